@@ -1,0 +1,23 @@
+# Every third-party dependency, found once. deploy/install-deps installs them all.
+find_package(Threads REQUIRED)
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(fastcdr REQUIRED)
+find_package(fastrtps REQUIRED)
+find_package(fcl REQUIRED)
+find_package(assimp REQUIRED)
+find_package(yaml-cpp REQUIRED)
+find_package(spdlog REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(GTest REQUIRED)
+find_package(benchmark REQUIRED)
+find_package(SQLite3 REQUIRED)
+
+# SuiteSparse 5 ships no CMake config: CHOLMOD is found by hand.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
+find_library(SUITESPARSECONFIG_LIBRARY suitesparseconfig REQUIRED)
+add_library(microdex::cholmod INTERFACE IMPORTED)
+target_include_directories(microdex::cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
+target_link_libraries(microdex::cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSECONFIG_LIBRARY})
+
+find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)

@@ -1,0 +1,49 @@
+#pragma once
+// The needle–vessel query (thesis chapter 4): a suture needle, a circular arc, against a
+// vessel, a segment of a torus. Every method (SP, exact, sampled, mesh) answers the same
+// question with the same types, so the station, the cues and the benchmark can swap them.
+//
+// Clearance (../shared/DESIGN.md): the minimum, over the needle points whose azimuth in the
+// tube frame lies in [0, segment_angle], of r − distance(point, core circle). Positive: the
+// needle is inside the tube by that margin; ≤ 0: it touches or crosses the wall.
+
+#include <Eigen/Geometry>
+#include <string>
+
+namespace microdex::geometry {
+
+// The needle. In its frame N it is the arc (ρ cos s, ρ sin s, 0), s ∈ [0, sweep].
+struct ArcDef {
+  double radius_m = 1e-3;                                  // ρ > 0
+  double sweep_rad = 3.14159265358979323846 / 2;           // S ∈ (0, 2π]
+  Eigen::Isometry3d X_WN = Eigen::Isometry3d::Identity();  // needle frame in world
+};
+
+// The vessel. In its frame V the core circle has radius R in the xy-plane around the
+// origin; the tube radius is r; the segment keeps azimuth atan2(y, x) ∈ [0, Ω].
+struct TorusSegmentDef {
+  double core_radius_m = 5e-3;                             // R > 0
+  double tube_radius_m = 0.5e-3;                           // 0 < r < R
+  double segment_angle_rad = 2 * 3.14159265358979323846;   // Ω ∈ (0, 2π]
+  Eigen::Isometry3d X_WV = Eigen::Isometry3d::Identity();  // vessel frame in world
+};
+
+enum class ClearanceStatus {
+  kOk,            // clearance and closest points are valid
+  kEmptyRange,    // no needle point lies inside the segment's azimuth range
+  kInvalidInput,  // NaN/Inf, non-positive radii, r ≥ R, sweep or Ω outside (0, 2π]
+};
+
+struct ArcTorusClearance {
+  ClearanceStatus status = ClearanceStatus::kInvalidInput;
+  double clearance_m = 0;  // NaN unless status == kOk
+  bool contact = false;    // clearance_m ≤ 0 (false unless kOk)
+  double s_rad = 0;        // needle parameter of the deepest point (argmin of clearance)
+  Eigen::Vector3d p_WN = Eigen::Vector3d::Zero();  // that needle point, in world
+  Eigen::Vector3d p_WW = Eigen::Vector3d::Zero();  // nearest tube-wall point to it, in world
+};
+
+// Empty when (arc, torus) is a valid query; otherwise a one-line reason naming the field.
+std::string ValidateArcTorus(const ArcDef& arc, const TorusSegmentDef& torus);
+
+}  // namespace microdex::geometry

@@ -1,0 +1,10 @@
+#include "bench_registry.h"
+
+namespace microdex::bench {
+
+std::vector<BenchCommand>& Registry() {
+  static std::vector<BenchCommand> registry;
+  return registry;
+}
+
+}  // namespace microdex::bench
