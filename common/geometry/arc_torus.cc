@@ -1,0 +1,1 @@
+#include "common/geometry/arc_torus.h"
