@@ -1,0 +1,448 @@
+#include "common/net/convert.h"
+
+#include <cmath>
+#include <string_view>
+
+#include "common/base/check.h"
+
+namespace microdex::net {
+namespace {
+
+constexpr std::size_t kMaxTraineeLength = 128;
+constexpr std::size_t kMaxSceneLength = 256;
+constexpr std::size_t kMaxTextLength = 128;
+
+template <std::size_t N>
+std::string S(const eprosima::fastrtps::fixed_string<N>& s) {
+  return std::string(s.c_str());
+}
+
+// Collects the first reason a received sample is rejected.
+class Checker {
+ public:
+  explicit Checker(std::string* why) : why_(why) {}
+  bool ok() const { return ok_; }
+  void Fail(const std::string& reason) {
+    if (ok_ && why_ != nullptr) *why_ = reason;
+    ok_ = false;
+  }
+  // The generated bounded strings (fixed_string<N>) already truncate at N on receipt; this
+  // guards the plain side and any future unbounded field.
+  void String(std::string_view s, std::size_t max, const char* field) {
+    if (s.size() > max) Fail(std::string(field) + ": longer than " + std::to_string(max));
+  }
+  void Finite(double v, const char* field) {
+    if (!std::isfinite(v)) Fail(std::string(field) + ": not finite");
+  }
+  template <std::size_t N>
+  void Finite(const std::array<double, N>& v, const char* field) {
+    for (double x : v) Finite(x, field);
+  }
+  void Unit(const std::array<double, 4>& q, const char* field) {
+    Finite(q, field);
+    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    if (ok_ && std::abs(n2 - 1.0) > 1e-6) Fail(std::string(field) + ": not a unit quaternion");
+  }
+  void Flag(std::uint8_t v, const char* field) {
+    if (v > 1) Fail(std::string(field) + ": flag other than 0 or 1");
+  }
+
+ private:
+  std::string* why_;
+  bool ok_ = true;
+};
+
+template <class Msg>
+void HeaderToMsg(const Header& in, Msg& out) {
+  MICRODEX_CHECK(in.station_id.size() <= kMaxIdLength && in.session_id.size() <= kMaxIdLength);
+  out.station_id(in.station_id);
+  out.session_id(in.session_id);
+  out.step(in.step);
+  out.stamp_ns(in.stamp_ns);
+}
+
+template <class Msg>
+void HeaderFromMsg(const Msg& in, Header& out, Checker& c) {
+  c.String(S(in.station_id()), kMaxIdLength, "station_id");
+  c.String(S(in.session_id()), kMaxIdLength, "session_id");
+  if (S(in.station_id()).empty()) c.Fail("station_id: empty");
+  out.station_id = S(in.station_id());
+  out.session_id = S(in.session_id());
+  out.step = in.step();
+  out.stamp_ns = in.stamp_ns();
+}
+
+std::array<double, 3> V(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+Eigen::Vector3d V(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+std::array<double, 4> Q(const Eigen::Quaterniond& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+Eigen::Quaterniond Q(const std::array<double, 4>& a) { return {a[0], a[1], a[2], a[3]}; }
+
+void CheckModuleName(const std::string& s) { MICRODEX_CHECK(s.size() <= kMaxModuleNameLength); }
+
+}  // namespace
+
+const char* CueKindName(CueKind kind) {
+  switch (kind) {
+    case CueKind::kClear:
+      return "clear";
+    case CueKind::kConvergentField:
+      return "convergent";
+    case CueKind::kDivergentField:
+      return "divergent";
+    case CueKind::kAmplifiedTremor:
+      return "tremor";
+  }
+  return nullptr;
+}
+
+bool ParseCueKind(const std::string& name, CueKind* kind) {
+  for (std::uint32_t i = 0; i < kCueKindCount; ++i) {
+    if (name == CueKindName(static_cast<CueKind>(i))) {
+      *kind = static_cast<CueKind>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* TaskEventKindName(TaskEventKind kind) {
+  switch (kind) {
+    case TaskEventKind::kTaskStart:
+      return "task-start";
+    case TaskEventKind::kTaskEnd:
+      return "task-end";
+    case TaskEventKind::kCueApplied:
+      return "cue-applied";
+    case TaskEventKind::kCueRejected:
+      return "cue-rejected";
+    case TaskEventKind::kContactBegin:
+      return "contact-begin";
+    case TaskEventKind::kContactEnd:
+      return "contact-end";
+  }
+  return "unknown";
+}
+
+// ---- StationInfo ----
+void ToMsg(const StationInfo& in, msg::StationInfo& out) {
+  HeaderToMsg(in.header, out);
+  MICRODEX_CHECK(in.trainee.size() <= kMaxTraineeLength && in.scene.size() <= kMaxSceneLength);
+  MICRODEX_CHECK(in.modules.size() <= kMaxModules && in.build.size() <= kMaxIdLength);
+  MICRODEX_CHECK(in.device.size() <= kMaxModuleNameLength);
+  for (const auto& m : in.modules) CheckModuleName(m);
+  out.trainee(in.trainee);
+  out.scene(in.scene);
+  out.modules().resize(in.modules.size());
+  for (std::size_t i = 0; i < in.modules.size(); ++i) out.modules()[i].name(in.modules[i]);
+  out.build(in.build);
+  out.haptic_rate_hz(in.haptic_rate_hz);
+  out.mirror_rate_hz(in.mirror_rate_hz);
+  out.skill(in.skill);
+  out.device(in.device);
+}
+
+bool FromMsg(const msg::StationInfo& in, StationInfo& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  c.String(S(in.trainee()), kMaxTraineeLength, "trainee");
+  c.String(S(in.scene()), kMaxSceneLength, "scene");
+  c.String(S(in.build()), kMaxIdLength, "build");
+  c.String(S(in.device()), kMaxModuleNameLength, "device");
+  if (in.modules().size() > kMaxModules) c.Fail("modules: more than 16");
+  for (const auto& m : in.modules()) c.String(S(m.name()), kMaxModuleNameLength, "modules[]");
+  c.Finite(in.haptic_rate_hz(), "haptic_rate_hz");
+  c.Finite(in.mirror_rate_hz(), "mirror_rate_hz");
+  c.Finite(in.skill(), "skill");
+  out.trainee = S(in.trainee());
+  out.scene = S(in.scene());
+  out.modules.clear();
+  for (const auto& m : in.modules()) out.modules.push_back(S(m.name()));
+  out.build = S(in.build());
+  out.haptic_rate_hz = in.haptic_rate_hz();
+  out.mirror_rate_hz = in.mirror_rate_hz();
+  out.skill = in.skill();
+  out.device = S(in.device());
+  return c.ok();
+}
+
+// ---- DeviceInput ----
+void ToMsg(const DeviceInput& in, msg::DeviceInput& out) {
+  HeaderToMsg(in.header, out);
+  out.p_WT(V(in.p_WT));
+  out.q_WT(Q(in.q_WT));
+  out.gripper(in.gripper);
+  out.buttons(in.buttons);
+}
+
+bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  c.Finite(in.p_WT(), "p_WT");
+  c.Unit(in.q_WT(), "q_WT");
+  c.Finite(in.gripper(), "gripper");
+  out.p_WT = V(in.p_WT());
+  out.q_WT = Q(in.q_WT());
+  out.gripper = in.gripper();
+  out.buttons = in.buttons();
+  return c.ok();
+}
+
+// ---- ToolState ----
+void ToMsg(const ToolState& in, msg::ToolState& out) {
+  HeaderToMsg(in.header, out);
+  out.p_WT(V(in.p_WT));
+  out.q_WT(Q(in.q_WT));
+  out.f_T_W(V(in.f_T_W));
+  out.tremor_rms_m(in.tremor_rms_m);
+  out.active_cues(in.active_cues);
+}
+
+bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  c.Finite(in.p_WT(), "p_WT");
+  c.Unit(in.q_WT(), "q_WT");
+  c.Finite(in.f_T_W(), "f_T_W");
+  c.Finite(in.tremor_rms_m(), "tremor_rms_m");
+  out.p_WT = V(in.p_WT());
+  out.q_WT = Q(in.q_WT());
+  out.f_T_W = V(in.f_T_W());
+  out.tremor_rms_m = in.tremor_rms_m();
+  out.active_cues = in.active_cues();
+  return c.ok();
+}
+
+// ---- NeedleState ----
+void ToMsg(const NeedleState& in, msg::NeedleState& out) {
+  HeaderToMsg(in.header, out);
+  out.p_WN(V(in.p_WN));
+  out.q_WN(Q(in.q_WN));
+  out.clearance_m(in.clearance_m);
+  out.contact(in.contact ? 1 : 0);
+  out.s_rad(in.s_rad);
+  out.p_WD(V(in.p_WD));
+  out.p_WW(V(in.p_WW));
+  out.status(static_cast<std::uint8_t>(in.status));
+}
+
+bool FromMsg(const msg::NeedleState& in, NeedleState& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  c.Finite(in.p_WN(), "p_WN");
+  c.Unit(in.q_WN(), "q_WN");
+  c.Flag(in.contact(), "contact");
+  if (in.status() > 2) c.Fail("status: not 0, 1 or 2");
+  // Clearance and the closest points are NaN when the status says there is none.
+  if (in.status() == 0) {
+    c.Finite(in.clearance_m(), "clearance_m");
+    c.Finite(in.s_rad(), "s_rad");
+    c.Finite(in.p_WD(), "p_WD");
+    c.Finite(in.p_WW(), "p_WW");
+  }
+  out.p_WN = V(in.p_WN());
+  out.q_WN = Q(in.q_WN());
+  out.clearance_m = in.clearance_m();
+  out.contact = in.contact() == 1;
+  out.s_rad = in.s_rad();
+  out.p_WD = V(in.p_WD());
+  out.p_WW = V(in.p_WW());
+  out.status = static_cast<ClearanceStatus>(in.status());
+  return c.ok();
+}
+
+// ---- ThreadState ----
+void ToMsg(const ThreadState& in, msg::ThreadState& out) {
+  HeaderToMsg(in.header, out);
+  MICRODEX_CHECK(in.nodes.size() <= kMaxThreadNodes && in.knot.size() <= kMaxModuleNameLength);
+  out.nodes().resize(in.nodes.size());
+  for (std::size_t i = 0; i < in.nodes.size(); ++i) {
+    out.nodes()[i].x(in.nodes[i].x());
+    out.nodes()[i].y(in.nodes[i].y());
+    out.nodes()[i].z(in.nodes[i].z());
+  }
+  out.knot(in.knot);
+}
+
+bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  if (in.nodes().size() > kMaxThreadNodes) c.Fail("nodes: more than kMaxThreadNodes");
+  c.String(S(in.knot()), kMaxModuleNameLength, "knot");
+  if (!c.ok()) return false;
+  out.nodes.resize(in.nodes().size());
+  for (std::size_t i = 0; i < in.nodes().size(); ++i) {
+    const auto& n = in.nodes()[i];
+    c.Finite(n.x(), "nodes[].x");
+    c.Finite(n.y(), "nodes[].y");
+    c.Finite(n.z(), "nodes[].z");
+    out.nodes[i] = {n.x(), n.y(), n.z()};
+  }
+  out.knot = S(in.knot());
+  return c.ok();
+}
+
+// ---- TissueState ----
+void ToMsg(const TissueState& in, msg::TissueState& out) {
+  HeaderToMsg(in.header, out);
+  MICRODEX_CHECK(in.displacement_m.size() <= kMaxTissueNodes);
+  out.mesh_revision(in.mesh_revision);
+  out.displacement_m(in.displacement_m);
+}
+
+bool FromMsg(const msg::TissueState& in, TissueState& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  if (in.displacement_m().size() > kMaxTissueNodes) c.Fail("displacement_m: too many nodes");
+  if (!c.ok()) return false;
+  for (float w : in.displacement_m()) c.Finite(w, "displacement_m[]");
+  out.mesh_revision = in.mesh_revision();
+  out.displacement_m = in.displacement_m();
+  return c.ok();
+}
+
+// ---- Telemetry ----
+void ToMsg(const Telemetry& in, msg::Telemetry& out) {
+  HeaderToMsg(in.header, out);
+  MICRODEX_CHECK(in.modules.size() <= kMaxTelemetryModules);
+  out.window_s(in.window_s);
+  out.ticks(in.ticks);
+  out.period_mean_s(in.period_mean_s);
+  out.period_p99_s(in.period_p99_s);
+  out.period_max_s(in.period_max_s);
+  out.overruns(in.overruns);
+  out.ring_dropped(in.ring_dropped);
+  out.realtime(in.realtime ? 1 : 0);
+  out.modules().resize(in.modules.size());
+  for (std::size_t i = 0; i < in.modules.size(); ++i) {
+    const auto& m = in.modules[i];
+    CheckModuleName(m.name);
+    CheckModuleName(m.error_kind);
+    auto& o = out.modules()[i];
+    o.name(m.name);
+    o.step_time_mean_s(m.step_time_mean_s);
+    o.step_time_max_s(m.step_time_max_s);
+    o.error_estimate(m.error_estimate);
+    o.error_kind(m.error_kind);
+    o.warnings(m.warnings);
+  }
+}
+
+bool FromMsg(const msg::Telemetry& in, Telemetry& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  c.Finite(in.window_s(), "window_s");
+  c.Finite(in.period_mean_s(), "period_mean_s");
+  c.Finite(in.period_p99_s(), "period_p99_s");
+  c.Finite(in.period_max_s(), "period_max_s");
+  c.Flag(in.realtime(), "realtime");
+  if (in.modules().size() > kMaxTelemetryModules) c.Fail("modules: too many");
+  if (!c.ok()) return false;
+  out.window_s = in.window_s();
+  out.ticks = in.ticks();
+  out.period_mean_s = in.period_mean_s();
+  out.period_p99_s = in.period_p99_s();
+  out.period_max_s = in.period_max_s();
+  out.overruns = in.overruns();
+  out.ring_dropped = in.ring_dropped();
+  out.realtime = in.realtime() == 1;
+  out.modules.resize(in.modules().size());
+  for (std::size_t i = 0; i < in.modules().size(); ++i) {
+    const auto& m = in.modules()[i];
+    c.String(S(m.name()), kMaxModuleNameLength, "modules[].name");
+    c.String(S(m.error_kind()), kMaxModuleNameLength, "modules[].error_kind");
+    // The error estimate may be NaN when a module has none in the window.
+    c.Finite(m.step_time_mean_s(), "modules[].step_time_mean_s");
+    c.Finite(m.step_time_max_s(), "modules[].step_time_max_s");
+    out.modules[i] = ModuleTelemetry{S(m.name()),        m.step_time_mean_s(), m.step_time_max_s(),
+                                     m.error_estimate(), S(m.error_kind()),    m.warnings()};
+  }
+  return c.ok();
+}
+
+// ---- CueCommand ----
+void ToMsg(const CueCommand& in, msg::CueCommand& out) {
+  HeaderToMsg(in.header, out);
+  MICRODEX_CHECK(static_cast<std::uint32_t>(in.kind) < kCueKindCount);
+  MICRODEX_CHECK(in.issuer.size() <= kMaxIdLength);
+  out.cue_id(in.cue_id);
+  out.kind(static_cast<msg::CueKind>(in.kind));
+  out.param(in.param);
+  out.issuer(in.issuer);
+}
+
+bool FromMsg(const msg::CueCommand& in, CueCommand& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  if (static_cast<std::uint32_t>(in.kind()) >= kCueKindCount) c.Fail("kind: unknown cue kind");
+  c.Finite(in.param(), "param");
+  c.String(S(in.issuer()), kMaxIdLength, "issuer");
+  out.cue_id = in.cue_id();
+  out.kind = static_cast<CueKind>(in.kind());
+  out.param = in.param();
+  out.issuer = S(in.issuer());
+  return c.ok();
+}
+
+// ---- TaskEvent ----
+void ToMsg(const TaskEvent& in, msg::TaskEvent& out) {
+  HeaderToMsg(in.header, out);
+  MICRODEX_CHECK(in.text.size() <= kMaxTextLength);
+  out.kind(static_cast<msg::TaskEventKind>(in.kind));
+  out.cue_id(in.cue_id);
+  out.value(in.value);
+  out.text(in.text);
+}
+
+bool FromMsg(const msg::TaskEvent& in, TaskEvent& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  if (static_cast<std::uint32_t>(in.kind()) >
+      static_cast<std::uint32_t>(TaskEventKind::kContactEnd))
+    c.Fail("kind: unknown event kind");
+  c.String(S(in.text()), kMaxTextLength, "text");
+  out.kind = static_cast<TaskEventKind>(in.kind());
+  out.cue_id = in.cue_id();
+  out.value = in.value();
+  out.text = S(in.text());
+  return c.ok();
+}
+
+// ---- Score ----
+void ToMsg(const Score& in, msg::Score& out) {
+  HeaderToMsg(in.header, out);
+  out.is_final(in.is_final ? 1 : 0);
+  out.duration_s(in.duration_s);
+  out.time_in_contact_s(in.time_in_contact_s);
+  out.contacts(in.contacts);
+  out.mean_clearance_m(in.mean_clearance_m);
+  out.min_clearance_m(in.min_clearance_m);
+  out.path_length_m(in.path_length_m);
+  out.ideal_path_length_m(in.ideal_path_length_m);
+  out.tremor_rms_m(in.tremor_rms_m);
+  out.score(in.score);
+}
+
+bool FromMsg(const msg::Score& in, Score& out, std::string* why) {
+  Checker c(why);
+  HeaderFromMsg(in, out.header, c);
+  c.Flag(in.is_final(), "is_final");
+  c.Finite(in.duration_s(), "duration_s");
+  c.Finite(in.time_in_contact_s(), "time_in_contact_s");
+  c.Finite(in.path_length_m(), "path_length_m");
+  c.Finite(in.ideal_path_length_m(), "ideal_path_length_m");
+  c.Finite(in.tremor_rms_m(), "tremor_rms_m");
+  c.Finite(in.score(), "score");
+  out.is_final = in.is_final() == 1;
+  out.duration_s = in.duration_s();
+  out.time_in_contact_s = in.time_in_contact_s();
+  out.contacts = in.contacts();
+  out.mean_clearance_m = in.mean_clearance_m();
+  out.min_clearance_m = in.min_clearance_m();
+  out.path_length_m = in.path_length_m();
+  out.ideal_path_length_m = in.ideal_path_length_m();
+  out.tremor_rms_m = in.tremor_rms_m();
+  out.score = in.score();
+  return c.ok();
+}
+
+}  // namespace microdex::net

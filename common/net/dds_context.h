@@ -1,0 +1,78 @@
+#pragma once
+// One DDS participant with its publisher and subscriber, created from the XML profile file
+// (deploy/dds/*.xml): the participant from the named participant profile
+// (create_participant_with_profile: a copied DomainParticipantQos would drop the XML
+// transports), topics, writers and readers from their named profiles. QoS is never set here,
+// with one exception: the partition (the course), a deployment value given on the command
+// line, is added to the publisher and subscriber QoS loaded from the XML.
+//
+// Not thread-safe: the thread that owns the context creates, uses and destroys its entities.
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+#include <string>
+#include <vector>
+
+#include "common/net/topics.h"
+
+namespace microdex::net {
+
+namespace dds = eprosima::fastdds::dds;
+
+struct DdsOptions {
+  std::string profile_file;  // XML profiles; must define kParticipantProfile
+  int domain_id = 0;         // 0..232
+  std::string partition;     // empty: the default partition
+  std::string participant_name = "microdex";
+  // Empty when valid; otherwise a one-line reason naming the field.
+  std::string Validate() const;
+};
+
+// The profile file used when none is given: $FASTRTPS_DEFAULT_PROFILES_FILE if set, else
+// deploy/dds/loopback.xml under the working directory, else under the source tree.
+std::string DefaultDdsProfileFile();
+
+class DdsContext {
+ public:
+  // Throws std::runtime_error naming the file, profile or entity that failed.
+  explicit DdsContext(const DdsOptions& options);
+  ~DdsContext();
+  DdsContext(const DdsContext&) = delete;
+  DdsContext& operator=(const DdsContext&) = delete;
+
+  // Registers PubSubType (once) and creates the topic from spec.topic_profile (once).
+  template <class PubSubType>
+  dds::Topic* GetTopic(const TopicSpec& spec) {
+    return GetTopicImpl(spec, [] { return dds::TypeSupport(new PubSubType()); });
+  }
+  // Writer/reader from the spec's XML profile; throws when the profile is missing.
+  template <class PubSubType>
+  dds::DataWriter* CreateWriter(const TopicSpec& spec) {
+    return CreateWriterImpl(GetTopic<PubSubType>(spec), spec);
+  }
+  template <class PubSubType>
+  dds::DataReader* CreateReader(const TopicSpec& spec) {
+    return CreateReaderImpl(GetTopic<PubSubType>(spec), spec);
+  }
+
+  dds::DomainParticipant* participant() { return participant_; }
+  const DdsOptions& options() const { return options_; }
+
+ private:
+  dds::Topic* GetTopicImpl(const TopicSpec& spec, dds::TypeSupport (*make_type)());
+  dds::DataWriter* CreateWriterImpl(dds::Topic* topic, const TopicSpec& spec);
+  dds::DataReader* CreateReaderImpl(dds::Topic* topic, const TopicSpec& spec);
+
+  DdsOptions options_;
+  dds::DomainParticipant* participant_ = nullptr;
+  dds::Publisher* publisher_ = nullptr;
+  dds::Subscriber* subscriber_ = nullptr;
+  std::vector<dds::Topic*> topics_;
+};
+
+}  // namespace microdex::net

@@ -1,0 +1,159 @@
+#pragma once
+// Plain C++ views of the DDS samples (idl/*.idl), in SI units with frames in the names.
+// Physics, the station and the instructor use these; only common/net sees microdex::msg.
+// Bounds (kMax...) are those of the IDL; FromMsg rejects a sample that exceeds them.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace microdex::net {
+
+inline constexpr std::size_t kMaxIdLength = 64;  // station_id, session_id
+inline constexpr std::size_t kMaxModules = 16;   // StationInfo.modules
+inline constexpr std::size_t kMaxModuleNameLength = 32;
+inline constexpr std::size_t kMaxThreadNodes = 512;    // ThreadState.nodes
+inline constexpr std::size_t kMaxTissueNodes = 16384;  // TissueState.displacement_m
+inline constexpr std::size_t kMaxTelemetryModules = 16;
+inline constexpr const char* kAllStations = "all";  // CueCommand target for every station
+
+// Fields every sample carries.
+struct Header {
+  std::string station_id;  // the key
+  std::string session_id;
+  std::uint64_t step = 0;     // haptic step index
+  std::int64_t stamp_ns = 0;  // source time, CLOCK_REALTIME, ns
+};
+
+struct StationInfo {
+  Header header;
+  std::string trainee;
+  std::string scene;
+  std::vector<std::string> modules;
+  std::string build;
+  double haptic_rate_hz = 0;
+  double mirror_rate_hz = 0;
+  double skill = -1;  // simulated trainee skill 0..1; -1: a real device
+  std::string device;
+};
+
+struct DeviceInput {
+  Header header;
+  Eigen::Vector3d p_WT = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_WT = Eigen::Quaterniond::Identity();
+  double gripper = 0;
+  std::uint32_t buttons = 0;
+};
+
+struct ToolState {
+  Header header;
+  Eigen::Vector3d p_WT = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_WT = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // N
+  double tremor_rms_m = 0;
+  std::uint32_t active_cues = 0;  // bit (1 << CueKind)
+};
+
+enum class ClearanceStatus : std::uint8_t { kOk = 0, kEmptyRange = 1, kInvalidInput = 2 };
+
+struct NeedleState {
+  Header header;
+  Eigen::Vector3d p_WN = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_WN = Eigen::Quaterniond::Identity();
+  double clearance_m = 0;
+  bool contact = false;
+  double s_rad = 0;
+  Eigen::Vector3d p_WD = Eigen::Vector3d::Zero();  // deepest needle point
+  Eigen::Vector3d p_WW = Eigen::Vector3d::Zero();  // nearest wall point
+  ClearanceStatus status = ClearanceStatus::kOk;
+};
+
+struct ThreadState {
+  Header header;
+  std::vector<Eigen::Vector3d> nodes;  // world, m; at most kMaxThreadNodes
+  std::string knot;
+};
+
+struct TissueState {
+  Header header;
+  std::uint32_t mesh_revision = 0;
+  std::vector<float> displacement_m;  // at most kMaxTissueNodes
+};
+
+struct ModuleTelemetry {
+  std::string name;
+  double step_time_mean_s = 0;
+  double step_time_max_s = 0;
+  double error_estimate = 0;
+  std::string error_kind;
+  std::uint32_t warnings = 0;
+};
+
+struct Telemetry {
+  Header header;
+  double window_s = 0;
+  std::uint64_t ticks = 0;
+  double period_mean_s = 0;
+  double period_p99_s = 0;
+  double period_max_s = 0;
+  std::uint64_t overruns = 0;
+  std::uint64_t ring_dropped = 0;
+  bool realtime = false;
+  std::vector<ModuleTelemetry> modules;
+};
+
+enum class CueKind : std::uint32_t {
+  kClear = 0,
+  kConvergentField = 1,  // param: stiffness, N/m
+  kDivergentField = 2,   // param: stiffness, N/m
+  kAmplifiedTremor = 3,  // param: gain >= 1
+};
+inline constexpr std::uint32_t kCueKindCount = 4;
+
+// "clear", "convergent", "divergent", "tremor"; nullptr for an unknown value.
+const char* CueKindName(CueKind kind);
+// The inverse; false for an unknown name.
+bool ParseCueKind(const std::string& name, CueKind* kind);
+
+struct CueCommand {
+  Header header;  // station_id: the target station or kAllStations; step: 0 = on receipt
+  std::uint64_t cue_id = 0;
+  CueKind kind = CueKind::kClear;
+  double param = 0;
+  std::string issuer;
+};
+
+enum class TaskEventKind : std::uint32_t {
+  kTaskStart = 0,
+  kTaskEnd = 1,
+  kCueApplied = 2,
+  kCueRejected = 3,
+  kContactBegin = 4,
+  kContactEnd = 5,
+};
+const char* TaskEventKindName(TaskEventKind kind);
+
+struct TaskEvent {
+  Header header;  // step: when it happened (for a cue: the step it was applied at)
+  TaskEventKind kind = TaskEventKind::kTaskStart;
+  std::uint64_t cue_id = 0;
+  double value = 0;
+  std::string text;
+};
+
+struct Score {
+  Header header;
+  bool is_final = false;
+  double duration_s = 0;
+  double time_in_contact_s = 0;
+  std::uint32_t contacts = 0;
+  double mean_clearance_m = 0;
+  double min_clearance_m = 0;
+  double path_length_m = 0;
+  double ideal_path_length_m = 0;
+  double tremor_rms_m = 0;
+  double score = 0;
+};
+
+}  // namespace microdex::net

@@ -1,0 +1,207 @@
+// Plain structs go to the DDS types and back unchanged; a received sample outside the IDL
+// bounds or with non-finite numbers is refused with a reason naming the field.
+#include "common/net/convert.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace microdex::net {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+Header MakeHeader() { return {"station-2", "session-9", 4242, 1700000000123456789LL}; }
+
+void ExpectHeader(const Header& a, const Header& b) {
+  EXPECT_EQ(a.station_id, b.station_id);
+  EXPECT_EQ(a.session_id, b.session_id);
+  EXPECT_EQ(a.step, b.step);
+  EXPECT_EQ(a.stamp_ns, b.stamp_ns);
+}
+
+TEST(NetConvert, StationInfoRoundTrip) {
+  StationInfo in{
+      MakeHeader(), "trainee A", "needle_tube.yaml", {"needle", "tremor"}, "0.1.0", 1000.0, 60.0,
+      0.3,          "sim"};
+  msg::StationInfo m;
+  ToMsg(in, m);
+  StationInfo out;
+  ASSERT_TRUE(FromMsg(m, out));
+  ExpectHeader(out.header, in.header);
+  EXPECT_EQ(out.modules, in.modules);
+  EXPECT_EQ(out.trainee, in.trainee);
+  EXPECT_EQ(out.skill, 0.3);
+}
+
+TEST(NetConvert, NeedleStateRoundTripAndFlag) {
+  NeedleState in;
+  in.header = MakeHeader();
+  in.p_WN = {1e-3, 2e-3, -3e-3};
+  in.q_WN = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()));
+  in.clearance_m = -2e-5;
+  in.contact = true;
+  in.s_rad = 1.1;
+  in.p_WD = {1, 2, 3};
+  in.p_WW = {4, 5, 6};
+  msg::NeedleState m;
+  ToMsg(in, m);
+  EXPECT_EQ(m.contact(), 1);
+  NeedleState out;
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_TRUE(out.contact);
+  EXPECT_EQ(out.p_WN, in.p_WN);
+  EXPECT_EQ(out.q_WN.coeffs(), in.q_WN.coeffs());
+  EXPECT_EQ(out.clearance_m, in.clearance_m);
+
+  m.contact(7);  // neither 0 nor 1
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("contact"), std::string::npos) << why;
+}
+
+TEST(NetConvert, NeedleStateWithoutClearanceMayCarryNan) {
+  NeedleState in;
+  in.header = MakeHeader();
+  in.status = ClearanceStatus::kEmptyRange;
+  in.clearance_m = kNan;
+  msg::NeedleState m;
+  ToMsg(in, m);
+  NeedleState out;
+  EXPECT_TRUE(FromMsg(m, out));
+  EXPECT_EQ(out.status, ClearanceStatus::kEmptyRange);
+  m.status(0);  // the same NaN claimed valid
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("clearance_m"), std::string::npos) << why;
+}
+
+TEST(NetConvert, DeviceInputRejectsNonFiniteAndNonUnit) {
+  DeviceInput in;
+  in.header = MakeHeader();
+  in.p_WT = {1e-3, 0, 0};
+  msg::DeviceInput m;
+  ToMsg(in, m);
+  DeviceInput out;
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_EQ(out.p_WT, in.p_WT);
+
+  std::string why;
+  m.p_WT({kNan, 0, 0});
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("p_WT"), std::string::npos) << why;
+  m.p_WT({0, 0, 0});
+  m.q_WT({2, 0, 0, 0});
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("q_WT"), std::string::npos) << why;
+}
+
+TEST(NetConvert, ThreadStateBoundIsEnforcedOnReceipt) {
+  ThreadState in;
+  in.header = MakeHeader();
+  in.nodes.assign(kMaxThreadNodes, Eigen::Vector3d(1e-3, 2e-3, 3e-3));
+  msg::ThreadState m;
+  ToMsg(in, m);
+  ThreadState out;
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_EQ(out.nodes.size(), kMaxThreadNodes);
+  m.nodes().push_back(m.nodes().back());  // one over the bound
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("nodes"), std::string::npos) << why;
+}
+
+TEST(NetConvert, TissueStateRoundTripAndBound) {
+  TissueState in;
+  in.header = MakeHeader();
+  in.mesh_revision = 3;
+  in.displacement_m = {1e-6f, -2e-6f, 0.0f};
+  msg::TissueState m;
+  ToMsg(in, m);
+  TissueState out;
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_EQ(out.displacement_m, in.displacement_m);
+  m.displacement_m().resize(kMaxTissueNodes + 1);
+  EXPECT_FALSE(FromMsg(m, out));
+}
+
+TEST(NetConvert, CueCommandKindsAndRejection) {
+  for (std::uint32_t k = 0; k < kCueKindCount; ++k) {
+    CueCommand in;
+    in.header = MakeHeader();
+    in.header.station_id = kAllStations;
+    in.cue_id = 17 + k;
+    in.kind = static_cast<CueKind>(k);
+    in.param = 120.5;
+    in.issuer = "instructor";
+    msg::CueCommand m;
+    ToMsg(in, m);
+    CueCommand out;
+    ASSERT_TRUE(FromMsg(m, out));
+    EXPECT_EQ(out.kind, in.kind);
+    EXPECT_EQ(out.cue_id, in.cue_id);
+    EXPECT_EQ(out.header.station_id, "all");
+    CueKind parsed;
+    ASSERT_TRUE(ParseCueKind(CueKindName(in.kind), &parsed));
+    EXPECT_EQ(parsed, in.kind);
+  }
+  msg::CueCommand m;
+  m.station_id("station-1");
+  m.kind(static_cast<msg::CueKind>(9));
+  CueCommand out;
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("kind"), std::string::npos) << why;
+  CueKind parsed;
+  EXPECT_FALSE(ParseCueKind("vortex", &parsed));
+}
+
+TEST(NetConvert, EmptyStationIdIsRejectedOverlongIsCut) {
+  msg::Score m;
+  Score out;
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));  // empty station_id
+  EXPECT_NE(why.find("station_id"), std::string::npos) << why;
+  // The generated bounded string keeps at most 64 characters: a longer id arrives cut.
+  m.station_id(std::string(80, 'x'));
+  EXPECT_TRUE(FromMsg(m, out, &why)) << why;
+  EXPECT_EQ(out.header.station_id, std::string(64, 'x'));
+}
+
+TEST(NetConvert, TelemetryAndScoreRoundTrip) {
+  Telemetry t;
+  t.header = MakeHeader();
+  t.window_s = 0.1;
+  t.ticks = 100;
+  t.period_mean_s = 1e-3;
+  t.period_p99_s = 1.02e-3;
+  t.period_max_s = 3e-3;
+  t.overruns = 1;
+  t.realtime = true;
+  t.modules.push_back({"needle", 1e-6, 4e-6, 2e-9, "sp_vs_exact_m", 0});
+  msg::Telemetry tm;
+  ToMsg(t, tm);
+  Telemetry t2;
+  ASSERT_TRUE(FromMsg(tm, t2));
+  ASSERT_EQ(t2.modules.size(), 1u);
+  EXPECT_EQ(t2.modules[0].name, "needle");
+  EXPECT_EQ(t2.modules[0].error_estimate, 2e-9);
+  EXPECT_TRUE(t2.realtime);
+
+  Score s;
+  s.header = MakeHeader();
+  s.is_final = true;
+  s.score = 88;
+  s.contacts = 3;
+  msg::Score sm;
+  ToMsg(s, sm);
+  Score s2;
+  ASSERT_TRUE(FromMsg(sm, s2));
+  EXPECT_TRUE(s2.is_final);
+  EXPECT_EQ(s2.contacts, 3u);
+  EXPECT_EQ(s2.score, 88);
+}
+
+}  // namespace
+}  // namespace microdex::net
