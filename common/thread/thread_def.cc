@@ -1,0 +1,279 @@
+#include "common/thread/thread_def.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+namespace microdex::thread {
+namespace {
+
+void Require(bool ok, const char* field, const std::string& expected) {
+  if (!ok) {
+    throw std::invalid_argument(std::string("ThreadDef.") + field + ": expected " + expected);
+  }
+}
+
+bool Finite(double value) { return std::isfinite(value); }
+
+}  // namespace
+
+const char* IntegratorName(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kSemiImplicitEuler:
+      return "semi-implicit-euler";
+    case Integrator::kLinearlyImplicitEuler:
+      return "linearly-implicit-euler";
+  }
+  return "unknown";
+}
+
+Integrator ParseIntegrator(const std::string& name) {
+  if (name == "semi-implicit-euler") return Integrator::kSemiImplicitEuler;
+  if (name == "linearly-implicit-euler") return Integrator::kLinearlyImplicitEuler;
+  throw std::invalid_argument(
+      "integrator: expected semi-implicit-euler or linearly-implicit-euler, got '" + name + "'");
+}
+
+void ThreadDef::Validate() const {
+  Require(num_nodes >= 3 && num_nodes <= 100000, "num_nodes", "an integer in [3, 100000]");
+  Require(Finite(length_m) && length_m > 0.0 && length_m <= 100.0, "length_m",
+          "a length in (0, 100] m");
+  const double link_m = length_m / (num_nodes - 1);
+  Require(Finite(diameter_m) && diameter_m > 0.0 && diameter_m < 10.0 * link_m, "diameter_m",
+          "a positive diameter below 10 link lengths");
+  Require(Finite(youngs_modulus_Pa) && youngs_modulus_Pa > 0.0, "youngs_modulus_Pa",
+          "a positive modulus in Pa");
+  Require(Finite(shear_modulus_Pa) && shear_modulus_Pa > 0.0, "shear_modulus_Pa",
+          "a positive modulus in Pa");
+  Require(Finite(density_kg_per_m3) && density_kg_per_m3 > 0.0, "density_kg_per_m3",
+          "a positive density in kg/m^3");
+  Require(Finite(stretch_stiffness_N_per_m) && stretch_stiffness_N_per_m >= 0.0,
+          "stretch_stiffness_N_per_m", "0 (derived) or a positive stiffness in N/m");
+  Require(Finite(bend_stiffness_N_m) && bend_stiffness_N_m >= 0.0, "bend_stiffness_N_m",
+          "0 (derived) or a positive stiffness in N m/rad");
+  Require(Finite(twist_stiffness_N_m) && twist_stiffness_N_m >= 0.0, "twist_stiffness_N_m",
+          "0 (derived) or a positive stiffness in N m/rad");
+  Require(Finite(node_mass_kg) && node_mass_kg >= 0.0, "node_mass_kg",
+          "0 (derived) or a positive mass in kg");
+  Require(Finite(mass_scale) && mass_scale > 0.0, "mass_scale", "a positive factor");
+  Require(Finite(twist_coupling_N) && twist_coupling_N >= 0.0, "twist_coupling_N",
+          "a non-negative force in N/rad");
+  Require(Finite(drag_N_s_per_m2) && drag_N_s_per_m2 >= 0.0, "drag_N_s_per_m2",
+          "a non-negative drag in N s/m^2");
+  Require(Finite(twist_drag_N_m_s) && twist_drag_N_m_s >= 0.0, "twist_drag_N_m_s",
+          "a non-negative damping in N m s/rad");
+  Require(Finite(contact_damping_N_s_per_m) && contact_damping_N_s_per_m >= 0.0,
+          "contact_damping_N_s_per_m", "a non-negative damping in N s/m");
+  Require(Finite(contact_force_N) && contact_force_N >= 0.0, "contact_force_N",
+          "a non-negative force in N");
+  Require(Finite(contact_decay_m) && contact_decay_m > 0.0, "contact_decay_m",
+          "a positive length in m");
+  Require(Finite(contact_cutoff_m) && contact_cutoff_m > 0.0 && contact_cutoff_m < link_m,
+          "contact_cutoff_m", "a positive length below the link length");
+  Require(Finite(guard_fraction) && guard_fraction >= 0.0 && guard_fraction <= 1.0,
+          "guard_fraction", "a fraction in [0, 1]");
+  Require(gravity_m_per_s2.allFinite() && gravity_m_per_s2.norm() < 1e3, "gravity_m_per_s2",
+          "a finite acceleration below 1000 m/s^2");
+  Require(Finite(time_step_s) && time_step_s > 0.0 && time_step_s <= 0.1, "time_step_s",
+          "a time step in (0, 0.1] s");
+  Require(max_grasps >= 1 && max_grasps <= 64, "max_grasps", "an integer in [1, 64]");
+  Require(max_contacts >= 0, "max_contacts", "0 (automatic) or a positive capacity");
+}
+
+ThreadDef StiffNylon10_0() {
+  ThreadDef def;
+  def.name = "stiff-nylon-10-0";
+  def.num_nodes = 65;
+  def.length_m = 0.03;
+  def.diameter_m = 25e-6;
+  def.youngs_modulus_Pa = 3.0e9;
+  def.shear_modulus_Pa = 1.1e9;
+  def.density_kg_per_m3 = 1140.0;
+  def.drag_N_s_per_m2 = 3e-3;
+  def.twist_drag_N_m_s = 1e-12;
+  def.contact_damping_N_s_per_m = 1e-5;
+  def.contact_force_N = 2e-3;
+  def.contact_decay_m = 2.5e-6;
+  def.contact_cutoff_m = 12.5e-6;
+  def.twist_coupling_N = 1e-5;
+  return def;
+}
+
+ThreadDef SoftSilk() {
+  ThreadDef def;
+  def.name = "soft-silk";
+  def.num_nodes = 65;
+  def.length_m = 0.05;
+  def.diameter_m = 70e-6;
+  def.youngs_modulus_Pa = 0.5e9;
+  def.shear_modulus_Pa = 0.1e9;
+  def.density_kg_per_m3 = 1300.0;
+  def.drag_N_s_per_m2 = 3e-3;
+  def.twist_drag_N_m_s = 1e-11;
+  def.contact_damping_N_s_per_m = 1e-5;
+  def.contact_force_N = 5e-3;
+  def.contact_decay_m = 7e-6;
+  def.contact_cutoff_m = 35e-6;
+  def.twist_coupling_N = 1e-5;
+  return def;
+}
+
+ThreadDef Necklace() {
+  ThreadDef def;
+  def.name = "necklace";
+  def.num_nodes = 65;
+  def.length_m = 0.4;
+  def.diameter_m = 3e-3;
+  def.youngs_modulus_Pa = 1.0e9;
+  def.shear_modulus_Pa = 0.4e9;
+  def.density_kg_per_m3 = 2500.0;
+  // Beads on a string: the string stretches little, the chain bends and twists freely.
+  def.bend_stiffness_N_m = 1e-6;
+  def.twist_stiffness_N_m = 1e-6;
+  def.drag_N_s_per_m2 = 1e-2;
+  def.twist_drag_N_m_s = 1e-8;
+  def.contact_damping_N_s_per_m = 1e-2;
+  def.contact_force_N = 0.5;
+  def.contact_decay_m = 0.3e-3;
+  def.contact_cutoff_m = 1.5e-3;
+  def.twist_coupling_N = 0.0;
+  return def;
+}
+
+ThreadDef ThreadPreset(const std::string& name) {
+  if (name == "stiff-nylon-10-0") return StiffNylon10_0();
+  if (name == "soft-silk") return SoftSilk();
+  if (name == "necklace") return Necklace();
+  throw std::invalid_argument(
+      "thread preset: expected stiff-nylon-10-0, soft-silk or necklace, got '" + name + "'");
+}
+
+namespace {
+
+// Reads an optional scalar field; a present field of the wrong type names file and field.
+template <typename T>
+void ReadField(const YAML::Node& root, const std::string& path, const char* field, T& out) {
+  const YAML::Node node = root[field];
+  if (!node) return;
+  try {
+    out = node.as<T>();
+  } catch (const YAML::Exception&) {
+    throw std::runtime_error(path + ": field '" + field + "' (line " +
+                             std::to_string(node.Mark().line + 1) + "): expected a " +
+                             (std::is_same_v<T, std::string> ? "string" : "number"));
+  }
+}
+
+}  // namespace
+
+ThreadDef LoadThreadDef(const std::string& path) {
+  YAML::Node file;
+  try {
+    file = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw std::runtime_error(path + ": cannot open thread parameter file");
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ": malformed YAML: " + e.what());
+  }
+  const YAML::Node root = file["thread"];
+  if (!root || !root.IsMap()) {
+    throw std::runtime_error(path + ": field 'thread': expected a map of thread parameters");
+  }
+  static constexpr const char* kKnown[] = {"name",
+                                           "base",
+                                           "num_nodes",
+                                           "length_m",
+                                           "diameter_m",
+                                           "youngs_modulus_Pa",
+                                           "shear_modulus_Pa",
+                                           "density_kg_per_m3",
+                                           "stretch_stiffness_N_per_m",
+                                           "bend_stiffness_N_m",
+                                           "twist_stiffness_N_m",
+                                           "node_mass_kg",
+                                           "mass_scale",
+                                           "twist_coupling_N",
+                                           "drag_N_s_per_m2",
+                                           "twist_drag_N_m_s",
+                                           "contact_damping_N_s_per_m",
+                                           "contact_force_N",
+                                           "contact_decay_m",
+                                           "contact_cutoff_m",
+                                           "guard_fraction",
+                                           "gravity_m_per_s2",
+                                           "integrator",
+                                           "time_step_s",
+                                           "max_grasps",
+                                           "max_contacts"};
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    bool known = false;
+    for (const char* name : kKnown) known = known || key == name;
+    if (!known) throw std::runtime_error(path + ": field 'thread." + key + "': unknown field");
+  }
+  ThreadDef def;
+  std::string base;
+  ReadField(root, path, "base", base);
+  if (!base.empty()) {
+    try {
+      def = ThreadPreset(base);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(path + ": field 'thread.base': " + e.what());
+    }
+  }
+  ReadField(root, path, "name", def.name);
+  ReadField(root, path, "num_nodes", def.num_nodes);
+  ReadField(root, path, "length_m", def.length_m);
+  ReadField(root, path, "diameter_m", def.diameter_m);
+  ReadField(root, path, "youngs_modulus_Pa", def.youngs_modulus_Pa);
+  ReadField(root, path, "shear_modulus_Pa", def.shear_modulus_Pa);
+  ReadField(root, path, "density_kg_per_m3", def.density_kg_per_m3);
+  ReadField(root, path, "stretch_stiffness_N_per_m", def.stretch_stiffness_N_per_m);
+  ReadField(root, path, "bend_stiffness_N_m", def.bend_stiffness_N_m);
+  ReadField(root, path, "twist_stiffness_N_m", def.twist_stiffness_N_m);
+  ReadField(root, path, "node_mass_kg", def.node_mass_kg);
+  ReadField(root, path, "mass_scale", def.mass_scale);
+  ReadField(root, path, "twist_coupling_N", def.twist_coupling_N);
+  ReadField(root, path, "drag_N_s_per_m2", def.drag_N_s_per_m2);
+  ReadField(root, path, "twist_drag_N_m_s", def.twist_drag_N_m_s);
+  ReadField(root, path, "contact_damping_N_s_per_m", def.contact_damping_N_s_per_m);
+  ReadField(root, path, "contact_force_N", def.contact_force_N);
+  ReadField(root, path, "contact_decay_m", def.contact_decay_m);
+  ReadField(root, path, "contact_cutoff_m", def.contact_cutoff_m);
+  ReadField(root, path, "guard_fraction", def.guard_fraction);
+  ReadField(root, path, "time_step_s", def.time_step_s);
+  ReadField(root, path, "max_grasps", def.max_grasps);
+  ReadField(root, path, "max_contacts", def.max_contacts);
+  if (const YAML::Node g = root["gravity_m_per_s2"]) {
+    if (!g.IsSequence() || g.size() != 3) {
+      throw std::runtime_error(path + ": field 'thread.gravity_m_per_s2' (line " +
+                               std::to_string(g.Mark().line + 1) +
+                               "): expected a list of 3 numbers in m/s^2");
+    }
+    for (int i = 0; i < 3; ++i) {
+      try {
+        def.gravity_m_per_s2[i] = g[i].as<double>();
+      } catch (const YAML::Exception&) {
+        throw std::runtime_error(path + ": field 'thread.gravity_m_per_s2': expected numbers");
+      }
+    }
+  }
+  if (const YAML::Node n = root["integrator"]) {
+    try {
+      def.integrator = ParseIntegrator(n.as<std::string>());
+    } catch (const std::exception& e) {
+      throw std::runtime_error(path + ": field 'thread.integrator': " + e.what());
+    }
+  }
+  try {
+    def.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  return def;
+}
+
+}  // namespace microdex::thread

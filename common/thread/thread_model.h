@@ -1,0 +1,122 @@
+#pragma once
+// The suture thread's model (built once from a ThreadDef) and its plain, copyable state
+// (thesis §5.2, Fig. 5.1): nodes N_0..N_k with position x_i, velocity, torsion angle q_i and its
+// rate; links L_i between N_i and N_{i+1} (0-based) with rest lengths.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "common/thread/banded_spd.h"
+#include "common/thread/sphere_bvh.h"
+#include "common/thread/thread_def.h"
+
+namespace microdex::thread {
+
+struct ThreadModel {
+  ThreadDef def;  // validated
+  int num_nodes = 0;
+  int num_links = 0;
+  double radius_m = 0.0;
+  Eigen::VectorXd rest_length_m;      // per link
+  Eigen::VectorXd stretch_k_N_per_m;  // per link, kappa_s (5.4)
+  Eigen::VectorXd bend_k_N_m;         // per node (ends unused), kappa_b (5.5)
+  Eigen::VectorXd twist_k_N_m;        // per link, kappa_d (5.6)
+  Eigen::VectorXd mass_kg;            // per node, m_i (5.1)
+  Eigen::VectorXd inertia_kg_m2;      // per node, I_i (5.1): (1/2) m r^2 of a solid cylinder
+  Eigen::VectorXd drag_N_s_per_m;     // per node, kappa_fx (5.8)
+  SphereBvhTopology bvh;
+  // Leaf spheres grow by this: thread radius plus contact cutoff plus a motion margin, so
+  // pairs that may touch before the next step are already candidates.
+  double bvh_inflate_m = 0.0;
+  int contact_capacity = 0;  // self pairs and object contacts, each
+  int half_bandwidth = 8;    // of the 3N x 3N implicit matrix
+};
+
+// Builds the model; throws std::invalid_argument (from ThreadDef::Validate) on a bad def.
+ThreadModel MakeThreadModel(const ThreadDef& def);
+
+// A grasped control node (thesis §5.4): it follows the tool tip p_WT and the tool's roll.
+struct Grasp {
+  int node = -1;  // -1: free slot
+  Eigen::Vector3d p_WT = Eigen::Vector3d::Zero();
+  double roll_rad = 0.0;
+  // Force the thread exerts on the tool (what a haptic device renders), world frame, N.
+  Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();
+};
+
+// Link–link contact (5.9): links a < b, closest points at parameters s, t.
+struct SelfContact {
+  int link_a = 0;
+  int link_b = 0;
+  double s = 0.0;
+  double t = 0.0;
+  double gap_m = 0.0;
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();  // unit, from link b to link a
+};
+
+// Link–object contact (5.9): the object pushes along n_W.
+struct ObjectContact {
+  int link = 0;
+  int collider = 0;
+  double s = 0.0;
+  double gap_m = 0.0;
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();
+};
+
+// Counters of numerical trouble and of the last step's work (never thrown; published).
+struct ThreadStatus {
+  std::int64_t steps = 0;
+  std::int64_t nonfinite_resets = 0;        // a step produced NaN/Inf: state rolled back
+  std::int64_t factorization_failures = 0;  // non-SPD system: state rolled back
+  std::int64_t contact_overflows = 0;       // more candidate pairs than capacity
+  std::int64_t guard_corrections = 0;       // non-penetration projections applied
+  int num_candidate_pairs = 0;
+  int num_self_contacts = 0;
+  int num_object_contacts = 0;
+  double max_strain = 0.0;  // max |l - r| / r after the step
+};
+
+// Work arrays, sized once by MakeThreadState; no step resizes them.
+struct ThreadScratch {
+  Eigen::Matrix3Xd f_W;       // force per node
+  Eigen::Matrix3Xd x_prev_W;  // state at the start of the step, for rollback
+  Eigen::Matrix3Xd v_prev_W;
+  Eigen::VectorXd q_prev_rad;
+  Eigen::VectorXd qdot_prev_rad_per_s;
+  Eigen::VectorXd tau_N_m;                             // torsion torque per node
+  Eigen::Matrix<double, 9, Eigen::Dynamic> k_contact;  // per node 3x3 contact stiffness bound
+  Eigen::VectorXd c_contact_N_s_per_m;                 // per node extra contact damping
+  Eigen::VectorXi grasp_slot;                          // per node: grasp slot or -1
+  SphereBvhSpheres spheres;
+  std::vector<LinkPair> pairs;
+  std::vector<SelfContact> self_contacts;
+  std::vector<ObjectContact> object_contacts;
+  int num_self_contacts = 0;
+  int num_object_contacts = 0;
+  BandedSpd system;        // 3N x 3N, half bandwidth 8
+  BandedSpd twist_system;  // N x N, tridiagonal
+  Eigen::VectorXd rhs;
+  Eigen::VectorXd twist_rhs;
+  Eigen::MatrixXd
+      grasp_rows;  // (3 max_grasps) x (2 p + 2): unmodified rows and rhs of grasped nodes
+};
+
+struct ThreadState {
+  double time_s = 0.0;
+  Eigen::Matrix3Xd x_W;            // node positions
+  Eigen::Matrix3Xd v_W;            // node velocities
+  Eigen::VectorXd q_rad;           // torsion angles q_i
+  Eigen::VectorXd qdot_rad_per_s;  // torsion rates
+  std::vector<Grasp> grasps;       // max_grasps slots
+  ThreadStatus status;
+  ThreadScratch scratch;
+};
+
+// A state at rest with the nodes at the given positions (3 x num_nodes), no grasp.
+ThreadState MakeThreadState(const ThreadModel& model, const Eigen::Matrix3Xd& x_W);
+// A straight thread at rest from p0_W along dir_W, links at their rest length.
+ThreadState MakeStraightThreadState(const ThreadModel& model, const Eigen::Vector3d& p0_W,
+                                    const Eigen::Vector3d& dir_W);
+
+}  // namespace microdex::thread
