@@ -1,0 +1,49 @@
+#pragma once
+// Conjugate gradient on a symmetric positive definite CSR matrix: the thesis's plain CG and
+// preconditioned variants (Jacobi, incomplete Cholesky IC(0)). Allocation-free after
+// MakeCgWorkspace.
+
+#include <cstdint>
+#include <vector>
+
+namespace microdex::fem {
+
+// Full (both triangles) CSR storage with sorted columns; diag[i] is the slot of (i, i).
+struct CsrView {
+  int n = 0;
+  const int* row_ptr = nullptr;
+  const int* cols = nullptr;
+  const double* vals = nullptr;
+  const int* diag = nullptr;
+};
+
+// y = A x.
+void Multiply(const CsrView& a, const double* x, double* y);
+
+enum class Preconditioner : std::uint8_t { kNone, kJacobi, kIc0 };
+
+struct CgWorkspace {
+  std::vector<double> r, z, p, q;  // [max_n]
+  std::vector<double> ic_vals;     // [max_nnz] IC(0) factor L on A's lower pattern
+  std::vector<double> inv_diag;    // [max_n]
+};
+CgWorkspace MakeCgWorkspace(int max_n, int max_nnz);
+
+// IC(0): L Lᵀ ≈ A with L on the pattern of A's lower triangle (rows' entries up to the
+// diagonal). Returns false on breakdown (a non-positive pivot).
+bool FactorIc0(const CsrView& a, CgWorkspace& ws);
+// Jacobi: 1 / diag. Returns false on a non-positive diagonal.
+bool FactorJacobi(const CsrView& a, CgWorkspace& ws);
+
+struct CgResult {
+  bool converged = false;
+  int iterations = 0;
+  double relative_residual = 0;  // ‖b − A x‖ / ‖b‖ of the returned x (recurrence value)
+};
+
+// Solves A x = b from the initial guess in x; stops at ‖r‖ ≤ tol · ‖b‖. The preconditioner
+// must have been factored (FactorIc0 / FactorJacobi) for this A.
+CgResult SolveCg(const CsrView& a, const double* b, double* x, Preconditioner preconditioner,
+                 double relative_tolerance, int max_iterations, CgWorkspace& ws);
+
+}  // namespace microdex::fem

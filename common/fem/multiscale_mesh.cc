@@ -1,0 +1,144 @@
+#include "common/fem/multiscale_mesh.h"
+
+#include <algorithm>
+
+#include "common/base/check.h"
+
+namespace microdex::fem {
+namespace {
+
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+std::uint64_t HashMix(std::uint64_t h, std::uint64_t value) {
+  for (int b = 0; b < 8; ++b) {
+    h ^= (value >> (8 * b)) & 0xffu;
+    h *= kFnvPrime;
+  }
+  return h;
+}
+
+// Side s runs from corner s to corner s+1 (BL, BR, TR, TL); its midpoint in half-cell units.
+constexpr std::array<TemplateVertex, 4> kCorners = {{{0, 0}, {2, 0}, {2, 2}, {0, 2}}};
+constexpr std::array<TemplateVertex, 4> kMidpoints = {{{1, 0}, {2, 1}, {1, 2}, {0, 1}}};
+
+void MarkNode(MeshSelection& mesh, int node) {
+  if (mesh.node_mark[node] != mesh.mark) {
+    mesh.node_mark[node] = mesh.mark;
+    mesh.active_nodes[mesh.num_active_nodes++] = node;
+  }
+}
+
+struct Selector {
+  const TissueModel& model;
+  int level;
+  MeshKind kind;
+  const ToolContact& tool;
+  MeshSelection& mesh;
+
+  bool Refine(int l, int ci, int cj) const {
+    if (l >= level) return false;
+    if (kind == MeshKind::kFine) return true;
+    const double hx = model.CellSizeX_m(l), hy = model.CellSizeY_m(l);
+    const double d = ToolBoxDistance_m(tool, ci * hx, cj * hy, (ci + 1) * hx, (cj + 1) * hy);
+    return d - tool.contact_radius_m < model.def.grading * std::max(hx, hy);
+  }
+
+  void Visit(int l, int ci, int cj) {
+    if (Refine(l, ci, cj)) {
+      for (int k = 0; k < 4; ++k) Visit(l + 1, 2 * ci + (k & 1), 2 * cj + (k >> 1));
+      return;
+    }
+    MICRODEX_CHECK(mesh.num_leaves < static_cast<int>(mesh.leaves.size()));
+    Leaf& leaf = mesh.leaves[mesh.num_leaves++];
+    leaf.ci = ci;
+    leaf.cj = cj;
+    leaf.level = static_cast<std::int8_t>(l);
+    leaf.hanging_mask = 0;
+    for (const TemplateVertex& c : kCorners) MarkNode(mesh, CellVertex(model, l, ci, cj, c.u, c.v));
+    mesh.signature = HashMix(mesh.signature, (static_cast<std::uint64_t>(l) << 56) ^
+                                                 (static_cast<std::uint64_t>(ci) << 28) ^
+                                                 static_cast<std::uint64_t>(cj));
+  }
+};
+
+}  // namespace
+
+MeshSelection MakeMeshSelection(const TissueModel& model) {
+  MeshSelection mesh;
+  mesh.leaves.resize(model.max_leaves);
+  mesh.triangles.resize(model.max_triangles);
+  mesh.active_nodes.resize(model.num_grid_nodes);
+  mesh.node_mark.assign(model.num_grid_nodes, 0);
+  return mesh;
+}
+
+int LeafTriangles(const TissueModel& model, const Leaf& leaf, std::array<Triangle, 8>& out) {
+  int count = 0;
+  auto emit = [&](int shape) {
+    Triangle& t = out[count++];
+    t.level = leaf.level;
+    t.shape = static_cast<std::int8_t>(shape);
+    for (int k = 0; k < 3; ++k) {
+      const TemplateVertex& v = kTemplateTriangles[shape][k];
+      t.node[k] = CellVertex(model, leaf.level, leaf.ci, leaf.cj, v.u, v.v);
+    }
+  };
+  if (leaf.hanging_mask == 0) {
+    emit(kShapeLower);
+    emit(kShapeUpper);
+    return count;
+  }
+  for (int side = 0; side < 4; ++side) {
+    if (leaf.hanging_mask & (1u << side)) {
+      emit(kShapeFanHalf + 2 * side);
+      emit(kShapeFanHalf + 2 * side + 1);
+    } else {
+      emit(kShapeFanFull + side);
+    }
+  }
+  return count;
+}
+
+void SelectMesh(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool,
+                MeshSelection& mesh) {
+  MICRODEX_CHECK(level >= 1 && level <= model.def.max_level);
+  if (++mesh.mark == 0) {  // wrapped: old marks could alias the new one
+    std::fill(mesh.node_mark.begin(), mesh.node_mark.end(), 0u);
+    mesh.mark = 1;
+  }
+  mesh.num_leaves = 0;
+  mesh.num_triangles = 0;
+  mesh.num_active_nodes = 0;
+  mesh.level = level;
+  mesh.signature = HashMix(kFnvOffset, static_cast<std::uint64_t>(level));
+  Selector selector{model, level, kind, tool, mesh};
+  for (int cj = 0; cj < 2; ++cj) {
+    for (int ci = 0; ci < 2; ++ci) selector.Visit(1, ci, cj);
+  }
+  // A side's midpoint is a vertex of another leaf only if the neighbour across that side is
+  // refined (the quadtree is 2:1 balanced, see TissueDef::grading), so it becomes a vertex of
+  // this leaf too. Centres are marked after all tests: a centre never lies on another leaf's side.
+  for (int k = 0; k < mesh.num_leaves; ++k) {
+    Leaf& leaf = mesh.leaves[k];
+    if (leaf.level >= model.def.max_level) continue;
+    for (int side = 0; side < 4; ++side) {
+      const int mid =
+          CellVertex(model, leaf.level, leaf.ci, leaf.cj, kMidpoints[side].u, kMidpoints[side].v);
+      if (mesh.node_mark[mid] == mesh.mark)
+        leaf.hanging_mask |= static_cast<std::uint8_t>(1u << side);
+    }
+  }
+  std::array<Triangle, 8> cell_triangles;
+  for (int k = 0; k < mesh.num_leaves; ++k) {
+    const Leaf& leaf = mesh.leaves[k];
+    if (leaf.hanging_mask != 0)
+      MarkNode(mesh, CellVertex(model, leaf.level, leaf.ci, leaf.cj, 1, 1));
+    const int n = LeafTriangles(model, leaf, cell_triangles);
+    MICRODEX_CHECK(mesh.num_triangles + n <= static_cast<int>(mesh.triangles.size()));
+    std::copy_n(cell_triangles.begin(), n, mesh.triangles.begin() + mesh.num_triangles);
+    mesh.num_triangles += n;
+  }
+}
+
+}  // namespace microdex::fem

@@ -1,0 +1,63 @@
+#pragma once
+// The multi-scale mesh of thesis §3.2 (figures 3.1–3.2), chosen afresh each step from the
+// nested hierarchy as the tool moves: a quadtree over the levels whose cells are refined
+// near the tool, each leaf cut into template triangles (element_stiffness.h). A leaf whose
+// neighbour across a side is one level finer is cut as a fan around its centre with that
+// side's midpoint as a vertex, so the mesh is conforming: no hanging nodes, no constraints.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "common/fem/tissue_model.h"
+#include "common/fem/tool_contact.h"
+
+namespace microdex::fem {
+
+struct Leaf {
+  std::int32_t ci = 0;  // cell column and row at its level
+  std::int32_t cj = 0;
+  std::int8_t level = 0;
+  std::uint8_t hanging_mask = 0;  // bit s: side s (bottom, right, top, left) has a midpoint vertex
+};
+
+struct Triangle {
+  std::array<std::int32_t, 3> node{};  // grid-node ids, counter-clockwise, template order
+  std::int8_t level = 0;
+  std::int8_t shape = 0;  // index into kTemplateTriangles / TissueModel::element_matrices
+};
+
+// Per-step mesh buffers, sized once to the model's capacities.
+struct MeshSelection {
+  std::vector<Leaf> leaves;  // [max_leaves], first num_leaves valid, quadtree (Morton) order
+  int num_leaves = 0;
+  std::vector<Triangle> triangles;  // [max_triangles]
+  int num_triangles = 0;
+  std::vector<std::int32_t> active_nodes;  // [num_grid_nodes] vertices in first-use order
+  int num_active_nodes = 0;
+  std::vector<std::uint32_t> node_mark;  // [num_grid_nodes]; == mark: vertex of this mesh
+  std::uint32_t mark = 0;
+  std::uint64_t signature = 0;  // hash of the leaf set (same leaves ⇒ same mesh)
+  int level = 0;                // finest level of this selection
+
+  bool IsActive(int node) const { return node_mark[node] == mark; }
+};
+
+MeshSelection MakeMeshSelection(const TissueModel& model);
+
+// Chooses the leaves (kFine: every cell at `level`; kMultiscale: a level-l cell is refined
+// while l < level and its distance to the tool minus the contact radius is below
+// grading · h_l) and cuts them into triangles. Allocation-free.
+void SelectMesh(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool,
+                MeshSelection& mesh);
+
+// The triangles of one leaf (2 for a plain cell, 4–8 for a fan); returns their count.
+int LeafTriangles(const TissueModel& model, const Leaf& leaf, std::array<Triangle, 8>& out);
+
+// Grid-node id of template vertex (u, v) (half-cell units) of the level-`level` cell (ci, cj).
+inline int CellVertex(const TissueModel& model, int level, int ci, int cj, int u, int v) {
+  const int stride = model.Stride(level);
+  return (cj * stride + v * stride / 2) * model.nodes_per_side + ci * stride + u * stride / 2;
+}
+
+}  // namespace microdex::fem

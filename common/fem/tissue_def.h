@@ -1,0 +1,56 @@
+#pragma once
+// Description of a soft-tissue patch: the antiplane (out-of-plane) elasticity problem of
+// thesis chapter 3 on an Lx × Ly rectangle with fixed edges, discretised on a hierarchy of
+// nested uniform grids. SI units throughout; the thesis's cm and N/cm² are converted at the
+// boundary with the constants below.
+
+#include <cstdint>
+#include <string>
+
+namespace microdex::fem {
+
+inline constexpr double kMetrePerCm = 0.01;
+inline constexpr double kPascalPerNewtonPerCm2 = 1e4;  // 1 N/cm² = 1e4 N/m²
+
+enum class MeshKind : std::uint8_t {
+  kFine,        // every cell at the run's level (the thesis's "fine mesh")
+  kMultiscale,  // fine cells near the tool, coarser further away (figures 3.1–3.2)
+};
+
+enum class SolverKind : std::uint8_t {
+  kCg,         // the thesis's conjugate gradient: no preconditioner, cold start
+  kPcgJacobi,  // diagonal preconditioner, warm-started from the previous step
+  kPcgIc,      // incomplete Cholesky IC(0) preconditioner, warm-started
+  kCholmod,    // sparse direct LLᵀ (SuiteSparse CHOLMOD), symbolic analysis cached
+};
+
+const char* ToString(MeshKind kind);
+const char* ToString(SolverKind kind);
+// Parses "fine"/"multiscale" and "cg"/"pcg_jacobi"/"pcg_ic"/"cholmod"; throws
+// std::invalid_argument naming the text otherwise.
+MeshKind ParseMeshKind(const std::string& text);
+SolverKind ParseSolverKind(const std::string& text);
+
+struct TissueDef {
+  double length_x_m = 0.20;  // domain [0, Lx] × [0, Ly] in the tissue frame S
+  double length_y_m = 0.20;
+  double shear_modulus_Pa = 1.0e4;  // G; the thesis's 1 N/cm²
+  // Thickness of the slab. The 2-D problem's stiffness is G·t ∫∇Nᵢ·∇Nⱼ dA, so forces come
+  // out in newtons; 1 cm makes the thesis's study (G in N/cm², w in cm) read in newtons.
+  double thickness_m = 0.01;
+  int max_level = 8;  // finest level of the hierarchy: level l has 2^l × 2^l cells
+  int level = 7;      // finest level used by a step (1 ≤ level ≤ max_level)
+  MeshKind mesh = MeshKind::kMultiscale;
+  // A level-l cell is refined when (distance to the tool − contact radius) < grading · h_l.
+  // grading ≥ 1.5 keeps neighbouring leaves within one level of each other (see README).
+  double grading = 2.0;
+  SolverKind solver = SolverKind::kCholmod;
+  double cg_relative_tolerance = 1e-8;  // ‖b − K u‖ / ‖b‖ at which CG stops
+  int cg_max_iterations = 20000;
+  int max_contact_nodes = 4096;   // capacity of the contact list (pre-sized)
+  int pattern_cache_entries = 2;  // sparsity patterns (and CHOLMOD analyses) kept
+  // Throws std::invalid_argument naming the first bad field and what was expected.
+  void Validate() const;
+};
+
+}  // namespace microdex::fem

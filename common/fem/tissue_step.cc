@@ -1,0 +1,517 @@
+#include "common/fem/tissue_step.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "common/base/check.h"
+
+namespace microdex::fem {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Microseconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::micro>(b - a).count();
+}
+
+bool ToolIsFinite(const ToolContact& tool) {
+  if (tool.num_points < 1 || tool.num_points > kMaxToolPoints) return false;
+  if (!std::isfinite(tool.contact_radius_m) || tool.contact_radius_m < 0) return false;
+  if (!tool.p_ST.allFinite()) return false;
+  for (int k = 0; k < tool.num_points; ++k) {
+    if (!tool.p_SP[k].allFinite()) return false;
+  }
+  return true;
+}
+
+// Liang–Barsky: the parameter range [t0, t1] ⊂ [0, 1] of a + t (b − a) inside the box.
+bool ClipSegment(double ax, double ay, double bx, double by, double x0, double y0, double x1,
+                 double y1, double* t0, double* t1) {
+  double lo = 0, hi = 1;
+  const double d[2] = {bx - ax, by - ay};
+  const double a[2] = {ax, ay};
+  const double mins[2] = {x0, y0};
+  const double maxs[2] = {x1, y1};
+  for (int k = 0; k < 2; ++k) {
+    if (d[k] == 0) {
+      if (a[k] < mins[k] || a[k] > maxs[k]) return false;
+      continue;
+    }
+    double ta = (mins[k] - a[k]) / d[k];
+    double tb = (maxs[k] - a[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    lo = std::max(lo, ta);
+    hi = std::min(hi, tb);
+    if (lo > hi) return false;
+  }
+  *t0 = lo;
+  *t1 = hi;
+  return true;
+}
+
+std::uint64_t MixKey(std::uint64_t h, std::uint64_t v) {
+  h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h * 1099511628211ull;
+}
+
+class ContactFinder {
+ public:
+  ContactFinder(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws)
+      : model_(model), tool_(tool), ws_(ws) {}
+
+  // Fills ws.contact_nodes / contact_w_m and tags them in node_dof. False on overflow.
+  bool Run() {
+    ws_.num_contacts = 0;
+    const int level = ws_.mesh.level;
+    const double hx = model_.CellSizeX_m(level), hy = model_.CellSizeY_m(level);
+    const double lx = model_.def.length_x_m, ly = model_.def.length_y_m;
+    const int stride = model_.Stride(level);
+    const int cells = 1 << level;
+    const double r = tool_.contact_radius_m;
+    const int num_segments = std::max(1, tool_.num_points - 1);
+    for (int k = 0; k < num_segments; ++k) {
+      const Eigen::Vector3d& a = tool_.p_SP[k];
+      const Eigen::Vector3d& b = tool_.p_SP[std::min(k + 1, tool_.num_points - 1)];
+      // Nearest node of points every half node spacing along the segment: a connected chain
+      // of nodes under the tool whatever its orientation.
+      double t0 = 0, t1 = 1;
+      if (ClipSegment(a.x(), a.y(), b.x(), b.y(), 0, 0, lx, ly, &t0, &t1)) {
+        const double len = (t1 - t0) * std::hypot(b.x() - a.x(), b.y() - a.y());
+        const int n = static_cast<int>(std::ceil(len / (0.5 * std::min(hx, hy))));
+        for (int i = 0; i <= n; ++i) {
+          const double t = n == 0 ? t0 : t0 + (t1 - t0) * i / n;
+          const double px = a.x() + t * (b.x() - a.x()), py = a.y() + t * (b.y() - a.y());
+          const int ci = std::clamp(static_cast<int>(std::lround(px / hx)), 0, cells);
+          const int cj = std::clamp(static_cast<int>(std::lround(py / hy)), 0, cells);
+          if (!Add(cj * stride * model_.nodes_per_side + ci * stride)) return false;
+        }
+      }
+      if (r > 0) {  // every node within the contact radius of the segment
+        const int i0 = std::max(1, static_cast<int>(std::ceil((std::min(a.x(), b.x()) - r) / hx)));
+        const int i1 =
+            std::min(cells - 1, static_cast<int>(std::floor((std::max(a.x(), b.x()) + r) / hx)));
+        const int j0 = std::max(1, static_cast<int>(std::ceil((std::min(a.y(), b.y()) - r) / hy)));
+        const int j1 =
+            std::min(cells - 1, static_cast<int>(std::floor((std::max(a.y(), b.y()) + r) / hy)));
+        for (int j = j0; j <= j1; ++j) {
+          for (int i = i0; i <= i1; ++i) {
+            double t = 0;
+            const double px = i * hx, py = j * hy;
+            const double dx = b.x() - a.x(), dy = b.y() - a.y();
+            const double len2 = dx * dx + dy * dy;
+            if (len2 > 0) t = std::clamp(((px - a.x()) * dx + (py - a.y()) * dy) / len2, 0.0, 1.0);
+            if (std::hypot(px - a.x() - t * dx, py - a.y() - t * dy) > r) continue;
+            if (!Add(j * stride * model_.nodes_per_side + i * stride)) return false;
+          }
+        }
+      }
+    }
+    return true;
+  }
+
+ private:
+  bool Add(int node) {
+    const MeshSelection& mesh = ws_.mesh;
+    if (model_.IsBoundaryNode(node) || !mesh.IsActive(node)) return true;
+    if (ws_.contact_stamp[node] == mesh.mark) return true;  // already in the list
+    double z_m = 0;
+    ToolClosestPoint_m(tool_, model_.NodeX_m(node), model_.NodeY_m(node), &z_m);
+    if (!(z_m < 0)) return true;  // the tool is not below the surface here
+    if (ws_.num_contacts >= static_cast<int>(ws_.contact_nodes.size())) return false;
+    const int c = ws_.num_contacts++;
+    ws_.contact_nodes[c] = node;
+    ws_.contact_w_m[c] = z_m;
+    ws_.node_dof[node] = -2 - c;
+    ws_.contact_stamp[node] = mesh.mark;
+    return true;
+  }
+
+  const TissueModel& model_;
+  const ToolContact& tool_;
+  TissueWorkspace& ws_;
+};
+
+void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
+  const MeshSelection& mesh = ws.mesh;
+  std::fill_n(ws.row_count.begin(), n, 0);
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    for (int a = 0; a < 3; ++a) {
+      const int da = ws.node_dof[t.node[a]];
+      if (da < 0) continue;
+      int* row = &ws.row_fill[static_cast<size_t>(da) * kMaxRowEntries];
+      for (int b = 0; b < 3; ++b) {
+        const int db = ws.node_dof[t.node[b]];
+        if (db < 0) continue;
+        int& count = ws.row_count[da];
+        if (std::find(row, row + count, db) == row + count) {
+          MICRODEX_CHECK(count < kMaxRowEntries);
+          row[count++] = db;
+        }
+      }
+    }
+  }
+  int nnz = 0;
+  for (int i = 0; i < n; ++i) {
+    int* row = &ws.row_fill[static_cast<size_t>(i) * kMaxRowEntries];
+    std::sort(row, row + ws.row_count[i]);
+    entry.row_ptr[i] = nnz;
+    for (int k = 0; k < ws.row_count[i]; ++k) {
+      if (row[k] == i) entry.diag[i] = nnz;
+      entry.cols[nnz++] = row[k];
+    }
+  }
+  entry.row_ptr[n] = nnz;
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    for (int a = 0; a < 3; ++a) {
+      const int da = ws.node_dof[t.node[a]];
+      for (int b = 0; b < 3; ++b) {
+        const int db = ws.node_dof[t.node[b]];
+        int slot = -1;
+        if (da >= 0 && db >= 0) {
+          const int* begin = &entry.cols[entry.row_ptr[da]];
+          const int* end = &entry.cols[entry.row_ptr[da + 1]];
+          slot = static_cast<int>(std::lower_bound(begin, end, db) - entry.cols.data());
+        }
+        entry.scatter[9 * e + 3 * a + b] = slot;
+      }
+    }
+  }
+  entry.num_dofs = n;
+  entry.valid = true;
+  entry.values_valid = false;
+  entry.factor_valid = false;
+}
+
+void AssembleValues(const TissueModel& model, const MeshSelection& mesh, PatternEntry& entry) {
+  std::fill_n(entry.vals.begin(), entry.row_ptr[entry.num_dofs], 0.0);
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+    const int* slots = &entry.scatter[9 * e];
+    for (int ab = 0; ab < 9; ++ab) {
+      if (slots[ab] >= 0) entry.vals[slots[ab]] += k[ab];
+    }
+  }
+  entry.values_valid = true;
+  entry.factor_valid = false;
+}
+
+// b_f = −K_fc U_c: the prescribed displacements moved to the right-hand side, (3.10)–(3.11).
+void AssembleRhs(const TissueModel& model, TissueWorkspace& ws, int n) {
+  std::fill_n(ws.rhs.begin(), n, 0.0);
+  const MeshSelection& mesh = ws.mesh;
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    const int d[3] = {ws.node_dof[t.node[0]], ws.node_dof[t.node[1]], ws.node_dof[t.node[2]]};
+    if (d[0] > -2 && d[1] > -2 && d[2] > -2) continue;  // no contact node in this element
+    const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] < 0) continue;
+      for (int b = 0; b < 3; ++b) {
+        if (d[b] <= -2) ws.rhs[d[a]] -= k[3 * a + b] * ws.contact_w_m[-2 - d[b]];
+      }
+    }
+  }
+}
+
+double NodeValue(const TissueWorkspace& ws, int dof_code) {
+  if (dof_code >= 0) return ws.x[dof_code];
+  if (dof_code == -1) return 0.0;
+  return ws.contact_w_m[-2 - dof_code];
+}
+
+void Fail(TissueState& state, TissueStatus status) {
+  state.status = status;
+  ++state.num_failed_steps;
+}
+
+}  // namespace
+
+const char* ToString(TissueStatus status) {
+  switch (status) {
+    case TissueStatus::kOk:
+      return "ok";
+    case TissueStatus::kNoContact:
+      return "no_contact";
+    case TissueStatus::kBadInput:
+      return "bad_input";
+    case TissueStatus::kTooManyContacts:
+      return "too_many_contacts";
+    case TissueStatus::kNotConverged:
+      return "not_converged";
+    case TissueStatus::kFactorisationFailed:
+      return "factorisation_failed";
+    case TissueStatus::kNonFinite:
+      return "non_finite";
+  }
+  return "?";
+}
+
+TissueState MakeTissueState(const TissueModel& model) {
+  TissueState state;
+  state.w_m.assign(model.num_grid_nodes, 0.0);
+  state.node_step.assign(model.num_grid_nodes, 0u);
+  state.leaves.resize(model.max_leaves);
+  state.contact_nodes.resize(model.def.max_contact_nodes);
+  state.contact_force_N.resize(model.def.max_contact_nodes);
+  return state;
+}
+
+TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelection(model)) {
+  const int n = model.num_grid_nodes;
+  node_dof.assign(n, -1);
+  contact_stamp.assign(n, 0u);
+  dof_node.resize(n);
+  contact_nodes.resize(model.def.max_contact_nodes);
+  contact_w_m.resize(model.def.max_contact_nodes);
+  contact_f_N.resize(model.def.max_contact_nodes);
+  row_fill.resize(static_cast<size_t>(kMaxRowEntries) * n);
+  row_count.resize(n);
+  rhs.resize(n);
+  x.resize(n);
+  residual.resize(n);
+  patterns.resize(model.def.pattern_cache_entries);
+  for (PatternEntry& entry : patterns) {
+    entry.row_ptr.resize(n + 1);
+    entry.cols.resize(static_cast<size_t>(kMaxRowEntries) * n);
+    entry.vals.resize(static_cast<size_t>(kMaxRowEntries) * n);
+    entry.diag.resize(n);
+    entry.scatter.resize(static_cast<size_t>(9) * model.max_triangles);
+  }
+  cg = MakeCgWorkspace(n, kMaxRowEntries * n);
+  cholmod = std::make_unique<CholmodSolver>(model.def.pattern_cache_entries);
+}
+
+void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
+                TissueState& state) {
+  const TissueDef& def = model.def;
+  const Clock::time_point t_begin = Clock::now();
+  TissueStepStats stats;
+  if (!ToolIsFinite(tool)) {
+    stats.total_us = Microseconds(t_begin, Clock::now());
+    state.stats = stats;
+    Fail(state, TissueStatus::kBadInput);
+    return;
+  }
+
+  // Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
+  SelectMesh(model, def.level, def.mesh, tool, ws.mesh);
+  const MeshSelection& mesh = ws.mesh;
+  ContactFinder finder(model, tool, ws);
+  const bool contacts_fit = finder.Run();
+  int n = 0;
+  std::uint64_t key = MixKey(mesh.signature, static_cast<std::uint64_t>(ws.num_contacts));
+  for (int k = 0; k < mesh.num_active_nodes; ++k) {
+    const int node = mesh.active_nodes[k];
+    if (ws.contact_stamp[node] == mesh.mark) continue;  // contact, tagged by the finder
+    if (model.IsBoundaryNode(node)) {
+      ws.node_dof[node] = -1;
+    } else {
+      ws.node_dof[node] = n;
+      ws.dof_node[n++] = node;
+    }
+  }
+  for (int c = 0; c < ws.num_contacts; ++c) key = MixKey(key, ws.contact_nodes[c]);
+  stats.unknowns = n;
+  stats.contact_nodes = ws.num_contacts;
+  stats.active_nodes = mesh.num_active_nodes;
+  stats.triangles = mesh.num_triangles;
+  stats.leaves = mesh.num_leaves;
+  const Clock::time_point t_selected = Clock::now();
+  stats.select_us = Microseconds(t_begin, t_selected);
+  if (!contacts_fit) {
+    stats.total_us = stats.select_us;
+    state.stats = stats;
+    Fail(state, TissueStatus::kTooManyContacts);
+    return;
+  }
+
+  // Assemble K_ff from the precomputed element matrices into the cached pattern.
+  int slot = -1;
+  for (int e = 0; e < static_cast<int>(ws.patterns.size()); ++e) {
+    if (ws.patterns[e].valid && ws.patterns[e].key == key && ws.patterns[e].num_dofs == n) slot = e;
+  }
+  const bool new_pattern = slot < 0;
+  if (new_pattern) {
+    slot = 0;
+    for (int e = 1; e < static_cast<int>(ws.patterns.size()); ++e) {
+      if (!ws.patterns[e].valid ||
+          (ws.patterns[slot].valid && ws.patterns[e].last_used < ws.patterns[slot].last_used))
+        slot = e;
+    }
+    if (ws.ic_valid && ws.ic_key == ws.patterns[slot].key) ws.ic_valid = false;
+    ws.patterns[slot].key = key;
+    BuildPattern(ws, ws.patterns[slot], n);
+  }
+  PatternEntry& entry = ws.patterns[slot];
+  entry.last_used = ++ws.use_clock;
+  stats.pattern_reused = !new_pattern;
+  if (!entry.values_valid || !ws.reuse_values) {
+    AssembleValues(model, mesh, entry);
+    if (ws.ic_key == key) ws.ic_valid = false;
+  }
+  AssembleRhs(model, ws, n);
+  const CsrView a{n, entry.row_ptr.data(), entry.cols.data(), entry.vals.data(), entry.diag.data()};
+  const Clock::time_point t_assembled = Clock::now();
+  stats.assemble_us = Microseconds(t_selected, t_assembled);
+
+  // Solve the reduced system for the free nodes.
+  TissueStatus status = ws.num_contacts == 0 ? TissueStatus::kNoContact : TissueStatus::kOk;
+  double b_norm2 = 0;
+  for (int i = 0; i < n; ++i) b_norm2 += ws.rhs[i] * ws.rhs[i];
+  if (n > 0 && b_norm2 == 0) {
+    std::fill_n(ws.x.begin(), n, 0.0);
+  } else if (n > 0) {
+    if (def.solver == SolverKind::kCholmod) {
+      stats.factor_reused = entry.factor_valid;
+      if (!entry.factor_valid) {
+        if (new_pattern || !ws.cholmod->HasAnalysis(slot)) ws.cholmod->Analyze(slot, a);
+        entry.factor_valid = ws.cholmod->Factorize(slot, a);
+      }
+      if (!entry.factor_valid || !ws.cholmod->Solve(slot, ws.rhs.data(), ws.x.data(), n))
+        status = TissueStatus::kFactorisationFailed;
+    } else {
+      const bool warm = def.solver != SolverKind::kCg && state.step > 0;
+      for (int i = 0; i < n; ++i) {
+        const int node = ws.dof_node[i];
+        ws.x[i] = warm && state.node_step[node] == state.step ? state.w_m[node] : 0.0;
+      }
+      Preconditioner preconditioner = Preconditioner::kNone;
+      bool factored = true;
+      if (def.solver != SolverKind::kCg) {
+        preconditioner =
+            def.solver == SolverKind::kPcgIc ? Preconditioner::kIc0 : Preconditioner::kJacobi;
+        stats.factor_reused = ws.ic_valid && ws.ic_key == key;
+        if (!stats.factor_reused) {
+          factored =
+              preconditioner == Preconditioner::kIc0 ? FactorIc0(a, ws.cg) : FactorJacobi(a, ws.cg);
+          ws.ic_valid = factored;
+          ws.ic_key = key;
+        }
+      }
+      if (!factored) {
+        status = TissueStatus::kFactorisationFailed;
+      } else {
+        const CgResult cg = SolveCg(a, ws.rhs.data(), ws.x.data(), preconditioner,
+                                    def.cg_relative_tolerance, def.cg_max_iterations, ws.cg);
+        stats.iterations = cg.iterations;
+        if (!cg.converged) status = TissueStatus::kNotConverged;
+      }
+    }
+    if (IsGood(status)) {
+      Multiply(a, ws.x.data(), ws.residual.data());
+      double r2 = 0;
+      for (int i = 0; i < n; ++i) {
+        const double r = ws.rhs[i] - ws.residual[i];
+        r2 += r * r;
+      }
+      stats.relative_residual = std::sqrt(r2 / b_norm2);
+      if (!std::isfinite(stats.relative_residual)) status = TissueStatus::kNonFinite;
+    }
+  }
+  const Clock::time_point t_solved = Clock::now();
+  stats.solve_us = Microseconds(t_assembled, t_solved);
+  if (!IsGood(status)) {
+    stats.total_us = Microseconds(t_begin, t_solved);
+    state.stats = stats;
+    Fail(state, status);
+    return;
+  }
+
+  // Reactions at the contact nodes (3.12): f_c = Σ_e K_e w over the elements around c.
+  std::fill_n(ws.contact_f_N.begin(), ws.num_contacts, 0.0);
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    const int d[3] = {ws.node_dof[t.node[0]], ws.node_dof[t.node[1]], ws.node_dof[t.node[2]]};
+    if (d[0] > -2 && d[1] > -2 && d[2] > -2) continue;
+    const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+    for (int a_local = 0; a_local < 3; ++a_local) {
+      if (d[a_local] > -2) continue;
+      double f = 0;
+      for (int b = 0; b < 3; ++b) f += k[3 * a_local + b] * NodeValue(ws, d[b]);
+      ws.contact_f_N[-2 - d[a_local]] += f;
+    }
+  }
+  Eigen::Vector3d f_T_S = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tau_T_S = Eigen::Vector3d::Zero();
+  for (int c = 0; c < ws.num_contacts; ++c) {
+    const int node = ws.contact_nodes[c];
+    const double fz_on_tool_N = -ws.contact_f_N[c];  // the tissue pushes back on the tool
+    const double rx = model.NodeX_m(node) - tool.p_ST.x();
+    const double ry = model.NodeY_m(node) - tool.p_ST.y();
+    f_T_S.z() += fz_on_tool_N;
+    tau_T_S.x() += ry * fz_on_tool_N;  // r × (0, 0, f)
+    tau_T_S.y() -= rx * fz_on_tool_N;
+  }
+  if (!f_T_S.allFinite() || !tau_T_S.allFinite()) {
+    stats.total_us = Microseconds(t_begin, Clock::now());
+    state.stats = stats;
+    Fail(state, TissueStatus::kNonFinite);
+    return;
+  }
+
+  // Commit: this is now the last good state.
+  ++state.step;
+  for (int k = 0; k < mesh.num_active_nodes; ++k) {
+    const int node = mesh.active_nodes[k];
+    state.w_m[node] = NodeValue(ws, ws.node_dof[node]);
+    state.node_step[node] = state.step;
+  }
+  std::copy_n(mesh.leaves.begin(), mesh.num_leaves, state.leaves.begin());
+  state.num_leaves = mesh.num_leaves;
+  std::copy_n(ws.contact_nodes.begin(), ws.num_contacts, state.contact_nodes.begin());
+  std::copy_n(ws.contact_f_N.begin(), ws.num_contacts, state.contact_force_N.begin());
+  state.num_contacts = ws.num_contacts;
+  state.f_T_S = f_T_S;
+  state.tau_T_S = tau_T_S;
+  state.status = status;
+  const Clock::time_point t_end = Clock::now();
+  stats.forces_us = Microseconds(t_solved, t_end);
+  stats.total_us = Microseconds(t_begin, t_end);
+  state.stats = stats;
+}
+
+void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, int level,
+                          std::vector<double>& out_m) {
+  MICRODEX_CHECK(level >= 0 && level <= model.def.max_level);
+  const int cells = 1 << level;
+  const int side = cells + 1;
+  out_m.assign(static_cast<size_t>(side) * side, 0.0);
+  const double hx = model.CellSizeX_m(level), hy = model.CellSizeY_m(level);
+  std::array<Triangle, 8> tris;
+  for (int k = 0; k < state.num_leaves; ++k) {
+    const Leaf& leaf = state.leaves[k];
+    const double lx = model.CellSizeX_m(leaf.level), ly = model.CellSizeY_m(leaf.level);
+    const double x0 = leaf.ci * lx, y0 = leaf.cj * ly;
+    const int count = LeafTriangles(model, leaf, tris);
+    const int i0 = static_cast<int>(std::ceil(x0 / hx - 1e-9));
+    const int i1 = static_cast<int>(std::floor((x0 + lx) / hx + 1e-9));
+    const int j0 = static_cast<int>(std::ceil(y0 / hy - 1e-9));
+    const int j1 = static_cast<int>(std::floor((y0 + ly) / hy + 1e-9));
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) {
+        const double px = i * hx, py = j * hy;
+        for (int t = 0; t < count; ++t) {
+          const auto& nd = tris[t].node;
+          const double xa = model.NodeX_m(nd[0]), ya = model.NodeY_m(nd[0]);
+          const double xb = model.NodeX_m(nd[1]), yb = model.NodeY_m(nd[1]);
+          const double xc = model.NodeX_m(nd[2]), yc = model.NodeY_m(nd[2]);
+          const double det = (xb - xa) * (yc - ya) - (xc - xa) * (yb - ya);
+          const double l1 = ((px - xa) * (yc - ya) - (xc - xa) * (py - ya)) / det;
+          const double l2 = ((xb - xa) * (py - ya) - (px - xa) * (yb - ya)) / det;
+          const double l0 = 1 - l1 - l2;
+          constexpr double kInsideTol = -1e-9;
+          if (l0 < kInsideTol || l1 < kInsideTol || l2 < kInsideTol) continue;
+          out_m[static_cast<size_t>(j) * side + i] =
+              l0 * state.w_m[nd[0]] + l1 * state.w_m[nd[1]] + l2 * state.w_m[nd[2]];
+          break;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace microdex::fem

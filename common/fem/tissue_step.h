@@ -1,0 +1,124 @@
+#pragma once
+// One haptic step of the soft-tissue model: choose the mesh around the tool, assemble the
+// reduced system (3.9)–(3.11) from the precomputed element matrices, solve it, and recover
+// the reaction forces at the contact nodes (3.12), their resultant and torque.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "common/fem/cg_solver.h"
+#include "common/fem/cholmod_solver.h"
+#include "common/fem/multiscale_mesh.h"
+#include "common/fem/tissue_model.h"
+#include "common/fem/tool_contact.h"
+
+namespace microdex::fem {
+
+enum class TissueStatus : std::uint8_t {
+  kOk,
+  kNoContact,            // the tool does not press into the tissue: w = 0, no force
+  kBadInput,             // non-finite tool coordinates; last good state kept
+  kTooManyContacts,      // more contact nodes than max_contact_nodes; last good state kept
+  kNotConverged,         // CG reached cg_max_iterations; last good state kept
+  kFactorisationFailed,  // CHOLMOD / IC(0) / Jacobi breakdown; last good state kept
+  kNonFinite,            // a NaN or Inf in the solution; last good state kept
+};
+const char* ToString(TissueStatus status);
+inline bool IsGood(TissueStatus s) {
+  return s == TissueStatus::kOk || s == TissueStatus::kNoContact;
+}
+
+// Cost and error of one step.
+struct TissueStepStats {
+  int unknowns = 0;  // free nodes of the reduced system
+  int contact_nodes = 0;
+  int active_nodes = 0;
+  int triangles = 0;
+  int leaves = 0;
+  int iterations = 0;            // CG iterations (0 for CHOLMOD)
+  double relative_residual = 0;  // ‖b − K_ff u_f‖ / ‖b‖, recomputed after the solve
+  bool pattern_reused = false;   // the selection's sparsity pattern was in the cache
+  bool factor_reused = false;    // ... and its values and factor were reused unchanged
+  double select_us = 0;          // mesh selection and contact detection
+  double assemble_us = 0;        // pattern (if new) and values
+  double solve_us = 0;           // factorisation (if any) and solve
+  double forces_us = 0;          // reactions, resultant, torque, commit
+  double total_us = 0;
+};
+
+// Plain copyable state of the tissue. Arrays are sized at MakeTissueState; the step only
+// writes into them.
+struct TissueState {
+  std::vector<double> w_m;               // [num_grid_nodes] displacement (z), last good step
+  std::vector<std::uint32_t> node_step;  // [num_grid_nodes] w_m valid where == step
+  std::uint32_t step = 0;                // count of good steps
+  std::vector<Leaf> leaves;              // [max_leaves] mesh of the last good step (display)
+  int num_leaves = 0;
+  std::vector<std::int32_t> contact_nodes;  // [max_contact_nodes]
+  std::vector<double> contact_force_N;      // [max_contact_nodes] tool → tissue, (3.12)
+  int num_contacts = 0;
+  Eigen::Vector3d f_T_S = Eigen::Vector3d::Zero();    // force of the tissue on the tool, N
+  Eigen::Vector3d tau_T_S = Eigen::Vector3d::Zero();  // its torque about tool.p_ST, N·m (z = 0)
+  TissueStatus status = TissueStatus::kNoContact;     // of the latest step
+  std::uint32_t num_failed_steps = 0;
+  TissueStepStats stats;
+};
+TissueState MakeTissueState(const TissueModel& model);
+
+// A cached sparsity pattern of K_ff (full CSR, sorted) and where each element entry goes.
+struct PatternEntry {
+  std::uint64_t key = 0;
+  bool valid = false;
+  bool values_valid = false;  // vals hold K_ff for this key (values depend only on the key)
+  bool factor_valid = false;  // the CHOLMOD slot holds the numeric factor of vals
+  std::uint64_t last_used = 0;
+  int num_dofs = 0;
+  std::vector<int> row_ptr;  // [num_grid_nodes + 1]
+  std::vector<int> cols;     // [kMaxRowEntries · num_grid_nodes]
+  std::vector<int> diag;     // [num_grid_nodes]
+  std::vector<double> vals;  // [kMaxRowEntries · num_grid_nodes]
+  std::vector<int> scatter;  // [9 · max_triangles] CSR slot of element entry (a, b), or −1
+};
+
+inline constexpr int kMaxRowEntries = 16;
+
+// Scratch of the step: buffers, pattern cache, solver state. Not copyable; one per model.
+struct TissueWorkspace {
+  explicit TissueWorkspace(const TissueModel& model);
+  MeshSelection mesh;
+  std::vector<std::int32_t> node_dof;  // [num_grid_nodes] ≥0 free dof, −1 fixed, −2−c contact c
+  std::vector<std::int32_t> dof_node;        // [num_grid_nodes]
+  std::vector<std::uint32_t> contact_stamp;  // [num_grid_nodes] == mesh.mark: contact node
+  std::vector<std::int32_t> contact_nodes;   // [max_contact_nodes]
+  std::vector<double> contact_w_m;           // [max_contact_nodes] prescribed displacement U
+  std::vector<double> contact_f_N;           // [max_contact_nodes]
+  int num_contacts = 0;
+  std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · num_grid_nodes] pattern scratch
+  std::vector<int> row_count;            // [num_grid_nodes]
+  std::vector<double> rhs, x, residual;  // [num_grid_nodes]
+  std::vector<PatternEntry> patterns;
+  std::uint64_t use_clock = 0;
+  std::uint64_t ic_key = 0;  // key whose IC(0)/Jacobi factor is in cg
+  bool ic_valid = false;
+  CgWorkspace cg;
+  std::unique_ptr<CholmodSolver> cholmod;
+  // When false every step re-assembles the values and re-factorises even if the pattern is
+  // cached (the thesis's per-step assembly); the symbolic analysis is reused either way.
+  bool reuse_values = true;
+};
+
+// Reads the tool and the state's last good field (warm start); writes the state: displacement
+// field, contact forces, f_T_S, tau_T_S, status and stats. On failure the state keeps the
+// last good field and forces and records the status. Allocation-free after the first steps
+// of each pattern (CHOLMOD analysis of a new pattern allocates inside CHOLMOD).
+void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
+                TissueState& state);
+
+// Displacement of the last good step at the nodes of a uniform grid of `level`
+// (out: (2^level + 1)², row-major in y), interpolated on the step's triangles.
+void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, int level,
+                          std::vector<double>& out_m);
+
+}  // namespace microdex::fem
