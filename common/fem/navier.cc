@@ -72,7 +72,7 @@ double NavierLineLoadDisplacement_m(const NavierDomain& domain, const UniformLin
 }
 
 NavierBar::NavierBar(const NavierDomain& domain, double x1_m, double x2_m, double y1_m,
-                     double w_bar_m, int num_modes)
+                     double w_bar_m, int num_modes, int max_series_terms)
     : domain_(domain), x1_m_(x1_m), x2_m_(x2_m), y1_m_(y1_m), w_bar_m_(w_bar_m) {
   const double lx = domain.length_x_m, ly = domain.length_y_m;
   if (!(0 < x1_m && x1_m < x2_m && x2_m < lx && 0 < y1_m && y1_m < ly) || num_modes < 1) {
@@ -118,6 +118,41 @@ NavierBar::NavierBar(const NavierDomain& domain, double x1_m, double x2_m, doubl
   rhs(0) = kPi * w_bar_m;
   const Eigen::VectorXd c = a.partialPivLu().solve(rhs);
   c_.assign(c.data(), c.data() + num_modes);
+  // ∫ e^{iβs} T_l(s)/√(1 − s²) ds = π i^l J_l(β), so the sine moments of the load are Bessel sums.
+  load_sine_.resize(max_series_terms);
+  for (int m = 1; m <= max_series_terms; ++m) {
+    const double k = m * kPi / lx;
+    const double alpha = k * xc_m_, beta = k * a_m_;
+    double sum = 0;
+    for (int l = 0; l < num_modes; ++l) {
+      const double j = std::cyl_bessel_j(static_cast<double>(l), beta);
+      const double re = (l % 4 == 0) ? 1 : (l % 4 == 2 ? -1 : 0);
+      const double im = (l % 4 == 1) ? 1 : (l % 4 == 3 ? -1 : 0);
+      sum += c_[l] * kPi * (std::sin(alpha) * re + std::cos(alpha) * im) * j;
+    }
+    load_sine_[m - 1] = sum;
+  }
+}
+
+double NavierBar::Displacement_m(double x_m, double y_m) const {
+  const double lx = domain_.length_x_m, ly = domain_.length_y_m;
+  const double gt = domain_.shear_modulus_Pa * domain_.thickness_m;
+  const double dy = std::abs(y_m - y1_m_);
+  const double ratio = std::exp(-kPi * dy / lx);
+  // |S_m| ≤ π Σ|c_l| since |J_l| ≤ 1: a bound that does not vanish with S_m (S_m = 0 for
+  // every even m when the bar is centred, which must not stop the sum).
+  double s_max = 0;
+  for (double c : c_) s_max += kPi * std::abs(c);
+  double w = 0;
+  for (size_t mi = 0; mi < load_sine_.size(); ++mi) {
+    const double k = (mi + 1) * kPi / lx;
+    // (A.3) with the n-sum in closed form: w = Σ_m (2/(L G t)) sin(kx) Y_k(y, y₁) S_m.
+    w += 2 / (lx * gt) * std::sin(k * x_m) * GreenY(k, y_m, y1_m_, ly) * load_sine_[mi];
+    const double bound =
+        2 / (lx * gt) * std::exp(-k * dy) / (2 * k * (1 - std::exp(-2 * k * ly))) * s_max * 2;
+    if (ratio < 1 && bound * ratio / (1 - ratio) < 1e-12 * std::abs(w)) break;
+  }
+  return w;
 }
 
 double NavierBar::SmoothKernel(double x_m, double xi_m) const {

@@ -53,7 +53,7 @@ double NavierLineLoadDisplacement_m(const NavierDomain& domain, const UniformLin
 class NavierBar {
  public:
   NavierBar(const NavierDomain& domain, double x1_m, double x2_m, double y1_m, double w_bar_m,
-            int num_modes = 40);
+            int num_modes = 40, int max_series_terms = 4096);
 
   double TotalForce_N() const;                   // ∫ q dx: force of the tool on the tissue
   double LoadDensity_N_per_m(double x_m) const;  // q(x) (infinite at the ends)
@@ -63,6 +63,9 @@ class NavierBar {
   double IntervalForce_N(double xa_m, double xb_m) const;
   // w at a point of the bar from the solved load (equals w_bar up to the solution error).
   double BarDisplacement_m(double x_m) const;
+  // w anywhere off the bar's line y = y₁ (the series converges like exp(−mπ|y − y₁|/L)),
+  // summed until the remaining terms are below 1e-12 of the sum or max_series_terms is hit.
+  double Displacement_m(double x_m, double y_m) const;
   const std::vector<double>& coefficients() const { return c_; }
   int remainder_terms() const { return remainder_terms_; }
 
@@ -74,6 +77,7 @@ class NavierBar {
   double x1_m_, x2_m_, y1_m_, w_bar_m_;
   double xc_m_, a_m_;
   std::vector<double> c_;
+  std::vector<double> load_sine_;  // [m − 1] Σ_l c_l ∫ sin(mπξ/L) T_l(s)/√(1 − s²) ds
   int remainder_terms_ = 0;
 };
 

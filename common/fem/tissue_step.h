@@ -117,7 +117,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
                 TissueState& state);
 
 // Displacement of the last good step at the nodes of a uniform grid of `level`
-// (out: (2^level + 1)², row-major in y), interpolated on the step's triangles.
+// (out: (2^level + 1)², row-major in y, 0 ≤ level ≤ 12), interpolated on the step's triangles.
 void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, int level,
                           std::vector<double>& out_m);
 

@@ -1,0 +1,561 @@
+// microdex-bench fem: the accuracy and speed study of thesis §3.3 (figures 3.5–3.8).
+// A 20 × 20 cm domain, G = 1 N/cm², a 10 cm bar pressed down 1 cm; G1 bar at the centre, G2
+// bar near the border (y = 2.5 cm), G3 a bar through the centre at 30° (timing only).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bench_registry.h"
+#include "common/fem/navier.h"
+#include "common/fem/tissue_step.h"
+
+namespace microdex::fem {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kDomain_m = 20 * kMetrePerCm;
+constexpr double kPress_m = 1 * kMetrePerCm;
+constexpr double kBarLength_m = 10 * kMetrePerCm;
+
+struct Case {
+  const char* name;
+  double cx_m, cy_m, angle_rad;
+  bool has_navier;
+};
+
+const Case kCases[] = {
+    {"G1", 0.10, 0.10, 0.0, true},
+    {"G2", 0.10, 0.025, 0.0, true},
+    {"G3", 0.10, 0.10, std::numbers::pi / 6, false},
+};
+
+ToolContact BarTool(const Case& c, double depth_m, double shift_x_m = 0, double shift_y_m = 0) {
+  const double dx = 0.5 * kBarLength_m * std::cos(c.angle_rad);
+  const double dy = 0.5 * kBarLength_m * std::sin(c.angle_rad);
+  return MakeBarTool({c.cx_m + shift_x_m - dx, c.cy_m + shift_y_m - dy, -depth_m},
+                     {c.cx_m + shift_x_m + dx, c.cy_m + shift_y_m + dy, -depth_m});
+}
+
+TissueDef StudyDef(int level, MeshKind mesh, SolverKind solver, double grading) {
+  TissueDef def;
+  def.length_x_m = kDomain_m;
+  def.length_y_m = kDomain_m;
+  def.shear_modulus_Pa = 1 * kPascalPerNewtonPerCm2;
+  def.thickness_m = 1 * kMetrePerCm;
+  def.max_level = level;
+  def.level = level;
+  def.mesh = mesh;
+  def.solver = solver;
+  def.grading = grading;
+  def.cg_max_iterations = 100000;
+  return def;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
+}
+
+std::string Num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+struct Run {
+  std::string case_name, mesh, solver;
+  int level = 0, unknowns = 0, contacts = 0, iterations = 0, steps = 0;
+  double step_us = kNaN, cached_step_us = kNaN, select_us = kNaN, assemble_us = kNaN,
+         solve_us = kNaN, forces_us = kNaN;
+  double rms = kNaN, nodal_rms = kNaN, force_error = kNaN, force_N = kNaN, residual = kNaN;
+  std::string status;
+};
+
+struct Distribution {
+  std::string case_name, mesh;
+  int level;
+  std::vector<double> x_m, f_N, ref_N;
+};
+
+struct Moving {
+  int level;
+  std::string solver;
+  double median_us, p99_us, max_us, reuse_fraction;
+  int failed, steps;
+  double mean_unknowns;
+};
+
+struct Options {
+  std::string json, plot_dir;
+  int max_level = 8;
+  int min_steps = 15;
+  double budget_s = 0.4;
+  double grading = 2.0;
+};
+
+// Times steps of a bar whose depth oscillates ±10 % around 1 cm (the selection and the
+// pattern stay, the right-hand side changes), re-assembling values every step.
+void TimeRun(const TissueModel& model, const Case& c, bool reuse_values, const Options& opt,
+             Run& run) {
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  ws.reuse_values = reuse_values;
+  std::vector<double> total, select, assemble, solve, forces, iterations;
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0;; ++k) {
+    const double depth = kPress_m * (1 + 0.1 * std::sin(2 * std::numbers::pi * k / 16));
+    StepTissue(model, BarTool(c, depth), ws, state);
+    if (k < 2) continue;  // warm-up: first analysis, first warm start
+    total.push_back(state.stats.total_us);
+    select.push_back(state.stats.select_us);
+    assemble.push_back(state.stats.assemble_us);
+    solve.push_back(state.stats.solve_us);
+    forces.push_back(state.stats.forces_us);
+    iterations.push_back(state.stats.iterations);
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (static_cast<int>(total.size()) >= opt.min_steps ||
+        (elapsed > opt.budget_s && total.size() >= 3))
+      break;
+  }
+  if (reuse_values) {
+    run.cached_step_us = Median(total);
+    return;
+  }
+  run.step_us = Median(total);
+  run.select_us = Median(select);
+  run.assemble_us = Median(assemble);
+  run.solve_us = Median(solve);
+  run.forces_us = Median(forces);
+  run.iterations = static_cast<int>(Median(iterations));
+  run.steps = static_cast<int>(total.size());
+}
+
+int RunFem(int argc, char** argv) {
+  Options opt;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(a + ": expected a value");
+      return argv[++i];
+    };
+    if (a == "--json") {
+      opt.json = value();
+    } else if (a == "--plot") {
+      opt.plot_dir = value();
+    } else if (a == "--quick") {
+      opt.max_level = 5;
+      opt.min_steps = 5;
+      opt.budget_s = 0.05;
+    } else if (a == "--max-level") {
+      opt.max_level = std::stoi(value());
+      if (opt.max_level < 1 || opt.max_level > 9)
+        throw std::invalid_argument("--max-level: expected 1..9");
+    } else if (a == "--grading") {
+      opt.grading = std::stod(value());
+    } else if (a == "--help" || a == "-h") {
+      std::printf(
+          "microdex-bench fem [--json FILE] [--plot DIR] [--quick] [--max-level N] "
+          "[--grading G]\n  the thesis §3.3 study: force along the bar, RMS error and CPU time by "
+          "level,\n  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n");
+      return 0;
+    } else {
+      throw std::invalid_argument("unknown option '" + a + "'");
+    }
+  }
+  const SolverKind solvers[] = {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc,
+                                SolverKind::kCholmod};
+  const NavierDomain domain{kDomain_m, kDomain_m, 1 * kPascalPerNewtonPerCm2, 1 * kMetrePerCm};
+  std::vector<Run> runs;
+  std::vector<Distribution> distributions;
+  std::vector<std::pair<std::string, std::vector<double>>> navier_density;  // case → q samples
+  std::vector<std::pair<std::string, double>> navier_force;
+  for (const Case& c : kCases) {
+    std::optional<NavierBar> navier;
+    if (c.has_navier) {
+      navier.emplace(domain, c.cx_m - kBarLength_m / 2, c.cx_m + kBarLength_m / 2, c.cy_m,
+                     -kPress_m, 40);
+      navier_force.emplace_back(c.name, navier->TotalForce_N());
+      std::vector<double> q;
+      for (int i = 0; i <= 200; ++i) {
+        const double x = c.cx_m - kBarLength_m / 2 + kBarLength_m * (i + 0.5) / 201.5;
+        q.push_back(x);
+        q.push_back(navier->LoadDensity_N_per_m(x));
+      }
+      navier_density.emplace_back(c.name, q);
+    }
+    // Reference field on the level-5 grid (33 × 33 nodes), except the row on the bar's line
+    // where the series converges only algebraically.
+    constexpr int kFieldLevel = 5;
+    const int field_side = (1 << kFieldLevel) + 1;
+    const double field_h = kDomain_m / (1 << kFieldLevel);
+    std::vector<double> field_ref(field_side * field_side, kNaN);
+    if (navier) {
+      for (int j = 1; j + 1 < field_side; ++j) {
+        if (std::abs(j * field_h - c.cy_m) < 1e-9) continue;
+        for (int i = 1; i + 1 < field_side; ++i)
+          field_ref[j * field_side + i] = navier->Displacement_m(i * field_h, j * field_h);
+      }
+    }
+    for (int level = 1; level <= opt.max_level; ++level) {
+      for (MeshKind mesh : {MeshKind::kFine, MeshKind::kMultiscale}) {
+        for (SolverKind solver : solvers) {
+          const TissueModel model = BuildTissueModel(StudyDef(level, mesh, solver, opt.grading));
+          Run run;
+          run.case_name = c.name;
+          run.mesh = ToString(mesh);
+          run.solver = ToString(solver);
+          run.level = level;
+          {  // accuracy: one cold step at exactly 1 cm
+            TissueWorkspace ws(model);
+            TissueState state = MakeTissueState(model);
+            StepTissue(model, BarTool(c, kPress_m), ws, state);
+            run.status = ToString(state.status);
+            run.unknowns = state.stats.unknowns;
+            run.contacts = state.num_contacts;
+            run.residual = state.stats.relative_residual;
+            run.force_N = -state.f_T_S.z();  // force of the tool on the tissue
+            if (navier) {
+              run.force_error =
+                  std::abs(run.force_N - navier->TotalForce_N()) / std::abs(navier->TotalForce_N());
+              const double h = model.CellSizeX_m(level);
+              bool on_line = state.num_contacts > 0;
+              double num = 0, den = 0;
+              Distribution dist{c.name, run.mesh, level, {}, {}, {}};
+              for (int k = 0; k < state.num_contacts; ++k) {
+                const int node = state.contact_nodes[k];
+                if (std::abs(model.NodeY_m(node) - c.cy_m) > 1e-9) on_line = false;
+                const double x = model.NodeX_m(node);
+                const double ref = navier->HatForce_N(x, h);
+                num += (state.contact_force_N[k] - ref) * (state.contact_force_N[k] - ref);
+                den += ref * ref;
+                dist.x_m.push_back(x);
+                dist.f_N.push_back(state.contact_force_N[k]);
+                dist.ref_N.push_back(ref);
+              }
+              if (on_line && den > 0) run.nodal_rms = std::sqrt(num / den);
+              std::vector<double> field;
+              CalcDisplacementGrid(model, state, kFieldLevel, field);
+              double sum2 = 0;
+              int count = 0;
+              for (int j = 0; j < field_side; ++j) {
+                for (int i = 0; i < field_side; ++i) {
+                  const double ref = field_ref[j * field_side + i];
+                  if (std::isnan(ref)) continue;
+                  const double w = field[j * field_side + i];
+                  sum2 += (w - ref) * (w - ref);
+                  ++count;
+                }
+              }
+              run.rms = std::sqrt(sum2 / count) / kPress_m;
+              if (solver == SolverKind::kCholmod) distributions.push_back(dist);
+            }
+          }
+          TimeRun(model, c, /*reuse_values=*/false, opt, run);
+          TimeRun(model, c, /*reuse_values=*/true, opt, run);
+          std::fprintf(
+              stderr, "%s L%d %-10s %-10s n=%6d step %10.1f us cached %9.1f us rms %s F %s\n",
+              c.name, level, run.mesh.c_str(), run.solver.c_str(), run.unknowns, run.step_us,
+              run.cached_step_us, Num(run.rms).c_str(), Num(run.force_error).c_str());
+          runs.push_back(run);
+        }
+      }
+    }
+  }
+
+  // The tool sweeping across the tissue at 1 m/s (1 mm per 1 kHz step, more than a level-7
+  // or level-8 cell) while turning, so the contact nodes change every step.
+  std::vector<Moving> moving;
+  for (int level = std::max(1, opt.max_level - 1); level <= opt.max_level; ++level) {
+    for (SolverKind solver : solvers) {
+      const TissueModel model =
+          BuildTissueModel(StudyDef(level, MeshKind::kMultiscale, solver, opt.grading));
+      TissueWorkspace ws(model);
+      TissueState state = MakeTissueState(model);
+      std::vector<double> us;
+      int reused = 0, failed = 0;
+      double unknowns = 0;
+      const int steps = opt.min_steps * 20;
+      for (int k = 0; k < steps + 5; ++k) {
+        const double t = 1e-3 * k;
+        const double cx = 0.06 + 0.08 * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * t / 0.16));
+        Case c{"moving", cx, 0.10 + 0.03 * std::sin(2 * std::numbers::pi * t / 0.2), 0.5 * t,
+               false};
+        StepTissue(model, BarTool(c, kPress_m), ws, state);
+        if (k < 5) continue;
+        us.push_back(state.stats.total_us);
+        reused += state.stats.pattern_reused;
+        failed += !IsGood(state.status);
+        unknowns += state.stats.unknowns;
+      }
+      moving.push_back({level, ToString(solver), Median(us), Percentile(us, 0.99),
+                        *std::max_element(us.begin(), us.end()),
+                        static_cast<double>(reused) / us.size(), failed,
+                        static_cast<int>(us.size()), unknowns / us.size()});
+    }
+  }
+
+  auto find = [&](const std::string& cs, int level, const std::string& mesh,
+                  const std::string& solver) -> const Run* {
+    for (const Run& r : runs) {
+      if (r.case_name == cs && r.level == level && r.mesh == mesh && r.solver == solver) return &r;
+    }
+    return nullptr;
+  };
+
+  // Goals of the issue, evaluated on this run's measurements.
+  auto best_ms = [&](int level) {
+    double best = kNaN;
+    std::string name;
+    for (SolverKind s : solvers) {
+      const Run* r = find("G1", level, "multiscale", ToString(s));
+      if (r && (std::isnan(best) || r->step_us < best)) {
+        best = r->step_us;
+        name = ToString(s);
+      }
+    }
+    return std::make_pair(best, name);
+  };
+  std::string goals = "{";
+  {
+    const int l7 = std::min(7, opt.max_level), l8 = std::min(8, opt.max_level);
+    auto [b7, s7] = best_ms(l7);
+    auto [b8, s8] = best_ms(l8);
+    goals += "\"level_for_500us_goal\": " + std::to_string(l7) +
+             ", \"best_multiscale_step_us\": " + Num(b7) + ", \"best_solver\": \"" + s7 +
+             "\", \"goal_500us_met\": " + (b7 <= 500 ? "true" : "false");
+    goals += ", \"level_for_1ms_goal\": " + std::to_string(l8) +
+             ", \"best_multiscale_step_us_top\": " + Num(b8) + ", \"best_solver_top\": \"" + s8 +
+             "\", \"goal_1ms_met\": " + (b8 <= 1000 ? "true" : "false");
+    double min_speedup = kNaN;
+    std::string speedups;
+    for (SolverKind s : solvers) {
+      const Run* f = find("G1", l7, "fine", ToString(s));
+      const Run* m = find("G1", l7, "multiscale", ToString(s));
+      if (!f || !m) continue;
+      const double sp = f->step_us / m->step_us;
+      if (!speedups.empty()) speedups += ", ";
+      speedups += "\"";
+      speedups += ToString(s);
+      speedups += "\": ";
+      speedups += Num(sp);
+      if (std::isnan(min_speedup) || sp < min_speedup) min_speedup = sp;
+    }
+    goals += ", \"speedup_by_solver\": {" + speedups + "}, \"min_speedup\": " + Num(min_speedup) +
+             ", \"goal_speedup_20x_met\": " + (min_speedup >= 20 ? "true" : "false");
+    bool rms_ok = true, force_ok = true;
+    for (int level = 1; level <= opt.max_level; ++level) {
+      const Run* f = find("G1", level, "fine", "cholmod");
+      const Run* m = find("G1", level, "multiscale", "cholmod");
+      if (level <= 6 && f && m && std::isfinite(f->rms) && !(m->rms <= 1.5 * f->rms))
+        rms_ok = false;
+      for (const char* cs : {"G1", "G2"}) {
+        for (const char* mk : {"fine", "multiscale"}) {
+          const Run* r = find(cs, level, mk, "cholmod");
+          if (level >= 5 && r && !(r->force_error <= 0.02)) force_ok = false;
+        }
+      }
+    }
+    goals += std::string(", \"goal_g1_rms_within_1p5x_fine_met\": ") + (rms_ok ? "true" : "false");
+    goals += std::string(", \"goal_force_within_2pct_from_level5_met\": ") +
+             (force_ok ? "true" : "false");
+  }
+  goals += "}";
+
+  std::FILE* out = stdout;
+  if (!opt.json.empty()) {
+    out = std::fopen(opt.json.c_str(), "w");
+    if (!out) throw std::invalid_argument("--json " + opt.json + ": cannot open for writing");
+  }
+  std::fprintf(out,
+               "{\n  \"bench\": \"fem\",\n  \"domain_m\": %s, \"shear_modulus_Pa\": %s, "
+               "\"thickness_m\": %s, \"bar_length_m\": %s, \"press_m\": %s, \"grading\": %s,\n",
+               Num(kDomain_m).c_str(), Num(1e4).c_str(), Num(0.01).c_str(),
+               Num(kBarLength_m).c_str(), Num(kPress_m).c_str(), Num(opt.grading).c_str());
+  std::fprintf(out, "  \"navier_force_N\": {");
+  for (size_t i = 0; i < navier_force.size(); ++i)
+    std::fprintf(out, "%s\"%s\": %s", i ? ", " : "", navier_force[i].first.c_str(),
+                 Num(-navier_force[i].second).c_str());
+  std::fprintf(out, "},\n  \"goals\": %s,\n  \"runs\": [\n", goals.c_str());
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const Run& r = runs[i];
+    std::fprintf(out,
+                 "    {\"case\": \"%s\", \"level\": %d, \"mesh\": \"%s\", \"solver\": \"%s\", "
+                 "\"unknowns\": %d, \"contact_nodes\": %d, \"step_us\": %s, "
+                 "\"cached_step_us\": %s, \"select_us\": %s, \"assemble_us\": %s, "
+                 "\"solve_us\": %s, \"forces_us\": %s, \"iterations\": %d, \"steps\": %d, "
+                 "\"relative_residual\": %s, \"force_N\": %s, \"rms_error_vs_navier\": %s, "
+                 "\"nodal_force_rms_error\": %s, "
+                 "\"resultant_force_error\": %s, \"status\": \"%s\"}%s\n",
+                 r.case_name.c_str(), r.level, r.mesh.c_str(), r.solver.c_str(), r.unknowns,
+                 r.contacts, Num(r.step_us).c_str(), Num(r.cached_step_us).c_str(),
+                 Num(r.select_us).c_str(), Num(r.assemble_us).c_str(), Num(r.solve_us).c_str(),
+                 Num(r.forces_us).c_str(), r.iterations, r.steps, Num(r.residual).c_str(),
+                 Num(r.force_N).c_str(), Num(r.rms).c_str(), Num(r.nodal_rms).c_str(),
+                 Num(r.force_error).c_str(), r.status.c_str(), i + 1 < runs.size() ? "," : "");
+  }
+  std::fprintf(out, "  ],\n  \"moving\": [\n");
+  for (size_t i = 0; i < moving.size(); ++i) {
+    const Moving& m = moving[i];
+    std::fprintf(out,
+                 "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", \"steps\": %d, "
+                 "\"median_us\": %s, \"p99_us\": %s, \"max_us\": %s, \"pattern_reuse_fraction\": "
+                 "%s, \"failed_steps\": %d, \"mean_unknowns\": %s}%s\n",
+                 m.level, m.solver.c_str(), m.steps, Num(m.median_us).c_str(),
+                 Num(m.p99_us).c_str(), Num(m.max_us).c_str(), Num(m.reuse_fraction).c_str(),
+                 m.failed, Num(m.mean_unknowns).c_str(), i + 1 < moving.size() ? "," : "");
+  }
+  std::fprintf(out, "  ],\n  \"force_distribution\": [\n");
+  for (size_t i = 0; i < distributions.size(); ++i) {
+    const Distribution& d = distributions[i];
+    std::string xs, fs, rs;
+    for (size_t k = 0; k < d.x_m.size(); ++k) {
+      if (k > 0) {
+        xs += ", ";
+        fs += ", ";
+        rs += ", ";
+      }
+      xs += Num(d.x_m[k]);
+      fs += Num(d.f_N[k]);
+      rs += Num(d.ref_N[k]);
+    }
+    std::fprintf(out,
+                 "    {\"case\": \"%s\", \"level\": %d, \"mesh\": \"%s\", \"x_m\": [%s], "
+                 "\"force_N\": [%s], \"navier_N\": [%s]}%s\n",
+                 d.case_name.c_str(), d.level, d.mesh.c_str(), xs.c_str(), fs.c_str(), rs.c_str(),
+                 i + 1 < distributions.size() ? "," : "");
+  }
+  std::fprintf(out, "  ]\n}\n");
+  if (out != stdout) std::fclose(out);
+
+  if (!opt.plot_dir.empty()) {
+    namespace fs = std::filesystem;
+    fs::create_directories(opt.plot_dir);
+    const std::string dir = opt.plot_dir + "/";
+    if (std::FILE* f = std::fopen((dir + "fem_runs.csv").c_str(), "w")) {
+      std::fprintf(f,
+                   "case,level,mesh,solver,unknowns,step_us,cached_step_us,rms_error_vs_navier,"
+                   "resultant_force_error,force_N,iterations\n");
+      for (const Run& r : runs)
+        std::fprintf(f, "%s,%d,%s,%s,%d,%s,%s,%s,%s,%s,%d\n", r.case_name.c_str(), r.level,
+                     r.mesh.c_str(), r.solver.c_str(), r.unknowns, Num(r.step_us).c_str(),
+                     Num(r.cached_step_us).c_str(), Num(r.rms).c_str(), Num(r.force_error).c_str(),
+                     Num(r.force_N).c_str(), r.iterations);
+      std::fclose(f);
+    }
+    // Per-figure data files for gnuplot (blank-line separated blocks, NaN as "?").
+    auto q = [](double v) { return std::isfinite(v) ? Num(v) : std::string("?"); };
+    if (std::FILE* f = std::fopen((dir + "fig3_5_force_G1.dat").c_str(), "w")) {
+      for (const auto& [name, qs] : navier_density) {
+        if (name != "G1") continue;
+        std::fprintf(f, "# navier x_cm q_N_per_cm\n");
+        for (size_t k = 0; k + 1 < qs.size(); k += 2)
+          std::fprintf(f, "%s %s\n", q(qs[k] * 100).c_str(), q(-qs[k + 1] / 100).c_str());
+      }
+      for (const Distribution& d : distributions) {
+        if (d.case_name != "G1") continue;
+        const double h_cm = 100 * kDomain_m / (1 << d.level);
+        std::fprintf(f, "\n\n# %s level %d: x_cm f/h N_per_cm\n", d.mesh.c_str(), d.level);
+        for (size_t k = 0; k < d.x_m.size(); ++k)
+          std::fprintf(f, "%s %s\n", q(d.x_m[k] * 100).c_str(), q(-d.f_N[k] / h_cm).c_str());
+      }
+      std::fclose(f);
+    }
+    if (std::FILE* f = std::fopen((dir + "fig3_6_rms.csv").c_str(), "w")) {
+      std::fprintf(f, "level,G1_fine,G1_multiscale,G2_fine,G2_multiscale\n");
+      for (int level = 1; level <= opt.max_level; ++level) {
+        std::fprintf(f, "%d", level);
+        for (const char* cs : {"G1", "G2"})
+          for (const char* mk : {"fine", "multiscale"}) {
+            const Run* r = find(cs, level, mk, "cholmod");
+            std::fprintf(f, ",%s", q(r ? r->rms : kNaN).c_str());
+          }
+        std::fprintf(f, "\n");
+      }
+      std::fclose(f);
+    }
+    if (std::FILE* f = std::fopen((dir + "fig3_7_time.csv").c_str(), "w")) {
+      std::fprintf(f, "level");
+      for (SolverKind s : solvers)
+        for (const char* mk : {"fine", "multiscale"}) std::fprintf(f, ",%s_%s", mk, ToString(s));
+      std::fprintf(f, "\n");
+      for (int level = 1; level <= opt.max_level; ++level) {
+        std::fprintf(f, "%d", level);
+        for (SolverKind s : solvers)
+          for (const char* mk : {"fine", "multiscale"}) {
+            const Run* r = find("G1", level, mk, ToString(s));
+            std::fprintf(f, ",%s", q(r ? r->step_us : kNaN).c_str());
+          }
+        std::fprintf(f, "\n");
+      }
+      std::fclose(f);
+    }
+    if (std::FILE* f = std::fopen((dir + "fig3_8_speedup.csv").c_str(), "w")) {
+      std::fprintf(f, "level");
+      for (const Case& c : kCases)
+        for (SolverKind s : solvers) std::fprintf(f, ",%s_%s", c.name, ToString(s));
+      std::fprintf(f, "\n");
+      for (int level = 1; level <= opt.max_level; ++level) {
+        std::fprintf(f, "%d", level);
+        for (const Case& c : kCases)
+          for (SolverKind s : solvers) {
+            const Run* fr = find(c.name, level, "fine", ToString(s));
+            const Run* mr = find(c.name, level, "multiscale", ToString(s));
+            std::fprintf(f, ",%s", q(fr && mr ? fr->step_us / mr->step_us : kNaN).c_str());
+          }
+        std::fprintf(f, "\n");
+      }
+      std::fclose(f);
+    }
+    if (std::FILE* f = std::fopen((dir + "fem_plots.gp").c_str(), "w")) {
+      std::fprintf(f,
+                   "set terminal pngcairo size 900,600\nset datafile separator ','\n"
+                   "set key autotitle columnhead\nset grid\n"
+                   "set output '%sfig3_6_rms.png'\nset logscale y\nset xlabel 'mesh level'\n"
+                   "set ylabel 'relative RMS error of nodal force vs Navier'\n"
+                   "plot for [i=2:5] '%sfig3_6_rms.csv' using 1:i with linespoints\n"
+                   "set output '%sfig3_7_time.png'\nset ylabel 'step time (us), case G1'\n"
+                   "plot for [i=2:9] '%sfig3_7_time.csv' using 1:i with linespoints\n"
+                   "set output '%sfig3_8_speedup.png'\nunset logscale y\n"
+                   "set ylabel 'speed-up fine / multi-scale'\n"
+                   "plot for [i=2:13] '%sfig3_8_speedup.csv' using 1:i with linespoints\n"
+                   "set output '%sfig3_5_force_G1.png'\nset datafile separator whitespace\n"
+                   "set key noautotitle\nset xlabel 'x (cm)'\nset ylabel 'line force (N/cm)'\n"
+                   "set yrange [0:*]\n"
+                   "plot '%sfig3_5_force_G1.dat' index 0 with lines lw 2 title 'Navier', "
+                   "for [b=1:%d] '' index b with linespoints title sprintf('FEM block %%d', b)\n",
+                   dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str(),
+                   dir.c_str(), dir.c_str(), 2 * opt.max_level);
+      std::fclose(f);
+      const std::string cmd = "gnuplot '" + dir + "fem_plots.gp' 2>&1";
+      if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "fem: gnuplot failed\n");
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace microdex::fem
+
+MICRODEX_REGISTER_BENCH(fem, "fem",
+                        "multi-scale FEM study (thesis fig 3.5-3.8): error and time by level",
+                        microdex::fem::RunFem);
