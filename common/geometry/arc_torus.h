@@ -46,4 +46,28 @@ struct ArcTorusClearance {
 // Empty when (arc, torus) is a valid query; otherwise a one-line reason naming the field.
 std::string ValidateArcTorus(const ArcDef& arc, const TorusSegmentDef& torus);
 
+// The same check without allocation, for the per-query hot path: nullptr when valid,
+// otherwise a static one-line reason naming the field.
+const char* FindArcTorusInputError(const ArcDef& arc, const TorusSegmentDef& torus);
+
+// The needle expressed in the vessel frame V with every length divided by the core radius
+// R (the scene scale), so that the methods work on numbers of order one whatever the units:
+// p(s) = center + radius (u cos s + v sin s), s ∈ [0, sweep], core circle of radius 1.
+struct ArcInTorusFrame {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d u = Eigen::Vector3d::UnitX();  // unit, the direction of s = 0
+  Eigen::Vector3d v = Eigen::Vector3d::UnitY();  // unit, ⊥ u
+  double radius = 1;                             // ρ / R
+  double radius_minus_one = 0;  // (ρ − R) / R, formed before the division (no cancellation)
+  double sweep = 0;             // S, rad
+};
+
+// Valid input assumed (FindArcTorusInputError == nullptr).
+ArcInTorusFrame CalcArcInTorusFrame(const ArcDef& arc, const TorusSegmentDef& torus);
+
+// Whether the azimuth atan2(y, x) ∈ (−π, π], taken in [0, 2π), of the vessel-frame point
+// (x, y, ·) lies in [0, Ω]; Ω ≥ 2π keeps everything. Points on the z axis (atan2(0, 0) = 0)
+// are inside. Every method uses this one definition.
+bool IsAzimuthInSegment(double x, double y, double segment_angle_rad);
+
 }  // namespace microdex::geometry

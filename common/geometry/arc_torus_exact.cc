@@ -1,1 +1,552 @@
-#include "common/geometry/arc_torus.h"
+#include "common/geometry/arc_torus_exact.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "common/geometry/arc_azimuth_clip.h"
+
+namespace microdex::geometry {
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPi = std::numbers::pi;
+
+// Degree of P (trigonometric) and of its half-angle polynomial Q.
+constexpr int kDeg = 4;
+constexpr int kN = 2 * kDeg;  // Bernstein degree
+// Rounding allowance of a computed Bernstein coefficient, in units of eps times the same
+// computation carried out on absolute values (a running error bound with a safety margin).
+constexpr double kNoiseFactor = 512;
+// A clipped interval is cut into pieces no wider than this before the half-angle map, so
+// that |t| ≤ tan(π/8) and the Bernstein form is well conditioned.
+constexpr double kMaxPieceWidth_rad = kPi / 2;
+// Nodes narrower than this (needle parameter) are not subdivided further: whatever P does
+// inside is settled through the sign of Φ at the node's ends.
+constexpr double kMinNodeWidth_rad = 1e-7;
+constexpr int kMaxNodesPerQuery = 600;
+constexpr int kStackSize = 96;
+// Split nodes slightly off their middle, so that roots at symmetric positions (common in
+// exact test poses) do not fall exactly on a node boundary.
+constexpr double kSplit = 0.5 - 1.0 / 128;
+
+// ---- Trigonometric polynomials a[0] + Σ_k a[k] cos ks + b[k] sin ks ---------------------
+
+template <int N>
+struct Trig {
+  double a[N + 1] = {};
+  double b[N + 1] = {};  // b[0] unused
+};
+
+// Product, with the product-to-sum identities; `abs_mode` multiplies magnitudes instead and
+// gives the running rounding bound of the same computation.
+template <int N, int M>
+Trig<N + M> Mul(const Trig<N>& p, const Trig<M>& q, bool abs_mode) {
+  Trig<N + M> r;
+  for (int j = 0; j <= N; ++j) {
+    for (int k = 0; k <= M; ++k) {
+      const double aa = 0.5 * p.a[j] * q.a[k];
+      const double bb = 0.5 * p.b[j] * q.b[k];
+      const double ab = 0.5 * p.a[j] * q.b[k];  // cos j · sin k
+      const double ba = 0.5 * p.b[j] * q.a[k];  // sin j · cos k
+      const int lo = j > k ? j - k : k - j;
+      if (abs_mode) {
+        r.a[lo] += aa + bb;
+        r.a[j + k] += aa + bb;
+        r.b[j + k] += ab + ba;
+        if (lo != 0) r.b[lo] += ab + ba;
+        continue;
+      }
+      r.a[lo] += aa + bb;
+      r.a[j + k] += aa - bb;
+      r.b[j + k] += ab + ba;
+      if (j > k) {
+        r.b[lo] += ba - ab;
+      } else if (k > j) {
+        r.b[lo] += ab - ba;
+      }
+    }
+  }
+  return r;
+}
+
+template <int N>
+Trig<N> Add(const Trig<N>& p, const Trig<N>& q) {
+  Trig<N> r;
+  for (int k = 0; k <= N; ++k) {
+    r.a[k] = p.a[k] + q.a[k];
+    r.b[k] = p.b[k] + q.b[k];
+  }
+  return r;
+}
+
+// Value of a degree ≤ 2 trigonometric polynomial from cos s, sin s, cos 2s, sin 2s.
+template <int N>
+double Eval2(const Trig<N>& p, double c1, double s1, double c2, double s2) {
+  static_assert(N <= 2);
+  double v = p.a[0] + p.a[1] * c1 + p.b[1] * s1;
+  if constexpr (N == 2) v += p.a[2] * c2 + p.b[2] * s2;
+  return v;
+}
+
+// ---- Constant tables ---------------------------------------------------------------------
+
+// E_k(t) = (1 + it)^(4+k) (1 − it)^(4−k), k = 0..4: with t = tan(σ/2),
+// (1 + t²)⁴ e^{ikσ} = E_k(t), so Q(t) = (1 + t²)⁴ P(m + σ) = Σ_k Re(C_k e^{ikm} E_k(t)).
+struct HalfAngleTable {
+  double re[kDeg + 1][kN + 1] = {};
+  double im[kDeg + 1][kN + 1] = {};
+};
+
+constexpr HalfAngleTable MakeHalfAngleTable() {
+  HalfAngleTable table;
+  for (int k = 0; k <= kDeg; ++k) {
+    double re[kN + 1] = {1}, im[kN + 1] = {0};
+    for (int f = 0; f < kN; ++f) {
+      const double sign = f < kDeg + k ? 1 : -1;  // multiply by (1 + i·sign·t)
+      for (int j = f + 1; j >= 1; --j) {
+        const double new_re = re[j] - sign * im[j - 1];
+        const double new_im = im[j] + sign * re[j - 1];
+        re[j] = new_re;
+        im[j] = new_im;
+      }
+    }
+    for (int j = 0; j <= kN; ++j) {
+      table.re[k][j] = re[j];
+      table.im[k][j] = im[j];
+    }
+  }
+  return table;
+}
+
+constexpr double Binomial(int n, int k) {
+  double r = 1;
+  for (int i = 1; i <= k; ++i) r = r * (n - k + i) / i;
+  return r;
+}
+
+// Power basis in x ∈ [−1, 1] to the Bernstein basis in y = (x + 1)/2 ∈ [0, 1].
+struct BernsteinTable {
+  double m[kN + 1][kN + 1] = {};
+  double abs_m[kN + 1][kN + 1] = {};
+};
+
+constexpr BernsteinTable MakeBernsteinTable() {
+  BernsteinTable table;
+  for (int i = 0; i <= kN; ++i) {
+    for (int j = 0; j <= kN; ++j) {
+      double sum = 0, abs_sum = 0;
+      for (int l = 0; l <= std::min(i, j); ++l) {
+        double term = Binomial(i, l) / Binomial(kN, l) * Binomial(j, l);
+        for (int p = 0; p < l; ++p) term *= 2;
+        abs_sum += term;
+        sum += ((j - l) % 2 == 0) ? term : -term;
+      }
+      table.m[i][j] = sum;
+      table.abs_m[i][j] = abs_sum;
+    }
+  }
+  return table;
+}
+
+constexpr HalfAngleTable kHalfAngle = MakeHalfAngleTable();
+constexpr BernsteinTable kBernstein = MakeBernsteinTable();
+
+// ---- The per-query problem ---------------------------------------------------------------
+
+// Quantities along the needle, normalised units (R = 1).
+struct Curve {
+  ArcInTorusFrame f;
+  Trig<2> e, b, zz;  // e = |p_xy|² − 1, B = p_xy·p'_xy, zz' = z z'
+  Trig<kDeg> p;      // P = e A² + zz'(A + B)
+  Trig<kDeg> p_abs;  // its running rounding bound (without the factor eps)
+};
+
+struct PointEval {
+  double k = 0;    // |p_xy|
+  double z = 0;    // p_z
+  double d = 0;    // distance to the core circle
+  double phi = 0;  // Φ = (k − 1)B + k zz' = k F'/2: the sign of the slope of F
+};
+
+PointEval EvalPoint(const Curve& cv, double c1, double s1) {
+  const ArcInTorusFrame& f = cv.f;
+  const double c2 = c1 * c1 - s1 * s1, s2 = 2 * c1 * s1;
+  PointEval pe;
+  const double px = f.center.x() + f.radius * (f.u.x() * c1 + f.v.x() * s1);
+  const double py = f.center.y() + f.radius * (f.u.y() * c1 + f.v.y() * s1);
+  pe.z = f.center.z() + f.radius * (f.u.z() * c1 + f.v.z() * s1);
+  pe.k = std::sqrt(px * px + py * py);
+  // k − 1 from e, which is accurate relative to its own size near the core circle.
+  const double k_minus_one = Eval2(cv.e, c1, s1, c2, s2) / (pe.k + 1);
+  pe.d = std::sqrt(k_minus_one * k_minus_one + pe.z * pe.z);
+  pe.phi = k_minus_one * Eval2(cv.b, c1, s1, c2, s2) + pe.k * Eval2(cv.zz, c1, s1, c2, s2);
+  return pe;
+}
+
+Curve MakeCurve(const ArcInTorusFrame& f) {
+  Curve cv;
+  cv.f = f;
+  const Eigen::Vector3d& c = f.center;
+  const Eigen::Vector3d& u = f.u;
+  const Eigen::Vector3d& v = f.v;
+  const double rho = f.radius, rho2 = rho * rho;
+  const double uz = u.z(), vz = v.z(), cz = c.z();
+  const double cu_xy = c.x() * u.x() + c.y() * u.y();
+  const double cv_xy = c.x() * v.x() + c.y() * v.y();
+  const double cu_xy_abs = std::abs(c.x() * u.x()) + std::abs(c.y() * u.y());
+  const double cv_xy_abs = std::abs(c.x() * v.x()) + std::abs(c.y() * v.y());
+  const double cxy2 = c.x() * c.x() + c.y() * c.y();
+  // The coefficients use |u| = |v| = 1 and u·v = 0 (u_xy·v_xy = −u_z v_z, |u_xy|² = 1 − u_z²),
+  // so that each is a product of small quantities in the degenerate families: this is what
+  // keeps P accurate relative to its own size there.
+  Trig<1> a, a_abs;  // A = p·p' = ρ (c·v cos s − c·u sin s)
+  a.a[1] = rho * (cv_xy + cz * vz);
+  a.b[1] = -rho * (cu_xy + cz * uz);
+  a_abs.a[1] = rho * (cv_xy_abs + std::abs(cz * vz));
+  a_abs.b[1] = rho * (cu_xy_abs + std::abs(cz * uz));
+  Trig<2> b, b_abs;
+  b.a[1] = rho * cv_xy;
+  b.b[1] = -rho * cu_xy;
+  b.a[2] = -rho2 * uz * vz;
+  b.b[2] = 0.5 * rho2 * (uz - vz) * (uz + vz);
+  b_abs.a[1] = rho * cv_xy_abs;
+  b_abs.b[1] = rho * cu_xy_abs;
+  b_abs.a[2] = rho2 * std::abs(uz * vz);
+  b_abs.b[2] = 0.5 * rho2 * (uz * uz + vz * vz);
+  Trig<2> zz, zz_abs;
+  zz.a[1] = rho * cz * vz;
+  zz.b[1] = -rho * cz * uz;
+  zz.a[2] = -b.a[2];
+  zz.b[2] = -b.b[2];
+  zz_abs.a[1] = rho * std::abs(cz * vz);
+  zz_abs.b[1] = rho * std::abs(cz * uz);
+  zz_abs.a[2] = b_abs.a[2];
+  zz_abs.b[2] = b_abs.b[2];
+  Trig<2> e, e_abs;
+  e.a[0] = cxy2 + f.radius_minus_one * (rho + 1) - 0.5 * rho2 * (uz * uz + vz * vz);
+  e.a[1] = 2 * rho * cu_xy;
+  e.b[1] = 2 * rho * cv_xy;
+  e.a[2] = -b.b[2];
+  e.b[2] = b.a[2];
+  e_abs.a[0] = cxy2 + std::abs(f.radius_minus_one) * (rho + 1) + b_abs.b[2];
+  e_abs.a[1] = 2 * rho * cu_xy_abs;
+  e_abs.b[1] = 2 * rho * cv_xy_abs;
+  e_abs.a[2] = b_abs.b[2];
+  e_abs.b[2] = b_abs.a[2];
+  Trig<2> a_plus_b, a_plus_b_abs;
+  a_plus_b.a[1] = rho * (2 * cv_xy + cz * vz);
+  a_plus_b.b[1] = -rho * (2 * cu_xy + cz * uz);
+  a_plus_b.a[2] = b.a[2];
+  a_plus_b.b[2] = b.b[2];
+  a_plus_b_abs.a[1] = rho * (2 * cv_xy_abs + std::abs(cz * vz));
+  a_plus_b_abs.b[1] = rho * (2 * cu_xy_abs + std::abs(cz * uz));
+  a_plus_b_abs.a[2] = b_abs.a[2];
+  a_plus_b_abs.b[2] = b_abs.b[2];
+  cv.e = e;
+  cv.b = b;
+  cv.zz = zz;
+  cv.p = Add(Mul(e, Mul(a, a, false), false), Mul(zz, a_plus_b, false));
+  cv.p_abs = Add(Mul(e_abs, Mul(a_abs, a_abs, true), true), Mul(zz_abs, a_plus_b_abs, true));
+  return cv;
+}
+
+// One piece [m − w, m + w] of a clipped interval, w ≤ π/4, in the variable
+// x = tan((s − m)/2) / τ ∈ [−1, 1], τ = tan(w/2): Q(x) = Σ q[j] x^j.
+struct Piece {
+  double m = 0, cos_m = 1, sin_m = 0, tau = 0;
+  double q[kN + 1] = {};
+};
+
+struct Node {
+  double b[kN + 1];
+  double noise[kN + 1];
+  double y0, y1;  // in the piece's y = (x + 1)/2
+};
+
+struct Best {
+  double d = -1;
+  double s = 0;
+};
+
+class Solver {
+ public:
+  explicit Solver(const Curve& cv) : cv_(cv) {}
+
+  void Consider(double s, double c1, double s1) {
+    const PointEval pe = EvalPoint(cv_, c1, s1);
+    if (pe.d > best_.d) best_ = {pe.d, s};
+  }
+
+  void ConsiderEnd(double s) { Consider(s, std::cos(s), std::sin(s)); }
+
+  void SolveInterval(double s_begin, double s_end) {
+    const double width = s_end - s_begin;
+    const int pieces = std::max(1, static_cast<int>(std::ceil(width / kMaxPieceWidth_rad)));
+    for (int i = 0; i < pieces; ++i) {
+      const double a = s_begin + width * i / pieces;
+      const double b = i + 1 == pieces ? s_end : s_begin + width * (i + 1) / pieces;
+      SolvePiece(a, b);
+    }
+  }
+
+  const Best& best() const { return best_; }
+  ExactDiagnostics& diagnostics() { return diag_; }
+
+ private:
+  // cos s, sin s and s at the piece variable x.
+  void AtX(const Piece& pc, double x, double* c1, double* s1, double* s) const {
+    const double t = pc.tau * x;
+    const double den = 1 + t * t;
+    const double cs = (1 - t * t) / den, sn = 2 * t / den;
+    *c1 = pc.cos_m * cs - pc.sin_m * sn;
+    *s1 = pc.sin_m * cs + pc.cos_m * sn;
+    *s = pc.m + 2 * std::atan(t);
+  }
+
+  PointEval EvalX(const Piece& pc, double x, double* s) {
+    double c1, s1;
+    AtX(pc, x, &c1, &s1, s);
+    const PointEval pe = EvalPoint(cv_, c1, s1);
+    if (pe.d > best_.d) best_ = {pe.d, *s};
+    return pe;
+  }
+
+  void SolvePiece(double sa, double sb) {
+    Piece pc;
+    pc.m = 0.5 * (sa + sb);
+    pc.tau = std::tan(0.25 * (sb - sa));
+    pc.cos_m = std::cos(pc.m);
+    pc.sin_m = std::sin(pc.m);
+    // D_k = C_k e^{ikm}, C_k = a_k − i b_k, so that Re(D_k e^{ikσ}) is the k-th term of P.
+    double d_re[kDeg + 1], d_im[kDeg + 1], c_abs[kDeg + 1];
+    double ck = 1, sk = 0;
+    for (int k = 0; k <= kDeg; ++k) {
+      d_re[k] = cv_.p.a[k] * ck + cv_.p.b[k] * sk;
+      d_im[k] = cv_.p.a[k] * sk - cv_.p.b[k] * ck;
+      c_abs[k] = cv_.p_abs.a[k] + cv_.p_abs.b[k];
+      const double next_c = ck * pc.cos_m - sk * pc.sin_m;
+      sk = sk * pc.cos_m + ck * pc.sin_m;
+      ck = next_c;
+    }
+    double q_abs[kN + 1];
+    double tau_j = 1;
+    for (int j = 0; j <= kN; ++j) {
+      double sum = 0, abs_sum = 0;
+      for (int k = 0; k <= kDeg; ++k) {
+        sum += d_re[k] * kHalfAngle.re[k][j] - d_im[k] * kHalfAngle.im[k][j];
+        abs_sum += c_abs[k] * (std::abs(kHalfAngle.re[k][j]) + std::abs(kHalfAngle.im[k][j]));
+      }
+      pc.q[j] = sum * tau_j;
+      q_abs[j] = abs_sum * tau_j;
+      tau_j *= pc.tau;
+    }
+    Node root;
+    root.y0 = 0;
+    root.y1 = 1;
+    for (int i = 0; i <= kN; ++i) {
+      double sum = 0, abs_sum = 0;
+      for (int j = 0; j <= kN; ++j) {
+        sum += kBernstein.m[i][j] * pc.q[j];
+        abs_sum += kBernstein.abs_m[i][j] * q_abs[j];
+      }
+      root.b[i] = sum;
+      root.noise[i] = kNoiseFactor * kEps * abs_sum;
+    }
+    Isolate(pc, root, sb - sa);
+  }
+
+  void Isolate(const Piece& pc, const Node& root, double piece_width) {
+    Node stack[kStackSize];
+    int top = 0;
+    stack[top++] = root;
+    while (top > 0) {
+      const Node node = stack[--top];
+      ++diag_.num_nodes;
+      int signs[kN + 1];
+      bool any_fuzzy = false, all_fuzzy = true;
+      for (int i = 0; i <= kN; ++i) {
+        if (std::abs(node.b[i]) <= node.noise[i]) {
+          signs[i] = 0;
+          any_fuzzy = true;
+        } else {
+          signs[i] = node.b[i] > 0 ? 1 : -1;
+          all_fuzzy = false;
+        }
+      }
+      int variations = 0, last = 0;
+      for (int i = 0; i <= kN; ++i) {
+        if (signs[i] == 0) continue;
+        if (last != 0 && signs[i] != last) ++variations;
+        last = signs[i];
+      }
+      if (!any_fuzzy && variations == 0) continue;
+      if (!any_fuzzy && variations == 1) {
+        SolveSimpleRoot(pc, node);
+        continue;
+      }
+      const bool too_small = (node.y1 - node.y0) * piece_width < kMinNodeWidth_rad;
+      if (all_fuzzy || too_small || top + 2 > kStackSize || diag_.num_nodes >= kMaxNodesPerQuery) {
+        if (diag_.num_nodes >= kMaxNodesPerQuery) diag_.node_budget_hit = true;
+        SettleByPhi(pc, node);
+        continue;
+      }
+      // De Casteljau split at kSplit; the rounding of the convex combinations is added to
+      // the children's noise.
+      Node left, right;
+      double b[kN + 1], n[kN + 1];
+      std::copy(node.b, node.b + kN + 1, b);
+      std::copy(node.noise, node.noise + kN + 1, n);
+      double max_b = 0;
+      for (int i = 0; i <= kN; ++i) max_b = std::max(max_b, std::abs(b[i]));
+      for (int level = 0; level <= kN; ++level) {
+        left.b[level] = b[0];
+        left.noise[level] = n[0];
+        right.b[kN - level] = b[kN - level];
+        right.noise[kN - level] = n[kN - level];
+        for (int i = 0; i < kN - level; ++i) {
+          b[i] = (1 - kSplit) * b[i] + kSplit * b[i + 1];
+          n[i] = (1 - kSplit) * n[i] + kSplit * n[i + 1];
+        }
+      }
+      const double extra = 2 * kN * kEps * max_b;
+      for (int i = 0; i <= kN; ++i) {
+        left.noise[i] += extra;
+        right.noise[i] += extra;
+      }
+      const double ym = node.y0 + kSplit * (node.y1 - node.y0);
+      left.y0 = node.y0;
+      left.y1 = ym;
+      right.y0 = ym;
+      right.y1 = node.y1;
+      stack[top++] = right;
+      stack[top++] = left;
+    }
+  }
+
+  static double EvalQ(const Piece& pc, double x, double* dq) {
+    double q = pc.q[kN], d = 0;
+    for (int j = kN - 1; j >= 0; --j) {
+      d = d * x + q;
+      q = q * x + pc.q[j];
+    }
+    *dq = d;
+    return q;
+  }
+
+  // Exactly one simple root of Q inside the node: safeguarded Newton on Q.
+  void SolveSimpleRoot(const Piece& pc, const Node& node) {
+    ++diag_.num_roots;
+    double lo = 2 * node.y0 - 1, hi = 2 * node.y1 - 1;
+    const bool lo_negative = node.b[0] < 0;
+    double x = lo + (hi - lo) * node.b[0] / (node.b[0] - node.b[kN]);
+    if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+    for (int it = 0; it < 60; ++it) {
+      double dq;
+      const double q = EvalQ(pc, x, &dq);
+      if (q == 0) break;
+      if ((q < 0) == lo_negative) {
+        lo = x;
+      } else {
+        hi = x;
+      }
+      double next = x - q / dq;
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+      const bool done = std::abs(next - x) <= 4 * kEps * std::max(1.0, std::abs(x));
+      x = next;
+      if (done || hi - lo <= 4 * kEps) break;
+    }
+    double s;
+    EvalX(pc, x, &s);
+  }
+
+  // P could not be resolved inside the node (it is zero to rounding there, or the node
+  // reached the minimal width): take the node's ends, and the maximum of F inside where
+  // Φ changes sign from + to −, found by bisection (Φ is well conditioned there, P is not).
+  void SettleByPhi(const Piece& pc, const Node& node) {
+    ++diag_.num_fuzzy;
+    double lo = 2 * node.y0 - 1, hi = 2 * node.y1 - 1;
+    double s;
+    const PointEval pe_lo = EvalX(pc, lo, &s);
+    const PointEval pe_hi = EvalX(pc, hi, &s);
+    if (!(pe_lo.phi > 0 && pe_hi.phi < 0)) return;
+    for (int it = 0; it < 80 && hi - lo > 2 * kEps * std::max(1.0, std::abs(lo)); ++it) {
+      const double mid = 0.5 * (lo + hi);
+      const PointEval pe = EvalX(pc, mid, &s);
+      if (pe.phi > 0) {
+        lo = mid;
+      } else if (pe.phi < 0) {
+        hi = mid;
+      } else {
+        break;
+      }
+    }
+  }
+
+  const Curve& cv_;
+  Best best_;
+  ExactDiagnostics diag_;
+};
+
+}  // namespace
+
+ArcTorusClearance MakeArcTorusClearance(const TorusSegmentDef& torus, const ArcInTorusFrame& f,
+                                        double s_rad, double distance_to_core_m) {
+  const double R = torus.core_radius_m, r = torus.tube_radius_m;
+  ArcTorusClearance out;
+  out.status = ClearanceStatus::kOk;
+  out.clearance_m = r - distance_to_core_m;
+  out.contact = out.clearance_m <= 0;
+  out.s_rad = s_rad;
+  const Eigen::Vector3d p_V =
+      R * (f.center + f.radius * (f.u * std::cos(s_rad) + f.v * std::sin(s_rad)));
+  const double k = std::hypot(p_V.x(), p_V.y());
+  // Nearest core point; on the z axis every core point is nearest: take azimuth 0.
+  const Eigen::Vector3d radial =
+      k > 0 ? Eigen::Vector3d(p_V.x() / k, p_V.y() / k, 0) : Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d q_V = R * radial;
+  const Eigen::Vector3d offset = p_V - q_V;
+  const double n = offset.norm();
+  // On the core circle every wall point at distance r is nearest: take the outward one.
+  const Eigen::Vector3d dir = n > 0 ? Eigen::Vector3d(offset / n) : radial;
+  out.p_WN = torus.X_WV * p_V;
+  out.p_WW = torus.X_WV * Eigen::Vector3d(q_V + r * dir);
+  return out;
+}
+
+ArcTorusClearance CalcArcTorusClearanceExact(const ArcDef& arc, const TorusSegmentDef& torus,
+                                             ExactDiagnostics* diagnostics) {
+  ArcTorusClearance out;
+  out.clearance_m = kNaN;
+  if (FindArcTorusInputError(arc, torus) != nullptr) {
+    out.status = ClearanceStatus::kInvalidInput;
+    return out;
+  }
+  const ArcInTorusFrame frame = CalcArcInTorusFrame(arc, torus);
+  const AzimuthIntervals intervals = CalcAzimuthIntervals(frame, torus.segment_angle_rad);
+  if (intervals.count == 0) {
+    out.status = ClearanceStatus::kEmptyRange;
+    if (diagnostics != nullptr) *diagnostics = {};
+    return out;
+  }
+  const Curve curve = MakeCurve(frame);
+  Solver solver(curve);
+  for (int i = 0; i < intervals.count; ++i) {
+    solver.ConsiderEnd(intervals.begin[i]);
+    solver.ConsiderEnd(intervals.end[i]);
+    solver.SolveInterval(intervals.begin[i], intervals.end[i]);
+  }
+  solver.diagnostics().num_intervals = intervals.count;
+  if (diagnostics != nullptr) *diagnostics = solver.diagnostics();
+  const Best& best = solver.best();
+  return MakeArcTorusClearance(torus, frame, best.s, best.d * torus.core_radius_m);
+}
+
+ArcTorusClearance CalcArcTorusClearanceExact(const ArcDef& arc, const TorusSegmentDef& torus) {
+  return CalcArcTorusClearanceExact(arc, torus, nullptr);
+}
+
+}  // namespace microdex::geometry
