@@ -186,8 +186,12 @@ double NavierBar::LoadDensity_N_per_m(double x_m) const {
 // ∫_{xa}^{xb} q(x) (α + β s(x)) dx, s = (x − x_c)/a, exactly: with s = cos θ the weight
 // disappears and cos(lθ)(α + β cos θ) integrates in closed form.
 double NavierBar::LinearIntegral(double xa_m, double xb_m, double alpha, double beta) const {
-  const double sa = std::clamp((xa_m - xc_m_) / a_m_, -1.0, 1.0);
-  const double sb = std::clamp((xb_m - xc_m_) / a_m_, -1.0, 1.0);
+  // Snap to the bar ends: acos is steep there (an ulp off 1 moves θ by 2e-8).
+  auto to_s = [&](double x) {
+    const double s = std::clamp((x - xc_m_) / a_m_, -1.0, 1.0);
+    return std::abs(std::abs(s) - 1) < 1e-12 ? std::copysign(1.0, s) : s;
+  };
+  const double sa = to_s(xa_m), sb = to_s(xb_m);
   if (!(sb > sa)) return 0.0;
   const double th_lo = std::acos(sb), th_hi = std::acos(sa);  // θ decreases with s
   double sum = 0;

@@ -1,0 +1,93 @@
+#include "common/fem/navier.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/fem/tissue_step.h"
+
+namespace microdex::fem {
+namespace {
+
+constexpr double kPress_m = 0.01;
+
+NavierDomain StudyDomain() { return NavierDomain{0.20, 0.20, 1e4, 0.01}; }
+
+// The closed-form n-sum is the same series as (A.11) summed brute force.
+TEST(Navier, ClosedFormInnerSumMatchesDoubleSeries) {
+  const NavierDomain domain{0.20, 0.12, 2.5e3, 0.004};  // L ≠ B: catches L written for B
+  const UniformLineLoad load{0.04, 0.13, 0.05, 3.0};
+  for (const auto& [x, y] : {std::pair{0.07, 0.08}, std::pair{0.15, 0.02}, std::pair{0.1, 0.1}}) {
+    int terms = 0;
+    const double fast = NavierLineLoadDisplacement_m(domain, load, x, y, 1e-12, 1000000, &terms);
+    const double brute = NavierDoubleSeries_m(domain, load, x, y, terms, 20000);
+    EXPECT_NEAR(fast, brute, 1e-6 * std::abs(fast)) << x << "," << y;
+    EXPECT_LT(terms, 2000);
+  }
+}
+
+// Uniform load on the centred bar, G1 geometry: symmetric, and displacement positive for a
+// positive load (the equation is G t ∇²w + p = 0 with p pushing +z).
+TEST(Navier, LineLoadSymmetryAndSign) {
+  const NavierDomain domain = StudyDomain();
+  const UniformLineLoad load{0.05, 0.15, 0.10, 10.0};
+  const double a = NavierLineLoadDisplacement_m(domain, load, 0.07, 0.13);
+  const double b = NavierLineLoadDisplacement_m(domain, load, 0.13, 0.07);
+  EXPECT_GT(a, 0);
+  EXPECT_NEAR(a, b, 1e-12 * a);
+}
+
+TEST(Navier, BarHoldsThePrescribedDisplacement) {
+  const NavierBar bar(StudyDomain(), 0.05, 0.15, 0.10, -kPress_m);
+  for (double x = 0.0501; x < 0.15; x += 0.0099) {
+    EXPECT_NEAR(bar.BarDisplacement_m(x), -kPress_m, 1e-9 * kPress_m) << x;
+  }
+  // The field just off the bar tends to the bar's displacement, and to 0 at the edges.
+  EXPECT_NEAR(bar.Displacement_m(0.1, 0.1 + 1e-4), -kPress_m, 0.003 * kPress_m);
+  EXPECT_NEAR(bar.Displacement_m(0.1, 0.1999), 0.0, 1e-3 * kPress_m);
+  // Symmetric load, total = ∫ q.
+  EXPECT_NEAR(bar.LoadDensity_N_per_m(0.07), bar.LoadDensity_N_per_m(0.13), 1e-9);
+  EXPECT_NEAR(bar.IntervalForce_N(0.05, 0.15), bar.TotalForce_N(), 1e-12);
+  double hats = 0;
+  for (int i = 0; i <= 64; ++i) hats += bar.HatForce_N(0.05 + i * 0.1 / 64, 0.1 / 64);
+  EXPECT_NEAR(hats, bar.TotalForce_N(), 1e-12);  // the hats are a partition of unity on the bar
+}
+
+TEST(Navier, ChebyshevExpansionConvergedAndRemainderSummed) {
+  const NavierBar coarse(StudyDomain(), 0.05, 0.15, 0.025, -kPress_m, 16);
+  const NavierBar fine(StudyDomain(), 0.05, 0.15, 0.025, -kPress_m, 48);
+  EXPECT_NEAR(coarse.TotalForce_N(), fine.TotalForce_N(), 1e-10 * std::abs(fine.TotalForce_N()));
+  EXPECT_GT(fine.remainder_terms(), 9);  // the bar near the edge needs more remainder terms
+}
+
+// The fine-mesh FEM converges to the Navier force of the pressed bar: the error falls by about
+// two per level (the load is singular at the bar ends, so O(h)), and the Richardson
+// extrapolation of two levels lands on the series value.
+TEST(Navier, FineMeshFemConvergesToNavierForce) {
+  const NavierBar bar(StudyDomain(), 0.05, 0.15, 0.10, -kPress_m);
+  const double reference = -bar.TotalForce_N();  // force of the tissue on the tool, up
+  double force[8] = {};
+  for (int level = 4; level <= 7; ++level) {
+    TissueDef def;
+    def.max_level = level;
+    def.level = level;
+    def.mesh = MeshKind::kFine;
+    def.solver = SolverKind::kCholmod;
+    const TissueModel model = BuildTissueModel(def);
+    TissueWorkspace ws(model);
+    TissueState state = MakeTissueState(model);
+    StepTissue(model, MakeBarTool({0.05, 0.1, -kPress_m}, {0.15, 0.1, -kPress_m}), ws, state);
+    ASSERT_EQ(state.status, TissueStatus::kOk);
+    force[level] = state.f_T_S.z();
+  }
+  for (int level = 5; level <= 7; ++level) {
+    const double e0 = force[level - 1] - reference, e1 = force[level] - reference;
+    EXPECT_GT(e0, e1);
+    EXPECT_GT(e0 / e1, 1.7);
+    EXPECT_LT(e0 / e1, 2.3);
+  }
+  EXPECT_NEAR(2 * force[7] - force[6], reference, 2e-3 * reference);
+}
+
+}  // namespace
+}  // namespace microdex::fem

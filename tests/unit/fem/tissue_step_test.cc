@@ -1,0 +1,286 @@
+#include "common/fem/tissue_step.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace microdex::fem {
+namespace {
+
+constexpr double kPress_m = 0.01;
+constexpr double kSolverAgreementTol = 1e-6;  // relative, set by cg_relative_tolerance 1e-8
+
+TissueModel Model(int level, MeshKind mesh, SolverKind solver, double g_Pa = 1e4) {
+  TissueDef def;
+  def.max_level = level;
+  def.level = level;
+  def.mesh = mesh;
+  def.solver = solver;
+  def.shear_modulus_Pa = g_Pa;
+  return BuildTissueModel(def);
+}
+
+ToolContact G1Bar(double depth_m) {
+  return MakeBarTool({0.05, 0.10, -depth_m}, {0.15, 0.10, -depth_m});
+}
+
+struct Result {
+  TissueStatus status;
+  double force_N;
+  Eigen::Vector3d tau;
+  int contacts;
+};
+
+Result Step(const TissueModel& model, const ToolContact& tool) {
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  StepTissue(model, tool, ws, state);
+  return {state.status, state.f_T_S.z(), state.tau_T_S, state.num_contacts};
+}
+
+// Manufactured solution w = sin(πx/L) sin(πy/B), p = G t π² (1/L² + 1/B²) w, assembled from
+// the model's element tables on the fine mesh: nodal error falls as h².
+TEST(TissueFem, ManufacturedSolutionConvergesSecondOrder) {
+  double previous = 0;
+  for (int level = 3; level <= 6; ++level) {
+    TissueDef def;
+    def.max_level = level;
+    def.level = level;
+    def.length_y_m = 0.12;
+    const TissueModel model = BuildTissueModel(def);
+    MeshSelection mesh = MakeMeshSelection(model);
+    SelectMesh(model, level, MeshKind::kFine, ToolContact{}, mesh);
+    const double lx = def.length_x_m, ly = def.length_y_m, pi = std::numbers::pi;
+    auto exact = [&](double x, double y) { return std::sin(pi * x / lx) * std::sin(pi * y / ly); };
+    const double p_scale =
+        def.shear_modulus_Pa * def.thickness_m * pi * pi * (1 / (lx * lx) + 1 / (ly * ly));
+    std::vector<int> dof(model.num_grid_nodes, -1);
+    int n = 0;
+    for (int id = 0; id < model.num_grid_nodes; ++id)
+      if (!model.IsBoundaryNode(id)) dof[id] = n++;
+    std::vector<Eigen::Triplet<double>> triplets;
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    for (int e = 0; e < mesh.num_triangles; ++e) {
+      const Triangle& t = mesh.triangles[e];
+      const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+      const double x[3] = {model.NodeX_m(t.node[0]), model.NodeX_m(t.node[1]),
+                           model.NodeX_m(t.node[2])};
+      const double y[3] = {model.NodeY_m(t.node[0]), model.NodeY_m(t.node[1]),
+                           model.NodeY_m(t.node[2])};
+      const double area = 0.5 * ((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+      for (int a = 0; a < 3; ++a) {
+        if (dof[t.node[a]] < 0) continue;
+        // Edge-midpoint quadrature (exact for quadratics) of ∫ p N_a.
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const double pab = exact(0.5 * (x[a] + x[b]), 0.5 * (y[a] + y[b]));
+        const double pac = exact(0.5 * (x[a] + x[c]), 0.5 * (y[a] + y[c]));
+        f[dof[t.node[a]]] += p_scale * area / 3 * 0.5 * (pab + pac);
+        for (int bb = 0; bb < 3; ++bb)
+          if (dof[t.node[bb]] >= 0)
+            triplets.emplace_back(dof[t.node[a]], dof[t.node[bb]], k[3 * a + bb]);
+      }
+    }
+    Eigen::SparseMatrix<double> kff(n, n);
+    kff.setFromTriplets(triplets.begin(), triplets.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(kff);
+    const Eigen::VectorXd w = solver.solve(f);
+    double err = 0;
+    for (int id = 0; id < model.num_grid_nodes; ++id)
+      if (dof[id] >= 0)
+        err = std::max(err, std::abs(w[dof[id]] - exact(model.NodeX_m(id), model.NodeY_m(id))));
+    if (level > 3) {
+      EXPECT_GT(previous / err, 3.5) << "level " << level;
+      EXPECT_LT(previous / err, 4.5) << "level " << level;
+    }
+    previous = err;
+  }
+  EXPECT_LT(previous, 1e-3);
+}
+
+TEST(TissueStep, SolversAgreeOnFineAndMultiscaleMeshes) {
+  for (MeshKind mesh : {MeshKind::kFine, MeshKind::kMultiscale}) {
+    const double reference = Step(Model(5, mesh, SolverKind::kCholmod), G1Bar(kPress_m)).force_N;
+    EXPECT_GT(reference, 0);  // pressed down, the tissue pushes the tool up
+    for (SolverKind solver : {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc}) {
+      const Result r = Step(Model(5, mesh, solver), G1Bar(kPress_m));
+      ASSERT_EQ(r.status, TissueStatus::kOk);
+      EXPECT_NEAR(r.force_N, reference, kSolverAgreementTol * reference) << ToString(solver);
+    }
+  }
+  const double fine =
+      Step(Model(6, MeshKind::kFine, SolverKind::kCholmod), G1Bar(kPress_m)).force_N;
+  const double ms =
+      Step(Model(6, MeshKind::kMultiscale, SolverKind::kCholmod), G1Bar(kPress_m)).force_N;
+  EXPECT_NEAR(ms, fine, 0.02 * fine);
+}
+
+// Linear in G and in the prescribed displacement, from 1e-3 Pa to 1e9 Pa and from 0 to half
+// the domain size.
+TEST(TissueStep, StiffnessAndDisplacementSweepsStayLinearAndFinite) {
+  const double base =
+      Step(Model(5, MeshKind::kMultiscale, SolverKind::kCholmod), G1Bar(kPress_m)).force_N / 1e4;
+  for (SolverKind solver : {SolverKind::kCholmod, SolverKind::kPcgIc, SolverKind::kCg}) {
+    for (double g : {1e-3, 1.0, 1e4, 1e6, 1e9}) {
+      const Result r = Step(Model(5, MeshKind::kMultiscale, solver, g), G1Bar(kPress_m));
+      ASSERT_EQ(r.status, TissueStatus::kOk) << g;
+      EXPECT_NEAR(r.force_N / g, base, 1e-6 * base) << "G " << g << " " << ToString(solver);
+    }
+  }
+  const TissueModel model = Model(5, MeshKind::kMultiscale, SolverKind::kCholmod);
+  const Result half = Step(model, G1Bar(0.10));
+  EXPECT_NEAR(half.force_N, 10 * base * 1e4, 1e-9 * half.force_N);
+  const Result zero = Step(model, G1Bar(0.0));
+  EXPECT_EQ(zero.status, TissueStatus::kNoContact);
+  EXPECT_EQ(zero.force_N, 0.0);
+  EXPECT_EQ(zero.contacts, 0);
+}
+
+TEST(TissueStep, BarTouchingTheBoundaryAndLeavingTheDomain) {
+  const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kCholmod);
+  const Result touching = Step(model, MakeBarTool({0.0, 0.10, -kPress_m}, {0.10, 0.10, -kPress_m}));
+  ASSERT_EQ(touching.status, TissueStatus::kOk);
+  EXPECT_TRUE(std::isfinite(touching.force_N));
+  EXPECT_GT(touching.force_N, 0);
+  const Result across = Step(model, MakeBarTool({-0.1, 0.05, -kPress_m}, {0.3, 0.05, -kPress_m}));
+  ASSERT_EQ(across.status, TissueStatus::kOk);
+  EXPECT_EQ(across.contacts, 63);  // every interior node of the row, none outside
+  const Result outside = Step(model, MakeBarTool({0.25, 0.1, -kPress_m}, {0.35, 0.1, -kPress_m}));
+  EXPECT_EQ(outside.status, TissueStatus::kNoContact);
+  EXPECT_EQ(outside.force_N, 0.0);
+}
+
+// The point load is singular: with a point contact the force needed for a given displacement
+// falls as the mesh is refined (like 1/ln(1/h)); a finite contact radius regularises it.
+TEST(TissueStep, PointToolSingularityAndItsRegularisation) {
+  const Eigen::Vector3d p{0.1, 0.1, -kPress_m};
+  double point[9] = {}, disc[9] = {};
+  for (int level = 4; level <= 8; ++level) {
+    const TissueModel model = Model(level, MeshKind::kMultiscale, SolverKind::kCholmod);
+    point[level] = Step(model, MakePointTool(p, 0.0)).force_N;
+    disc[level] = Step(model, MakePointTool(p, 0.01)).force_N;
+  }
+  for (int level = 5; level <= 8; ++level) EXPECT_LT(point[level], 0.95 * point[level - 1]);
+  EXPECT_LT(std::abs(disc[8] - disc[7]), 0.01 * disc[8]);
+  EXPECT_LT(std::abs(disc[8] - disc[7]) / disc[8], 0.25 * (point[7] - point[8]) / point[8]);
+}
+
+TEST(TissueStep, TorqueOfATiltedBarAndReferencePoint) {
+  const TissueModel model = Model(6, MeshKind::kFine, SolverKind::kCholmod);
+  ToolContact bar = G1Bar(kPress_m);
+  const Result level = Step(model, bar);
+  EXPECT_NEAR(level.tau.x(), 0.0, 1e-9);
+  EXPECT_NEAR(level.tau.y(), 0.0, 1e-9);
+  bar.p_ST.x() += 0.02;  // about a point 2 cm to the right: τ_y = −Σ r_x f = +0.02 F
+  const Result shifted = Step(model, bar);
+  EXPECT_NEAR(shifted.tau.y(), 0.02 * shifted.force_N, 1e-9);
+  ToolContact tilted = MakeBarTool({0.05, 0.10, -0.5 * kPress_m}, {0.15, 0.10, -1.5 * kPress_m});
+  const Result t = Step(model, tilted);
+  EXPECT_LT(t.tau.y(), 0);  // the deeper right end pushes up harder: torque about −y
+  EXPECT_EQ(t.tau.z(), 0.0);
+}
+
+// The tool sweeps at 1 m/s (more than a cell per step at level 7) while turning: contacts
+// change every step, nothing fails, solvers agree step by step.
+TEST(TissueStep, FastMovingToolNeverFails) {
+  const TissueModel direct = Model(7, MeshKind::kMultiscale, SolverKind::kCholmod);
+  const TissueModel iterative = Model(7, MeshKind::kMultiscale, SolverKind::kPcgIc);
+  TissueWorkspace ws_d(direct), ws_i(iterative);
+  TissueState sd = MakeTissueState(direct), si = MakeTissueState(iterative);
+  for (int k = 0; k < 120; ++k) {
+    const double t = 1e-3 * k, a = 3.0 * t;
+    const double cx = 0.04 + 1.0 * t, cy = 0.1;
+    const ToolContact bar =
+        MakeBarTool({cx - 0.03 * std::cos(a), cy - 0.03 * std::sin(a), -kPress_m},
+                    {cx + 0.03 * std::cos(a), cy + 0.03 * std::sin(a), -kPress_m});
+    StepTissue(direct, bar, ws_d, sd);
+    StepTissue(iterative, bar, ws_i, si);
+    ASSERT_EQ(sd.status, TissueStatus::kOk) << k;
+    ASSERT_EQ(si.status, TissueStatus::kOk) << k;
+    ASSERT_TRUE(sd.f_T_S.allFinite() && sd.tau_T_S.allFinite());
+    EXPECT_NEAR(si.f_T_S.z(), sd.f_T_S.z(), 1e-5 * sd.f_T_S.z()) << k;
+  }
+}
+
+TEST(TissueStep, FailuresKeepTheLastGoodState) {
+  TissueDef def;
+  def.max_level = 6;
+  def.level = 6;
+  def.solver = SolverKind::kCg;
+  const TissueModel good_model = BuildTissueModel(def);
+  def.cg_max_iterations = 2;
+  const TissueModel starved = BuildTissueModel(def);
+  TissueWorkspace ws(good_model);
+  TissueState state = MakeTissueState(good_model);
+  StepTissue(good_model, G1Bar(kPress_m), ws, state);
+  ASSERT_EQ(state.status, TissueStatus::kOk);
+  const TissueState good = state;
+  TissueWorkspace ws_starved(starved);
+  StepTissue(starved, G1Bar(2 * kPress_m), ws_starved, state);
+  EXPECT_EQ(state.status, TissueStatus::kNotConverged);
+  EXPECT_EQ(state.num_failed_steps, 1u);
+  EXPECT_EQ(state.f_T_S, good.f_T_S);
+  EXPECT_EQ(state.w_m, good.w_m);
+  EXPECT_EQ(state.step, good.step);
+
+  ToolContact bad = G1Bar(kPress_m);
+  bad.p_SP[1].x() = std::numeric_limits<double>::quiet_NaN();
+  StepTissue(good_model, bad, ws, state);
+  EXPECT_EQ(state.status, TissueStatus::kBadInput);
+  EXPECT_EQ(state.f_T_S, good.f_T_S);
+
+  def.cg_max_iterations = 20000;
+  def.max_contact_nodes = 4;
+  const TissueModel small = BuildTissueModel(def);
+  TissueWorkspace ws_small(small);
+  TissueState s2 = MakeTissueState(small);
+  StepTissue(small, G1Bar(kPress_m), ws_small, s2);
+  EXPECT_EQ(s2.status, TissueStatus::kTooManyContacts);
+  EXPECT_TRUE(s2.f_T_S.allFinite());
+}
+
+TEST(TissueStep, DisplayFieldInterpolatesTheSolution) {
+  const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kCholmod);
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  StepTissue(model, G1Bar(kPress_m), ws, state);
+  std::vector<double> grid;
+  CalcDisplacementGrid(model, state, 6, grid);
+  ASSERT_EQ(grid.size(), 65u * 65u);
+  EXPECT_NEAR(grid[32 * 65 + 32], -kPress_m, 1e-15);  // under the bar
+  EXPECT_EQ(grid[0], 0.0);                            // fixed edge
+  for (int k = 0; k < state.num_contacts; ++k) {
+    const int node = state.contact_nodes[k];
+    EXPECT_NEAR(grid[node], -kPress_m, 1e-15);
+  }
+  for (int id = 0; id < model.num_grid_nodes; ++id) {
+    if (state.node_step[id] == state.step) {
+      EXPECT_NEAR(grid[id], state.w_m[id], 1e-15);
+    }
+    EXPECT_LE(grid[id], 1e-15);  // maximum principle: nothing rises above the surface
+    EXPECT_GE(grid[id], -kPress_m - 1e-15);
+  }
+}
+
+TEST(TissueDef, ValidateNamesTheField) {
+  TissueDef def;
+  def.grading = 1.0;
+  try {
+    def.Validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("grading"), std::string::npos);
+  }
+  def = TissueDef{};
+  def.level = 9;
+  EXPECT_THROW(def.Validate(), std::invalid_argument);
+  def = TissueDef{};
+  def.shear_modulus_Pa = -1;
+  EXPECT_THROW(BuildTissueModel(def), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace microdex::fem
