@@ -40,6 +40,9 @@ std::string_view KnotName(KnotType type);
 std::optional<KnotType> KnotTypeFromName(std::string_view name);
 
 struct KnotOptions {
+  // Thread diameter, which scales the closure's clearance tests; 0: the median link length
+  // (nodes about one diameter apart).
+  double thread_diameter_m = 0.0;
   // Number of generic projection directions whose answers must agree (majority vote).
   int num_projections = 3;
   // Seed of the projection directions (deterministic results for a given polyline).
