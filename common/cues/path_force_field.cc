@@ -1,0 +1,26 @@
+#include "common/cues/path_force_field.h"
+
+namespace microdex::cues {
+
+bool CalcNearestOnCircle(const PathCircle& circle, const Eigen::Vector3d& p_W,
+                         Eigen::Vector3d* q_W) {
+  const Eigen::Vector3d p_C = circle.X_WC.inverse() * p_W;
+  const double rho = std::hypot(p_C.x(), p_C.y());
+  // Below a nanometre from the axis the direction is rounding noise.
+  if (rho < 1e-9) return false;
+  const Eigen::Vector3d q_C(circle.radius_m * p_C.x() / rho, circle.radius_m * p_C.y() / rho, 0);
+  *q_W = circle.X_WC * q_C;
+  return true;
+}
+
+Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector3d& p_WT,
+                                   double signed_stiffness_N_per_m, double max_force_N) {
+  Eigen::Vector3d q_W;
+  if (!CalcNearestOnCircle(circle, p_WT, &q_W)) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d f = -signed_stiffness_N_per_m * (p_WT - q_W);
+  const double n = f.norm();
+  if (n > max_force_N) f *= max_force_N / n;
+  return f;
+}
+
+}  // namespace microdex::cues

@@ -1,0 +1,28 @@
+#pragma once
+// Haptic guidance cues along the ideal path (thesis §2.1, Fig. 2.1): a convergent field pulls
+// the tool towards the path, a divergent field pushes it away (training in unstable dynamics,
+// after Burdet et al., which the thesis proposes for micromanipulation). The path here is a
+// circle (the needle tail's ideal path around the vessel axis), so the field is the spring
+//   f_T_W = -k_signed (p_WT − q_W),  q_W the nearest point of the path circle to p_WT,
+// k_signed = +k (convergent) or −k (divergent), saturated at max_force_N.
+
+#include <Eigen/Geometry>
+
+namespace microdex::cues {
+
+struct PathCircle {
+  Eigen::Isometry3d X_WC = Eigen::Isometry3d::Identity();  // circle in the xy-plane of C
+  double radius_m = 5e-3;
+};
+
+// Nearest point of the circle to p_W; false (and q_W untouched) on the axis, where every
+// circle point is nearest.
+bool CalcNearestOnCircle(const PathCircle& circle, const Eigen::Vector3d& p_W,
+                         Eigen::Vector3d* q_W);
+
+// The spring force of the field; zero on the circle's axis. signed_stiffness_N_per_m > 0
+// converges, < 0 diverges.
+Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector3d& p_WT,
+                                   double signed_stiffness_N_per_m, double max_force_N);
+
+}  // namespace microdex::cues

@@ -1,0 +1,86 @@
+// microdex-station: one trainee station (DESIGN.md "Command-line contracts").
+#include <pthread.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <cstdio>
+#include <thread>
+
+#include "station/station_app.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // SIGINT/SIGTERM are blocked in every thread (the DDS threads inherit the mask) and taken
+  // by one watcher thread that only sets the stop flag.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  microdex::station::StationOptions o;
+  o.station_id = "station-" + std::to_string(getpid());
+  o.dds.profile_file = microdex::net::DefaultDdsProfileFile();
+  o.dds.participant_name = "microdex-station";
+  std::string window_unused, screenshot_unused, security_unused;
+  bool window = false;
+  bool no_realtime = false;
+
+  CLI::App app{"microdex-station: one trainee station (haptic loop, physics modules, DDS)"};
+  app.add_option("--scene", o.scene_path, "scene file (YAML)")->required();
+  app.add_option("--device", o.device, "input device: sim (playback, dds, gui: later)");
+  app.add_option("--skill", o.skill, "simulated trainee skill, 0 novice .. 1 expert");
+  app.add_option("--seed", o.seed, "seed of the simulated trainee");
+  app.add_option("--duration", o.duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
+  app.add_option("--station-id", o.station_id, "station id (DDS key)");
+  app.add_option("--trainee", o.trainee, "trainee name shown to the instructor");
+  app.add_option("--score-out", o.score_out, "write the final score as JSON to FILE");
+  app.add_option("--mirror-rate", o.mirror_rate_hz, "rate of the mirrored state topics, Hz");
+  app.add_option("--dds-profile", o.dds.profile_file, "DDS XML profiles")->capture_default_str();
+  app.add_option("--domain", o.dds.domain_id, "DDS domain id");
+  app.add_option("--partition", o.dds.partition, "DDS partition (the course)");
+  app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
+  app.add_flag("--window", window, "open a view window (not available in this build)");
+  app.add_option("--screenshot", screenshot_unused, "(not available in this build)");
+  app.add_option("--security", security_unused, "(not available in this build)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "microdex-station: %s\n", e.what());
+    return 2;
+  }
+  if (window || !screenshot_unused.empty() || !security_unused.empty()) {
+    std::fprintf(
+        stderr, "microdex-station: %s: not available in this build yet\n",
+        window ? "--window" : (!screenshot_unused.empty() ? "--screenshot" : "--security"));
+    return 2;
+  }
+  o.realtime = !no_realtime;
+  if (std::string why = o.Validate(); !why.empty()) {
+    std::fprintf(stderr, "microdex-station: %s\n", why.c_str());
+    return 2;
+  }
+  spdlog::set_pattern("[%H:%M:%S.%e] [station] [%l] %v");
+
+  std::thread watcher([&] {
+    int sig = 0;
+    sigwait(&signals, &sig);
+    g_stop = true;
+  });
+  watcher.detach();  // it ends with the process; it only ever sets the flag
+  try {
+    return microdex::station::RunStation(o, g_stop);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-station: %s\n", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,28 @@
+#include <stdexcept>
+
+#include "station/module.h"
+#include "station/needle_module.h"
+#include "station/tremor_module.h"
+
+namespace microdex::station {
+
+std::vector<std::unique_ptr<Module>> MakeModules(const scene::SceneModel& scene) {
+  std::vector<std::unique_ptr<Module>> modules;
+  for (const std::string& name : scene.modules) {
+    if (name == "needle") {
+      modules.push_back(std::make_unique<NeedleModule>(scene));
+    } else if (name == "tremor") {
+      modules.push_back(std::make_unique<TremorModule>(scene));
+    } else {
+      throw std::runtime_error(scene.path + ": modules: '" + name +
+                               "' has no station module in this build yet");
+    }
+  }
+  if (modules.size() > static_cast<std::size_t>(kMaxStationModules)) {
+    throw std::runtime_error(scene.path + ": modules: more than " +
+                             std::to_string(kMaxStationModules));
+  }
+  return modules;
+}
+
+}  // namespace microdex::station

@@ -1,0 +1,55 @@
+#include "station/rt/realtime.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+#include <time.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "station/rt/clock.h"
+
+namespace microdex::rt {
+
+bool LockMemory(std::string* why_not) {
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    if (why_not) *why_not = std::string("mlockall: ") + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+bool MakeThisThreadFifo(int priority, std::string* why_not) {
+  sched_param param{};
+  param.sched_priority = priority;
+  const int err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+  if (err != 0) {
+    if (why_not) *why_not = std::string("SCHED_FIFO: ") + std::strerror(err);
+    return false;
+  }
+  return true;
+}
+
+std::int64_t MonotonicClock::NowNs() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+void MonotonicClock::SleepUntilNs(std::int64_t deadline_ns) {
+  timespec ts;
+  ts.tv_sec = deadline_ns / 1'000'000'000;
+  ts.tv_nsec = deadline_ns % 1'000'000'000;
+  // EINTR: a signal arrived; sleep again until the same absolute deadline.
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+std::int64_t MonotonicClock::RealtimeNs() {
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace microdex::rt

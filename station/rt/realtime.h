@@ -1,0 +1,21 @@
+#pragma once
+// Real-time setup for the haptic thread: memory locked (mlockall) and SCHED_FIFO when the
+// process is permitted; otherwise the loop still runs on absolute deadlines, and the caller
+// logs one line saying why it is not real-time.
+
+#include <string>
+
+namespace microdex::rt {
+
+struct RealtimeStatus {
+  bool memory_locked = false;
+  bool fifo = false;
+  std::string why_not;  // empty when both succeeded
+};
+
+// Locks current and future pages. Call once from main, before the threads start.
+bool LockMemory(std::string* why_not);
+// Gives the calling thread SCHED_FIFO at `priority` (1..99).
+bool MakeThisThreadFifo(int priority, std::string* why_not);
+
+}  // namespace microdex::rt

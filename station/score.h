@@ -1,0 +1,18 @@
+#pragma once
+// The task score of a needle-in-tube run, from the running totals the haptic thread keeps
+// (snapshot.h ScoreTotals). Simple and explainable:
+//   contact fraction  c = time in contact / time
+//   clearance factor  g = clamp(mean clearance / tube radius, 0, 1)
+//   score             = 100 (1 − c) (1 + g) / 2
+// so a run that never touches and keeps the needle on the core circle scores 100, one that
+// never touches but rides the wall 50, and time in contact takes its share off.
+
+#include "common/net/messages.h"
+#include "common/scene/scene.h"
+#include "station/snapshot.h"
+
+namespace microdex::station {
+
+net::Score CalcScore(const scene::SceneModel& scene, const ScoreTotals& totals);
+
+}  // namespace microdex::station

@@ -1,0 +1,71 @@
+#pragma once
+// A simulated trainee holding the tool: the scene's scripted ideal path, plus physiological
+// tremor (8–12 Hz), plus slow drift of position and orientation, held by a compliant hand
+// that yields to the rendered force. A skill parameter (0 novice … 1 expert) scales tremor
+// and drift. Seeded and deterministic: the same scene, def and step sequence (and forces)
+// give the same samples bit for bit.
+//
+// Model, per step k (t = k dt):
+//   p_WT = p_ideal(t) + tremor(t) + drift(t) + f_prev / k_hand
+//   tremor: per axis, three sinusoids with frequencies drawn in [8, 12] Hz and random phases,
+//           scaled to an RMS of tremor_rms_m (novice … expert, interpolated by skill);
+//   drift:  per axis, four sinusoids with frequencies drawn in [drift_min_hz, drift_max_hz]
+//           and random phases, scaled to a standard deviation of drift_std_m (likewise for the
+//           orientation, a small rotation vector with drift_std_rad). Smooth, unlike a random
+//           walk, whose path length would grow without bound with the sampling rate;
+//   hand:   a spring of stiffness k_hand holding the planned pose, yielding with a time
+//           constant τ_hand: the offset o follows f / k_hand by o' = (f / k_hand − o) / τ_hand
+//           (explicit Euler, f the force of the previous step), so guidance fields and the
+//           wall act on the tool. A quasi-static hand (o = f / k_hand at once) would make the
+//           wall loop diverge whenever k_wall > k_hand.
+
+#include "common/scene/scene.h"
+#include "station/device.h"
+
+namespace microdex::station {
+
+struct SimTraineeDef {
+  double skill = 0.5;  // 0 novice .. 1 expert
+  std::uint64_t seed = 1;
+  double tremor_rms_novice_m = 60e-6;
+  double tremor_rms_expert_m = 10e-6;
+  double drift_std_novice_m = 300e-6;
+  double drift_std_expert_m = 40e-6;
+  double drift_std_novice_rad = 0.03;
+  double drift_std_expert_rad = 0.004;
+  double drift_min_hz = 0.05;
+  double drift_max_hz = 0.5;
+  double hand_stiffness_N_per_m = 400;
+  double hand_time_constant_s = 0.05;
+  // Empty when valid, else a one-line reason naming the field.
+  std::string Validate() const;
+};
+
+class SimTrainee final : public Device {
+ public:
+  static constexpr int kTremorComponents = 3;
+  static constexpr int kDriftComponents = 4;
+
+  SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def);
+  DeviceSample Read(std::uint64_t step) override;
+  void WriteForce(const Eigen::Vector3d& f_T_W) override { f_prev_W_ = f_T_W; }
+
+  double tremor_rms_m() const { return tremor_rms_m_; }
+  double drift_std_m() const { return drift_std_m_; }
+
+ private:
+  const scene::SceneModel& scene_;
+  double dt_s_;
+  double tremor_rms_m_, drift_std_m_, drift_std_rad_;
+  double hand_stiffness_N_per_m_;
+  double freq_hz_[3][kTremorComponents];
+  double phase_rad_[3][kTremorComponents];
+  // Drift: [0..2] position axes, [3..5] rotation-vector axes.
+  double drift_freq_hz_[6][kDriftComponents];
+  double drift_phase_rad_[6][kDriftComponents];
+  double hand_time_constant_s_;
+  Eigen::Vector3d f_prev_W_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hand_offset_m_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace microdex::station

@@ -1,0 +1,97 @@
+#pragma once
+// What the haptic thread hands to the publisher thread after every step (through the
+// snapshot ring), and what the publisher hands to the haptic thread (cue requests through
+// the cue ring). Plain, fixed-size, trivially copyable: copying one never allocates.
+
+#include <array>
+#include <cstdint>
+
+#include "common/net/messages.h"
+
+namespace microdex::station {
+
+inline constexpr int kMaxStationModules = 8;
+inline constexpr int kMaxAcksPerTick = 4;
+
+using Vec3 = std::array<double, 3>;
+using Quat = std::array<double, 4>;  // (w, x, y, z)
+
+// A cue as it enters the haptic thread: applied at the first step >= apply_at_step.
+struct CueRequest {
+  std::uint64_t cue_id = 0;
+  net::CueKind kind = net::CueKind::kClear;
+  double param = 0;
+  std::uint64_t apply_at_step = 0;
+};
+
+// A cue applied during a step (reported back as a TaskEvent with that step).
+struct CueAck {
+  std::uint64_t cue_id = 0;
+  net::CueKind kind = net::CueKind::kClear;
+  double param = 0;
+};
+
+struct ModuleSample {
+  double step_time_s = 0;      // wall time of this module's step
+  double error_estimate = 0;   // module-defined; NaN when none this step
+  std::uint32_t warnings = 0;  // running count
+};
+
+struct NeedleSnapshot {
+  Vec3 p_WN{};
+  Quat q_WN{1, 0, 0, 0};
+  double clearance_m = 0;
+  std::uint8_t contact = 0;
+  std::uint8_t status = 0;  // net::ClearanceStatus
+  double s_rad = 0;
+  Vec3 p_WD{};
+  Vec3 p_WW{};
+};
+
+// Running totals of the task score (station/score.h), updated every step.
+struct ScoreTotals {
+  double time_s = 0;
+  double time_in_contact_s = 0;
+  std::uint32_t contacts = 0;
+  double clearance_sum_m = 0;
+  std::uint64_t clearance_samples = 0;
+  double min_clearance_m = 0;
+  double path_length_m = 0;
+  double ideal_path_length_m = 0;
+  double tremor_sq_sum_m2 = 0;
+  std::uint64_t tremor_samples = 0;
+};
+
+struct TickSnapshot {
+  std::uint64_t step = 0;
+  std::int64_t tick_start_ns = 0;  // monotonic
+  std::int64_t stamp_ns = 0;       // CLOCK_REALTIME at tick start
+  std::int64_t period_ns = 0;      // since the previous tick start
+  std::uint8_t overrun = 0;        // started more than one period after its deadline
+  // Device, raw.
+  Vec3 p_WT_device{};
+  Quat q_WT_device{1, 0, 0, 0};
+  double gripper = 0;
+  std::uint32_t buttons = 0;
+  // Tool after cues, and the force sent to the device.
+  Vec3 p_WT{};
+  Quat q_WT{1, 0, 0, 0};
+  Vec3 f_T_W{};
+  std::uint32_t active_cues = 0;
+  // Modules (filled by the modules present).
+  std::uint8_t has_needle = 0;
+  NeedleSnapshot needle;
+  std::uint8_t has_tremor = 0;
+  double tremor_band_m = 0;  // |band-passed position| this step
+  double tremor_rms_m = 0;
+  std::array<ModuleSample, kMaxStationModules> modules{};
+  int module_count = 0;
+  // Events of this step.
+  std::array<CueAck, kMaxAcksPerTick> acks{};
+  int ack_count = 0;
+  std::int8_t contact_event = 0;     // +1 contact began, -1 ended
+  std::uint32_t force_warnings = 0;  // running count of non-finite forces replaced by zero
+  ScoreTotals score;
+};
+
+}  // namespace microdex::station

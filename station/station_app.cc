@@ -1,0 +1,178 @@
+#include "station/station_app.h"
+
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include "common/scene/scene.h"
+#include "station/haptic_loop.h"
+#include "station/module.h"
+#include "station/rt/clock.h"
+#include "station/rt/realtime.h"
+#include "station/sim_trainee.h"
+#include "station/station_publisher.h"
+
+namespace microdex::station {
+namespace {
+
+constexpr int kHapticPriority = 80;
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+void WriteScoreJson(const std::string& path, const StationOptions& o, const std::string& session,
+                    const scene::SceneModel& scene, const StationPublisher& pub,
+                    const HapticLoop& loop, bool realtime) {
+  const net::Score s = pub.final_score();
+  const PeriodStats& p = pub.run_periods();
+  const PublisherTotals& t = pub.totals();
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("score-out '" + path + "': cannot write");
+  f << "{\n";
+  f << "  \"station_id\": " << JsonString(s.header.station_id) << ",\n";
+  f << "  \"session_id\": " << JsonString(session) << ",\n";
+  f << "  \"scene\": " << JsonString(scene.path) << ",\n";
+  f << "  \"skill\": " << JsonNumber(o.skill) << ",\n";
+  f << "  \"seed\": " << o.seed << ",\n";
+  f << "  \"steps\": " << loop.step() << ",\n";
+  f << "  \"duration_s\": " << JsonNumber(s.duration_s) << ",\n";
+  f << "  \"time_in_contact_s\": " << JsonNumber(s.time_in_contact_s) << ",\n";
+  f << "  \"contacts\": " << s.contacts << ",\n";
+  f << "  \"mean_clearance_m\": " << JsonNumber(s.mean_clearance_m) << ",\n";
+  f << "  \"min_clearance_m\": " << JsonNumber(s.min_clearance_m) << ",\n";
+  f << "  \"path_length_m\": " << JsonNumber(s.path_length_m) << ",\n";
+  f << "  \"ideal_path_length_m\": " << JsonNumber(s.ideal_path_length_m) << ",\n";
+  f << "  \"tremor_rms_m\": " << JsonNumber(s.tremor_rms_m) << ",\n";
+  f << "  \"score\": " << JsonNumber(s.score) << ",\n";
+  f << "  \"loop\": {\"ticks\": " << t.snapshots
+    << ", \"period_mean_ms\": " << JsonNumber(p.mean_s() * 1e3)
+    << ", \"period_p99_ms\": " << JsonNumber(p.Quantile_s(0.99) * 1e3)
+    << ", \"period_p999_ms\": " << JsonNumber(p.Quantile_s(0.999) * 1e3)
+    << ", \"period_max_ms\": " << JsonNumber(p.max_s() * 1e3) << ", \"overruns\": " << t.overruns
+    << ", \"ring_dropped\": " << loop.ring_dropped()
+    << ", \"input_published\": " << t.input_published
+    << ", \"input_write_failed\": " << t.input_write_failed
+    << ", \"realtime\": " << (realtime ? "true" : "false") << "},\n";
+  f << "  \"cues_applied\": [";
+  for (std::size_t i = 0; i < t.cues_applied.size(); ++i) {
+    const AppliedCue& c = t.cues_applied[i];
+    f << (i ? ", " : "") << "{\"cue_id\": " << c.cue_id
+      << ", \"kind\": " << JsonString(net::CueKindName(c.kind))
+      << ", \"param\": " << JsonNumber(c.param) << ", \"step\": " << c.step << "}";
+  }
+  f << "],\n  \"cues_rejected\": " << t.cues_rejected << "\n}\n";
+}
+
+}  // namespace
+
+std::string StationOptions::Validate() const {
+  if (scene_path.empty()) return "--scene: required";
+  if (device != "sim") {
+    if (device == "playback" || device == "dds" || device == "gui") {
+      return "--device " + device + ": not available in this build yet (only 'sim')";
+    }
+    return "--device: expected sim|playback|dds|gui";
+  }
+  if (!(skill >= 0 && skill <= 1)) return "--skill: expected 0..1";
+  if (!(duration_s >= 0) || !std::isfinite(duration_s)) return "--duration: expected >= 0 s";
+  if (station_id.empty() || station_id.size() > 64) return "--station-id: expected 1..64 chars";
+  if (station_id == "all") return "--station-id: 'all' is reserved for cues to every station";
+  if (trainee.size() > 128) return "--trainee: longer than 128 characters";
+  if (!(mirror_rate_hz >= 1 && mirror_rate_hz <= 1000)) return "--mirror-rate: expected 1..1000 Hz";
+  if (std::string why = dds.Validate(); !why.empty()) return "--" + why;
+  return {};
+}
+
+int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
+  const scene::SceneModel scene = scene::LoadScene(o.scene_path);
+  std::vector<std::unique_ptr<Module>> modules = MakeModules(scene);
+  SimTraineeDef trainee_def;
+  trainee_def.skill = o.skill;
+  trainee_def.seed = o.seed;
+  if (std::string why = trainee_def.Validate(); !why.empty()) throw std::runtime_error(why);
+  SimTrainee device(scene, trainee_def);
+
+  bool realtime = false;
+  if (o.realtime) {
+    std::string why;
+    realtime = rt::LockMemory(&why);
+    if (!realtime) spdlog::warn("not real-time: {} (the loop keeps absolute deadlines)", why);
+  } else {
+    spdlog::info("real-time scheduling disabled by option");
+  }
+
+  StationRings rings;
+  rt::MonotonicClock clock;
+  HapticLoop loop(scene, device, std::move(modules), rings, clock);
+
+  PublisherConfig pc;
+  pc.station_id = o.station_id;
+  pc.session_id = o.station_id + "-" + std::to_string(clock.RealtimeNs() / 1'000'000) + "-" +
+                  std::to_string(getpid());
+  pc.session_id = pc.session_id.substr(0, 64);
+  pc.trainee = o.trainee;
+  pc.device = o.device;
+  pc.skill = o.skill;
+  pc.mirror_rate_hz = o.mirror_rate_hz;
+  StationPublisher publisher(pc, o.dds, scene, rings, loop);
+
+  const auto max_steps =
+      o.duration_s > 0
+          ? static_cast<std::uint64_t>(std::llround(o.duration_s * scene.haptic.rate_hz))
+          : UINT64_MAX;
+  std::atomic<bool> haptic_stop{false};
+  std::atomic<bool> haptic_done{false};
+  std::atomic<bool> fifo{false};
+  std::string fifo_why;
+  std::thread haptic([&] {
+    if (o.realtime) fifo = rt::MakeThisThreadFifo(kHapticPriority, &fifo_why);
+    loop.Run(haptic_stop, max_steps);
+    haptic_done = true;
+  });
+  std::thread pub_thread([&] { publisher.Run(); });
+
+  while (!stop.load() && !haptic_done.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  haptic_stop = true;
+  haptic.join();
+  publisher.RequestStop();
+  pub_thread.join();
+  if (o.realtime && !fifo) spdlog::warn("haptic thread not SCHED_FIFO: {}", fifo_why);
+  const bool rt_ok = realtime && fifo;
+  spdlog::info("station {}: {} steps, score {:.1f}, period p99 {:.3f} ms, overruns {}, dropped {}",
+               o.station_id, loop.step(), publisher.final_score().score,
+               publisher.run_periods().Quantile_s(0.99) * 1e3, publisher.totals().overruns,
+               loop.ring_dropped());
+  if (!o.score_out.empty()) {
+    WriteScoreJson(o.score_out, o, pc.session_id, scene, publisher, loop, rt_ok);
+  }
+  return 0;
+}
+
+}  // namespace microdex::station

@@ -1,0 +1,33 @@
+#pragma once
+// microdex-station as a library: options, validation and the run, so that tests and the
+// benchmark can start a station in-process as well as through the binary.
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "common/net/dds_context.h"
+
+namespace microdex::station {
+
+struct StationOptions {
+  std::string scene_path;
+  std::string device = "sim";
+  double skill = 0.5;
+  std::uint64_t seed = 1;
+  double duration_s = 0;   // 0: until SIGINT/SIGTERM
+  std::string station_id;  // default: station-<pid>
+  std::string trainee = "simulated trainee";
+  std::string score_out;  // JSON file written at the end ("" none)
+  double mirror_rate_hz = 60;
+  bool realtime = true;  // try SCHED_FIFO + mlockall
+  net::DdsOptions dds;
+  // Empty when valid; otherwise a one-line reason naming the option.
+  std::string Validate() const;
+};
+
+// Runs one station until `stop` becomes true or the duration elapses. Returns the process
+// exit status; throws std::runtime_error (bad scene, DDS profile...) with a one-line reason.
+int RunStation(const StationOptions& options, const std::atomic<bool>& stop);
+
+}  // namespace microdex::station

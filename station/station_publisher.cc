@@ -1,0 +1,337 @@
+#include "station/station_publisher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fastdds/dds/core/condition/GuardCondition.hpp>
+#include <fastdds/dds/core/condition/StatusCondition.hpp>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+
+#include "common/net/convert.h"
+#include "cue_commandPubSubTypes.h"
+#include "device_inputPubSubTypes.h"
+#include "needle_statePubSubTypes.h"
+#include "scorePubSubTypes.h"
+#include "station/rt/clock.h"
+#include "station/score.h"
+#include "station_infoPubSubTypes.h"
+#include "task_eventPubSubTypes.h"
+#include "telemetryPubSubTypes.h"
+#include "tool_statePubSubTypes.h"
+
+namespace microdex::station {
+
+namespace dds = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+struct StationPublisher::Writers {
+  dds::DataWriter* info = nullptr;
+  dds::DataWriter* input = nullptr;
+  dds::DataWriter* tool = nullptr;
+  dds::DataWriter* needle = nullptr;  // only with the needle module
+  dds::DataWriter* telemetry = nullptr;
+  dds::DataWriter* events = nullptr;
+  dds::DataWriter* score = nullptr;
+  dds::DataReader* cues = nullptr;
+  dds::WaitSet waitset;
+  msg::StationInfo info_msg;
+  eprosima::fastrtps::rtps::InstanceHandle_t info_handle;
+  msg::DeviceInput input_msg;
+  msg::ToolState tool_msg;
+  msg::NeedleState needle_msg;
+  msg::Telemetry telemetry_msg;
+  msg::TaskEvent event_msg;
+  msg::Score score_msg;
+  msg::CueCommand cue_msg;
+  net::DeviceInput input_plain;
+  net::ToolState tool_plain;
+  net::NeedleState needle_plain;
+};
+
+namespace {
+
+rt::MonotonicClock& SystemClock() {
+  static rt::MonotonicClock clock;
+  return clock;
+}
+
+Eigen::Vector3d E(const Vec3& v) { return {v[0], v[1], v[2]}; }
+Eigen::Quaterniond Q(const Quat& q) { return {q[0], q[1], q[2], q[3]}; }
+
+}  // namespace
+
+StationPublisher::StationPublisher(const PublisherConfig& config, const net::DdsOptions& dds,
+                                   const scene::SceneModel& scene, StationRings& rings,
+                                   const HapticLoop& loop)
+    : config_(config),
+      scene_(scene),
+      rings_(rings),
+      loop_(loop),
+      dds_(std::make_unique<net::DdsContext>(dds)),
+      stop_guard_(std::make_unique<dds::GuardCondition>()),
+      w_(std::make_unique<Writers>()) {
+  w_->info = dds_->CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+  w_->input = dds_->CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+  w_->tool = dds_->CreateWriter<msg::ToolStatePubSubType>(net::kToolStateTopic);
+  if (scene.HasModule("needle")) {
+    w_->needle = dds_->CreateWriter<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
+  }
+  w_->telemetry = dds_->CreateWriter<msg::TelemetryPubSubType>(net::kTelemetryTopic);
+  w_->events = dds_->CreateWriter<msg::TaskEventPubSubType>(net::kTaskEventTopic);
+  w_->score = dds_->CreateWriter<msg::ScorePubSubType>(net::kScoreTopic);
+  w_->cues = dds_->CreateReader<msg::CueCommandPubSubType>(net::kCueCommandTopic);
+  w_->cues->get_statuscondition().set_enabled_statuses(dds::StatusMask::data_available());
+  w_->waitset.attach_condition(w_->cues->get_statuscondition());
+  w_->waitset.attach_condition(*stop_guard_);
+  window_step_time_sum_s_.assign(scene.modules.size(), 0.0);
+  window_step_time_max_s_.assign(scene.modules.size(), 0.0);
+  final_score_.header.station_id = config_.station_id;
+
+  net::StationInfo info;
+  info.header = MakeHeader(0, SystemClock().RealtimeNs());
+  info.trainee = config_.trainee;
+  info.scene = scene.path;
+  info.modules = scene.modules;
+  info.build = MICRODEX_BUILD_VERSION;
+  info.haptic_rate_hz = scene.haptic.rate_hz;
+  info.mirror_rate_hz = config_.mirror_rate_hz;
+  info.skill = config_.skill;
+  info.device = config_.device;
+  net::ToMsg(info, w_->info_msg);
+  w_->info_handle = w_->info->register_instance(&w_->info_msg);
+  w_->info->write(&w_->info_msg, w_->info_handle);
+  PublishEvent(net::TaskEventKind::kTaskStart, 0, 0, 0, scene.name);
+}
+
+StationPublisher::~StationPublisher() {
+  if (w_) {
+    w_->waitset.detach_condition(*stop_guard_);
+    w_->waitset.detach_condition(w_->cues->get_statuscondition());
+  }
+  w_.reset();
+  dds_.reset();  // deletes the participant and everything in it
+}
+
+net::Header StationPublisher::MakeHeader(std::uint64_t step, std::int64_t stamp_ns) const {
+  return {config_.station_id, config_.session_id, step, stamp_ns};
+}
+
+void StationPublisher::RequestStop() {
+  stop_.store(true);
+  stop_guard_->set_trigger_value(true);
+}
+
+void StationPublisher::PublishEvent(net::TaskEventKind kind, std::uint64_t step,
+                                    std::uint64_t cue_id, double value, const std::string& text) {
+  net::TaskEvent e;
+  e.header = MakeHeader(step, SystemClock().RealtimeNs());
+  e.kind = kind;
+  e.cue_id = cue_id;
+  e.value = value;
+  e.text = text.substr(0, 128);
+  net::ToMsg(e, w_->event_msg);
+  w_->events->write(&w_->event_msg);
+}
+
+void StationPublisher::HandleCues() {
+  dds::SampleInfo info;
+  while (w_->cues->take_next_sample(&w_->cue_msg, &info) == ReturnCode_t::RETCODE_OK) {
+    if (!info.valid_data) continue;
+    net::CueCommand cue;
+    std::string why;
+    if (!net::FromMsg(w_->cue_msg, cue, &why)) {
+      ++totals_.cues_rejected;
+      PublishEvent(net::TaskEventKind::kCueRejected, last_.step, w_->cue_msg.cue_id(), 0,
+                   "malformed cue: " + why);
+      continue;
+    }
+    if (cue.header.station_id != config_.station_id && cue.header.station_id != net::kAllStations) {
+      continue;  // addressed to another station
+    }
+    // A cue is applied once, even when transient-local history delivers it again.
+    const auto key = std::make_pair(cue.issuer + "/" + cue.header.session_id, cue.cue_id);
+    if (std::find(seen_cues_.begin(), seen_cues_.end(), key) != seen_cues_.end()) continue;
+    seen_cues_.push_back(key);
+    if (const char* why_not = CheckCue(cue.kind, cue.param); *why_not != '\0') {
+      ++totals_.cues_rejected;
+      PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param, why_not);
+      continue;
+    }
+    CueRequest request{cue.cue_id, cue.kind, cue.param, cue.header.step};
+    if (!rings_.cues.TryPush(request)) {
+      ++totals_.cues_rejected;
+      PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param,
+                   "cue queue full");
+    }
+  }
+}
+
+void StationPublisher::Drain() {
+  TickSnapshot s;
+  while (rings_.snapshots.TryPop(s)) {
+    ++totals_.snapshots;
+    if (have_last_) {  // the first period of a run has no predecessor
+      run_periods_.Add(s.period_ns);
+      window_periods_.Add(s.period_ns);
+    }
+    if (s.overrun) {
+      ++totals_.overruns;
+      ++window_overruns_;
+    }
+    ++window_ticks_;
+    for (int i = 0; i < s.module_count && i < static_cast<int>(window_step_time_sum_s_.size());
+         ++i) {
+      window_step_time_sum_s_[i] += s.modules[i].step_time_s;
+      window_step_time_max_s_[i] = std::max(window_step_time_max_s_[i], s.modules[i].step_time_s);
+    }
+    // DeviceInput: every step, the replay source.
+    w_->input_plain.header = MakeHeader(s.step, s.stamp_ns);
+    w_->input_plain.p_WT = E(s.p_WT_device);
+    w_->input_plain.q_WT = Q(s.q_WT_device);
+    w_->input_plain.gripper = s.gripper;
+    w_->input_plain.buttons = s.buttons;
+    net::ToMsg(w_->input_plain, w_->input_msg);
+    if (w_->input->write(&w_->input_msg)) {
+      ++totals_.input_published;
+    } else {
+      ++totals_.input_write_failed;
+    }
+    for (int i = 0; i < s.ack_count; ++i) {
+      const CueAck& a = s.acks[i];
+      totals_.cues_applied.push_back({a.cue_id, a.kind, a.param, s.step});
+      PublishEvent(net::TaskEventKind::kCueApplied, s.step, a.cue_id, a.param,
+                   net::CueKindName(a.kind));
+    }
+    if (s.contact_event > 0) {
+      PublishEvent(net::TaskEventKind::kContactBegin, s.step, 0, s.needle.clearance_m, "");
+    } else if (s.contact_event < 0) {
+      PublishEvent(net::TaskEventKind::kContactEnd, s.step, 0, s.needle.clearance_m, "");
+    }
+    last_ = s;
+    have_last_ = true;
+  }
+}
+
+void StationPublisher::PublishMirror() {
+  if (!have_last_) return;
+  const TickSnapshot& s = last_;
+  w_->tool_plain.header = MakeHeader(s.step, s.stamp_ns);
+  w_->tool_plain.p_WT = E(s.p_WT);
+  w_->tool_plain.q_WT = Q(s.q_WT);
+  w_->tool_plain.f_T_W = E(s.f_T_W);
+  w_->tool_plain.tremor_rms_m = s.has_tremor ? s.tremor_rms_m : 0.0;
+  w_->tool_plain.active_cues = s.active_cues;
+  net::ToMsg(w_->tool_plain, w_->tool_msg);
+  w_->tool->write(&w_->tool_msg);
+  if (w_->needle != nullptr && s.has_needle) {
+    auto& n = w_->needle_plain;
+    n.header = MakeHeader(s.step, s.stamp_ns);
+    n.p_WN = E(s.needle.p_WN);
+    n.q_WN = Q(s.needle.q_WN);
+    n.clearance_m = s.needle.clearance_m;
+    n.contact = s.needle.contact != 0;
+    n.s_rad = s.needle.s_rad;
+    n.p_WD = E(s.needle.p_WD);
+    n.p_WW = E(s.needle.p_WW);
+    n.status = static_cast<net::ClearanceStatus>(s.needle.status);
+    net::ToMsg(n, w_->needle_msg);
+    w_->needle->write(&w_->needle_msg);
+  }
+}
+
+void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
+  net::Telemetry t;
+  t.header = MakeHeader(last_.step, SystemClock().RealtimeNs());
+  t.window_s = static_cast<double>(now_ns - telemetry_window_start_ns_) * 1e-9;
+  t.ticks = window_ticks_;
+  t.period_mean_s = window_periods_.mean_s();
+  t.period_p99_s = window_periods_.Quantile_s(0.99);
+  t.period_max_s = window_periods_.max_s();
+  t.overruns = window_overruns_;
+  t.ring_dropped = loop_.ring_dropped();
+  t.realtime = config_.realtime;
+  for (std::size_t i = 0; i < scene_.modules.size(); ++i) {
+    net::ModuleTelemetry m;
+    m.name = scene_.modules[i];
+    m.step_time_mean_s =
+        window_ticks_ ? window_step_time_sum_s_[i] / static_cast<double>(window_ticks_) : 0.0;
+    m.step_time_max_s = window_step_time_max_s_[i];
+    m.error_estimate = last_.modules[i].error_estimate;
+    m.warnings = last_.modules[i].warnings;
+    m.error_kind = scene_.modules[i] == "needle" ? "sp_vs_sampled_m" : "none";
+    t.modules.push_back(m);
+  }
+  net::ToMsg(t, w_->telemetry_msg);
+  w_->telemetry->write(&w_->telemetry_msg);
+  window_periods_.Reset();
+  window_overruns_ = 0;
+  window_ticks_ = 0;
+  std::fill(window_step_time_sum_s_.begin(), window_step_time_sum_s_.end(), 0.0);
+  std::fill(window_step_time_max_s_.begin(), window_step_time_max_s_.end(), 0.0);
+  telemetry_window_start_ns_ = now_ns;
+}
+
+void StationPublisher::PublishScore(bool is_final) {
+  net::Score s = CalcScore(scene_, last_.score);
+  s.header = MakeHeader(last_.step, SystemClock().RealtimeNs());
+  s.is_final = is_final;
+  net::ToMsg(s, w_->score_msg);
+  w_->score->write(&w_->score_msg);
+  if (is_final) final_score_ = s;
+}
+
+void StationPublisher::Run() {
+  const std::int64_t period_ns =
+      static_cast<std::int64_t>(std::llround(1e9 / scene_.haptic.rate_hz));
+  const auto mirror_ns = static_cast<std::int64_t>(1e9 / config_.mirror_rate_hz);
+  const auto telemetry_ns = static_cast<std::int64_t>(1e9 / config_.telemetry_rate_hz);
+  const auto score_ns = static_cast<std::int64_t>(1e9 * config_.score_period_s);
+  std::int64_t now = SystemClock().NowNs();
+  next_mirror_ns_ = now;
+  next_telemetry_ns_ = now + telemetry_ns;
+  next_score_ns_ = now + score_ns;
+  telemetry_window_start_ns_ = now;
+  dds::ConditionSeq active;
+  while (!stop_.load()) {
+    // Wake just after the next tick is due (its snapshot is then in the ring).
+    std::int64_t wake = now + period_ns;
+    if (have_last_) wake = last_.tick_start_ns + period_ns + config_.wake_offset_ns;
+    const std::int64_t timeout_ns = std::clamp<std::int64_t>(wake - now, 20'000, 2 * period_ns);
+    w_->waitset.wait(active,
+                     eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(timeout_ns)));
+    HandleCues();
+    Drain();
+    now = SystemClock().NowNs();
+    if (now >= next_mirror_ns_) {
+      PublishMirror();
+      next_mirror_ns_ = std::max(next_mirror_ns_ + mirror_ns, now);
+    }
+    if (now >= next_telemetry_ns_) {
+      PublishTelemetry(now);
+      next_telemetry_ns_ = std::max(next_telemetry_ns_ + telemetry_ns, now);
+    }
+    if (now >= next_score_ns_) {
+      PublishScore(false);
+      next_score_ns_ = std::max(next_score_ns_ + score_ns, now);
+    }
+  }
+  Goodbye();
+}
+
+void StationPublisher::Goodbye() {
+  Drain();
+  PublishMirror();
+  PublishScore(true);
+  PublishEvent(net::TaskEventKind::kTaskEnd, last_.step, 0, final_score_.score, "");
+  // Give the reliable topics a moment to deliver the final samples to a live instructor;
+  // bounded so that a shutdown stays well within one second.
+  const eprosima::fastrtps::Duration_t wait(0, 150'000'000);
+  w_->events->wait_for_acknowledgments(wait);
+  w_->score->wait_for_acknowledgments(wait);
+  // Departure: dispose the station's instance, then unregister it.
+  w_->info->dispose(&w_->info_msg, w_->info_handle);
+  w_->info->unregister_instance(&w_->info_msg, w_->info_handle);
+  w_->info->wait_for_acknowledgments(wait);
+}
+
+}  // namespace microdex::station

@@ -1,0 +1,117 @@
+#pragma once
+// The station's publisher thread: owns every DDS entity of the station and waits on a
+// WaitSet (the cue reader's data-available condition and a stop guard), with a timeout that
+// wakes it just after each haptic tick. Each wake-up it
+//   - takes cue commands addressed to this station (or "all"), checks them and hands them to
+//     the haptic thread through the cue ring (rejections become TaskEvents);
+//   - drains the snapshot ring: one DeviceInput per step (1 kHz, reliable keep-all), one
+//     TaskEvent per cue applied (with the step it was applied at) and per contact change;
+//   - publishes the mirrored states (ToolState, and NeedleState when the scene has the needle
+//     module) at the mirror rate, Telemetry at 10 Hz and a running Score every second.
+// Stop() publishes the last states, the final Score and a TaskEnd event, waits briefly for
+// their acknowledgement, and disposes the station's StationInfo instance (its departure).
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/net/dds_context.h"
+#include "common/net/messages.h"
+#include "common/scene/scene.h"
+#include "station/haptic_loop.h"
+#include "station/period_stats.h"
+#include "station/snapshot.h"
+
+namespace eprosima::fastdds::dds {
+class GuardCondition;
+}
+
+namespace microdex::station {
+
+struct PublisherConfig {
+  std::string station_id = "station-1";
+  std::string session_id;
+  std::string trainee = "simulated";
+  std::string device = "sim";
+  double skill = -1;
+  double mirror_rate_hz = 60;
+  double telemetry_rate_hz = 10;
+  double score_period_s = 1;
+  bool realtime = false;
+  // Wake-up this long after each tick start, to pick up its snapshot with little delay.
+  std::int64_t wake_offset_ns = 60'000;
+};
+
+struct AppliedCue {
+  std::uint64_t cue_id = 0;
+  net::CueKind kind = net::CueKind::kClear;
+  double param = 0;
+  std::uint64_t step = 0;
+};
+
+struct PublisherTotals {
+  std::uint64_t snapshots = 0;
+  std::uint64_t input_published = 0;
+  std::uint64_t input_write_failed = 0;
+  std::uint64_t overruns = 0;
+  std::uint64_t cues_rejected = 0;
+  std::vector<AppliedCue> cues_applied;
+};
+
+class StationPublisher {
+ public:
+  // Creates the participant and the scene's writers (throws std::runtime_error naming the
+  // profile or entity that failed) and publishes StationInfo.
+  StationPublisher(const PublisherConfig& config, const net::DdsOptions& dds,
+                   const scene::SceneModel& scene, StationRings& rings, const HapticLoop& loop);
+  ~StationPublisher();
+
+  // The thread body: runs until RequestStop(), then drains the ring and says goodbye.
+  void Run();
+  // Any thread.
+  void RequestStop();
+
+  const PeriodStats& run_periods() const { return run_periods_; }
+  const PublisherTotals& totals() const { return totals_; }
+  const TickSnapshot& last() const { return last_; }
+  net::Score final_score() const { return final_score_; }
+
+ private:
+  void HandleCues();
+  void Drain();
+  void PublishMirror();
+  void PublishTelemetry(std::int64_t now_ns);
+  void PublishScore(bool is_final);
+  void PublishEvent(net::TaskEventKind kind, std::uint64_t step, std::uint64_t cue_id, double value,
+                    const std::string& text);
+  void Goodbye();
+  net::Header MakeHeader(std::uint64_t step, std::int64_t stamp_ns) const;
+
+  PublisherConfig config_;
+  const scene::SceneModel& scene_;
+  StationRings& rings_;
+  const HapticLoop& loop_;
+  std::unique_ptr<net::DdsContext> dds_;
+  std::unique_ptr<eprosima::fastdds::dds::GuardCondition> stop_guard_;
+  std::atomic<bool> stop_{false};
+
+  struct Writers;
+  std::unique_ptr<Writers> w_;
+
+  PeriodStats run_periods_;
+  PeriodStats window_periods_;
+  std::uint64_t window_overruns_ = 0;
+  std::vector<double> window_step_time_sum_s_, window_step_time_max_s_;
+  std::uint64_t window_ticks_ = 0;
+  PublisherTotals totals_;
+  TickSnapshot last_;
+  bool have_last_ = false;
+  std::vector<std::pair<std::string, std::uint64_t>> seen_cues_;
+  net::Score final_score_;
+  std::int64_t next_mirror_ns_ = 0, next_telemetry_ns_ = 0, next_score_ns_ = 0;
+  std::int64_t telemetry_window_start_ns_ = 0;
+};
+
+}  // namespace microdex::station
