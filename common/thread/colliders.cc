@@ -1,5 +1,6 @@
 #include "common/thread/colliders.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
 

@@ -1,5 +1,6 @@
 #include "common/thread/thread_contacts.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -1,0 +1,436 @@
+// microdex-bench thread: stability region, error against run time, and speed of the suture
+// thread (thesis chapter 5), for each integrator.
+//
+//   microdex-bench thread [--json FILE]                  speed during knot tying (default)
+//   microdex-bench thread --stability --json FILE [--plot FILE.png]
+//   microdex-bench thread --accuracy --json FILE
+//   microdex-bench thread --tie PASSES [--mirror]        tie a knot, print its trace
+//   --quick                                              reduced sizes (CTest)
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bench_registry.h"
+#include "common/thread/knot_recognition.h"
+#include "common/thread/sphere_bvh.h"
+#include "common/thread/thread_contacts.h"
+#include "common/thread/thread_forces.h"
+#include "common/thread/thread_scenarios.h"
+#include "common/thread/thread_step.h"
+
+namespace microdex::thread {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+std::string Num(double x) {
+  if (!std::isfinite(x)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.6g", x);
+  return buf;
+}
+
+void WriteFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("--json/--plot: cannot write '" + path + "'");
+  out << text;
+}
+
+constexpr Integrator kIntegrators[] = {Integrator::kSemiImplicitEuler,
+                                       Integrator::kLinearlyImplicitEuler};
+
+// ---- stability -----------------------------------------------------------------------------
+int RunStability(bool quick, const std::string& json, const std::string& plot) {
+  std::vector<double> ks, kb, mass, dts;
+  if (quick) {
+    ks = {1e2, 1e6};
+    kb = {1e-7};
+    mass = {1e-5};
+    dts = {1e-4, 1e-3};
+  } else {
+    for (int e = 0; e <= 8; ++e) ks.push_back(std::pow(10.0, e));
+    for (int e = -9; e <= -3; ++e) kb.push_back(std::pow(10.0, e));
+    for (int e = -7; e <= -2; ++e) mass.push_back(std::pow(10.0, e));
+    dts = {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3};
+  }
+  std::ostringstream runs;
+  // Largest stable dt per (integrator, k_s, mass), minimised over k_b: the PNG map.
+  struct Cell {
+    int integrator;
+    double ks, mass, best_dt;
+  };
+  std::vector<Cell> cells;
+  int stable_count[2] = {0, 0};
+  int total = 0;
+  bool first = true;
+  for (int ii = 0; ii < 2; ++ii) {
+    for (double k : ks) {
+      for (double m : mass) {
+        double best_dt = 0.0;  // largest dt stable for every k_b
+        for (double dt : dts) {
+          bool all = true;
+          for (double b : kb) {
+            SwingPullOptions opt;
+            opt.integrator = kIntegrators[ii];
+            opt.time_step_s = dt;
+            const SwingPullReport r = RunSwingPull(SwingPullDef(k, b, m), opt);
+            all = all && r.stable();
+            stable_count[ii] += r.stable() ? 1 : 0;
+            ++total;
+            runs << (first ? "" : ",\n") << "    {\"integrator\": \""
+                 << IntegratorName(kIntegrators[ii]) << "\", \"stretch_N_per_m\": " << Num(k)
+                 << ", \"bend_N_m\": " << Num(b) << ", \"node_mass_kg\": " << Num(m)
+                 << ", \"dt_s\": " << Num(dt) << ", \"stable\": " << (r.stable() ? "true" : "false")
+                 << ", \"finite\": " << (r.finite ? "true" : "false")
+                 << ", \"energy_bounded\": " << (r.energy_bounded ? "true" : "false")
+                 << ", \"strain_ok\": " << (r.strain_ok ? "true" : "false")
+                 << ", \"no_tunnelling\": " << (r.no_tunnelling ? "true" : "false")
+                 << ", \"max_strain\": " << Num(r.max_strain) << "}";
+            first = false;
+          }
+          if (all) best_dt = std::max(best_dt, dt);
+        }
+        cells.push_back({ii, k, m, best_dt});
+      }
+    }
+  }
+  // Table: largest dt stable for all k_b, rows k_s, columns mass, one block per integrator.
+  for (int ii = 0; ii < 2; ++ii) {
+    std::printf("\n%s: largest stable dt [ms] over all bending stiffnesses (- : none)\n",
+                IntegratorName(kIntegrators[ii]));
+    std::printf("%12s", "k_s\\m [kg]");
+    for (double m : mass) std::printf(" %8.0e", m);
+    std::printf("\n");
+    for (double k : ks) {
+      std::printf("%12.0e", k);
+      for (double m : mass) {
+        for (const Cell& c : cells) {
+          if (c.integrator == ii && c.ks == k && c.mass == m) {
+            if (c.best_dt > 0) {
+              std::printf(" %8.2f", c.best_dt * 1e3);
+            } else {
+              std::printf(" %8s", "-");
+            }
+          }
+        }
+      }
+      std::printf("\n");
+    }
+  }
+  std::printf("\nstable runs: %s %d, %s %d, of %d each\n", IntegratorName(kIntegrators[0]),
+              stable_count[0], IntegratorName(kIntegrators[1]), stable_count[1], total / 2);
+  if (!json.empty()) {
+    std::ostringstream out;
+    out << "{\n  \"study\": \"stability\",\n  \"criteria\": \"finite, energy <= 100x reference, "
+           "max link strain < 0.1, no link through the rod or non-adjacent links < 0.5 d\",\n"
+        << "  \"summary\": [{\"integrator\": \"" << IntegratorName(kIntegrators[0])
+        << "\", \"stable_runs\": " << stable_count[0] << ", \"runs\": " << total / 2
+        << "}, {\"integrator\": \"" << IntegratorName(kIntegrators[1])
+        << "\", \"stable_runs\": " << stable_count[1] << ", \"runs\": " << total / 2 << "}],\n"
+        << "  \"runs\": [\n"
+        << runs.str() << "\n  ]\n}\n";
+    WriteFile(json, out.str());
+  }
+  if (!plot.empty()) {
+    const std::string dat = plot + ".dat";
+    std::ostringstream d;
+    for (int ii = 0; ii < 2; ++ii) {
+      for (double k : ks) {
+        for (const Cell& c : cells) {
+          if (c.integrator == ii && c.ks == k) {
+            d << std::log10(c.ks) << " " << std::log10(c.mass) << " "
+              << (c.best_dt > 0 ? c.best_dt * 1e3 : 0.0) << "\n";
+          }
+        }
+        d << "\n";
+      }
+      d << "\n\n";
+    }
+    WriteFile(dat, d.str());
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size 1200,500\nset output '" << plot << "'\n"
+       << "set multiplot layout 1,2 title 'Largest stable dt [ms] (all bending stiffnesses)'\n"
+       << "set xlabel 'log10 stretch stiffness [N/m]'\nset ylabel 'log10 node mass [kg]'\n"
+       << "set cbrange [0:4]\nset view map\n";
+    for (int ii = 0; ii < 2; ++ii) {
+      gp << "set title '" << IntegratorName(kIntegrators[ii]) << "'\n"
+         << "plot '" << dat << "' index " << ii << " using 1:2:3 with points pt 5 ps 3 "
+         << "palette notitle\n";
+    }
+    gp << "unset multiplot\n";
+    const std::string script = plot + ".gp";
+    WriteFile(script, gp.str());
+    const std::string cmd = "gnuplot '" + script + "'";
+    if (std::system(cmd.c_str()) != 0) {
+      std::fprintf(stderr, "gnuplot failed; data in %s\n", dat.c_str());
+    }
+  }
+  return 0;
+}
+
+// ---- accuracy ------------------------------------------------------------------------------
+double SampleError(const std::vector<Eigen::Matrix3Xd>& a, const std::vector<Eigen::Matrix3Xd>& b) {
+  double worst = 0.0;
+  const size_t n = std::min(a.size(), b.size());
+  for (size_t k = 0; k < n; ++k) {
+    const double rms = std::sqrt((a[k] - b[k]).colwise().squaredNorm().mean());
+    worst = std::max(worst, rms);
+  }
+  return n == a.size() && n == b.size() ? worst : std::numeric_limits<double>::infinity();
+}
+
+int RunAccuracy(bool quick, const std::string& json) {
+  // A model on which the baseline converges too: k_s = 1e3 N/m, node mass 1e-5 kg.
+  const ThreadDef def = SwingPullDef(1e3, 1e-7, 1e-5);
+  const double ref_dt = quick ? 1e-4 : 1e-5;
+  const std::vector<double> dts = quick ? std::vector<double>{1e-3, 4e-3}
+                                        : std::vector<double>{1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3};
+  SwingPullOptions ref_opt;
+  ref_opt.integrator = Integrator::kSemiImplicitEuler;
+  ref_opt.time_step_s = ref_dt;
+  ref_opt.stop_when_unstable = false;
+  const SwingPullReport ref = RunSwingPull(def, ref_opt);
+  std::printf("reference: %s dt = %g s, stable = %d\n", IntegratorName(ref_opt.integrator), ref_dt,
+              ref.stable());
+  std::printf("%-24s %8s %14s %14s %7s\n", "integrator", "dt[ms]", "error[m]", "ns/step", "stable");
+  std::ostringstream runs;
+  bool first = true;
+  for (Integrator integ : kIntegrators) {
+    for (double dt : dts) {
+      SwingPullOptions opt;
+      opt.integrator = integ;
+      opt.time_step_s = dt;
+      opt.stop_when_unstable = false;
+      std::vector<double> per_step;
+      SwingPullReport r;
+      for (int rep = 0; rep < (quick ? 1 : 3); ++rep) {
+        const auto t0 = Clock::now();
+        r = RunSwingPull(def, opt);
+        per_step.push_back(Seconds(t0, Clock::now()) / std::max(1, r.steps));
+      }
+      const double err = SampleError(r.samples, ref.samples);
+      const double ns = Median(per_step) * 1e9;
+      std::printf("%-24s %8.2f %14.4e %14.0f %7d\n", IntegratorName(integ), dt * 1e3, err, ns,
+                  r.stable());
+      runs << (first ? "" : ",\n") << "    {\"integrator\": \"" << IntegratorName(integ)
+           << "\", \"dt_s\": " << Num(dt) << ", \"position_error_m\": " << Num(err)
+           << ", \"ns_per_step\": " << Num(ns)
+           << ", \"stable\": " << (r.stable() ? "true" : "false") << "}";
+      first = false;
+    }
+  }
+  std::printf("(the cost per step includes the O(n^2) tunnelling check of the study)\n");
+  if (!json.empty()) {
+    std::ostringstream out;
+    out << "{\n  \"study\": \"accuracy\",\n  \"reference\": {\"integrator\": \""
+        << IntegratorName(ref_opt.integrator) << "\", \"dt_s\": " << Num(ref_dt)
+        << "},\n  \"error\": \"max over 20 ms samples of the RMS node position difference\",\n"
+        << "  \"runs\": [\n"
+        << runs.str() << "\n  ]\n}\n";
+    WriteFile(json, out.str());
+  }
+  return 0;
+}
+
+// ---- speed ---------------------------------------------------------------------------------
+int RunSpeed(bool quick, const std::string& json) {
+  const std::vector<int> nodes =
+      quick ? std::vector<int>{65, 129} : std::vector<int>{65, 129, 257, 513, 1025};
+  const int max_steps = quick ? 300 : 3000;
+  std::ostringstream runs;
+  bool first = true;
+  std::printf("%-24s %6s %12s %14s %8s\n", "integrator", "nodes", "steps/s", "collision_ns",
+              "resets");
+  for (Integrator integ : kIntegrators) {
+    for (int n : nodes) {
+      ThreadDef def = KnotTyingDef(n);
+      def.integrator = integ;
+      const ThreadModel model = MakeThreadModel(def);
+      ThreadState state =
+          MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+      KnotTieOptions tie;
+      tie.passes = 2;
+      tie.speed_m_per_s = 0.03;  // a faster hand, to reach the knot within the timed steps
+      KnotTyingScript script(model, state, tie);
+      std::vector<double> step_s, collision_s;
+      for (int k = 0; k < max_steps && !script.done(); ++k) {
+        const auto t0 = Clock::now();
+        script.Step(model, state);
+        step_s.push_back(Seconds(t0, Clock::now()));
+        if (k % 10 == 0) {
+          const auto c0 = Clock::now();
+          FindThreadContacts(model, script.colliders(), state);
+          collision_s.push_back(Seconds(c0, Clock::now()));
+        }
+      }
+      const double sps = 1.0 / Median(step_s);
+      const double cns = Median(collision_s) * 1e9;
+      const long long resets = static_cast<long long>(state.status.nonfinite_resets +
+                                                      state.status.factorization_failures);
+      std::printf("%-24s %6d %12.0f %14.0f %8lld\n", IntegratorName(integ), n, sps, cns, resets);
+      runs << (first ? "" : ",\n") << "    {\"integrator\": \"" << IntegratorName(integ)
+           << "\", \"nodes\": " << n << ", \"steps_per_s\": " << Num(sps)
+           << ", \"collision_ns\": " << Num(cns) << ", \"steps\": " << step_s.size()
+           << ", \"rolled_back_steps\": " << resets << "}";
+      first = false;
+    }
+  }
+  // BVH against all pairs at 257 nodes, on a thread coiled into a tight helix (many close
+  // pairs, the knot's worst case).
+  const int n = 257;
+  const ThreadModel model = MakeThreadModel(KnotTyingDef(n));
+  Eigen::Matrix3Xd x(3, n);
+  const double pitch = 4.0 * model.def.diameter_m;
+  const double radius = 0.6e-3;
+  const double dphi = model.rest_length_m[0] / radius;
+  for (int i = 0; i < n; ++i) {
+    x.col(i) = Eigen::Vector3d(radius * std::cos(i * dphi), radius * std::sin(i * dphi),
+                               pitch * i * dphi / (2.0 * M_PI));
+  }
+  SphereBvhSpheres spheres = MakeSphereBvhSpheres(model.bvh);
+  std::vector<LinkPair> pairs(model.contact_capacity * 4);
+  const int reps = quick ? 50 : 2000;
+  std::vector<double> bvh_s, all_s;
+  int bvh_count = 0, all_count = 0;
+  for (int r = 0; r < reps; ++r) {
+    auto t0 = Clock::now();
+    RefitSphereBvh(model.bvh, x, model.bvh_inflate_m, spheres);
+    bvh_count = FindSelfCollisions(model.bvh, spheres, pairs.data(), pairs.size());
+    bvh_s.push_back(Seconds(t0, Clock::now()));
+    t0 = Clock::now();
+    RefitSphereBvh(model.bvh, x, model.bvh_inflate_m, spheres);
+    all_count = FindSelfCollisionsAllPairs(model.bvh, spheres, pairs.data(), pairs.size());
+    all_s.push_back(Seconds(t0, Clock::now()));
+  }
+  const double bvh_ns = Median(bvh_s) * 1e9;
+  const double all_ns = Median(all_s) * 1e9;
+  std::printf(
+      "\nself-collision query at %d nodes: BVH %.0f ns, all pairs %.0f ns, ratio %.1f "
+      "(%d / %d pairs)\n",
+      n, bvh_ns, all_ns, all_ns / bvh_ns, bvh_count, all_count);
+  if (!json.empty()) {
+    std::ostringstream out;
+    out << "{\n  \"study\": \"speed\",\n  \"trajectory\": \"knot tying (double overhand jig)\",\n"
+        << "  \"runs\": [\n"
+        << runs.str() << "\n  ],\n"
+        << "  \"bvh_vs_all_pairs\": {\"nodes\": " << n << ", \"bvh_ns\": " << Num(bvh_ns)
+        << ", \"all_pairs_ns\": " << Num(all_ns) << ", \"ratio\": " << Num(all_ns / bvh_ns)
+        << ", \"pairs\": " << bvh_count << ", \"all_pairs_pairs\": " << all_count << "}\n}\n";
+    WriteFile(json, out.str());
+  }
+  return 0;
+}
+
+// ---- tie -----------------------------------------------------------------------------------
+int RunTie(int passes, bool mirror, int nodes) {
+  const ThreadModel model = MakeThreadModel(KnotTyingDef(nodes));
+  ThreadState state =
+      MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  KnotTieOptions tie;
+  tie.passes = passes;
+  tie.mirror = mirror;
+  KnotTyingScript script(model, state, tie);
+  double min_d = std::numeric_limits<double>::infinity();
+  int k = 0;
+  while (script.Step(model, state)) {
+    min_d = std::min(min_d, CalcMinNonAdjacentDistance(model, state.x_W));
+    if (std::getenv("MICRODEX_TIE_DUMP") != nullptr && k % 250 == 0) {
+      std::FILE* f = std::fopen(std::getenv("MICRODEX_TIE_DUMP"), "a");
+      for (int i = 0; i < model.num_nodes; ++i) {
+        std::fprintf(f, "%g %g %g\n", state.x_W(0, i) * 1e3, state.x_W(1, i) * 1e3,
+                     state.x_W(2, i) * 1e3);
+      }
+      std::fprintf(f, "\n\n");
+      std::fclose(f);
+    }
+    if (++k % 500 == 0) {
+      std::printf("t=%.2f s min_dist/d=%.2f strain=%.3f fA=%.3g fB=%.3g contacts=%d\n",
+                  state.time_s, min_d / model.def.diameter_m, state.status.max_strain,
+                  state.grasps[script.slot_a()].f_T_W.norm(),
+                  state.grasps[script.slot_b()].f_T_W.norm(), state.status.num_self_contacts);
+    }
+  }
+  std::vector<Eigen::Vector3d> poly(model.num_nodes);
+  for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
+  std::printf(
+      "done t=%.2f s, min_dist/d=%.3f, resets=%lld, knot=%s\n", state.time_s,
+      min_d / model.def.diameter_m,
+      static_cast<long long>(state.status.nonfinite_resets + state.status.factorization_failures),
+      std::string(KnotName(RecognizeKnot(poly))).c_str());
+  std::printf("o thread\n");
+  for (const auto& p : poly) std::printf("v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
+  std::printf("l");
+  for (int i = 1; i <= model.num_nodes; ++i) std::printf(" %d", i);
+  std::printf("\n");
+  return 0;
+}
+
+int Main(int argc, char** argv) {
+  bool stability = false, accuracy = false, quick = false, mirror = false;
+  int tie = 0, nodes = 65;
+  std::string json, plot;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&](const char* name) -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(std::string(name) + ": expected a value");
+      return argv[++i];
+    };
+    if (arg == "--stability") {
+      stability = true;
+    } else if (arg == "--accuracy") {
+      accuracy = true;
+    } else if (arg == "--quick") {
+      quick = true;
+    } else if (arg == "--mirror") {
+      mirror = true;
+    } else if (arg == "--json") {
+      json = value("--json");
+    } else if (arg == "--plot") {
+      plot = value("--plot");
+    } else if (arg == "--tie") {
+      tie = std::atoi(value("--tie").c_str());
+      if (tie < 1 || tie > 3) throw std::invalid_argument("--tie: expected 1, 2 or 3 passes");
+    } else if (arg == "--nodes") {
+      nodes = std::atoi(value("--nodes").c_str());
+      if (nodes < 33) throw std::invalid_argument("--nodes: expected at least 33");
+    } else if (arg == "--help" || arg == "-h") {
+      std::printf(
+          "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --tie N "
+          "[--mirror] [--nodes N]] [--json FILE] [--quick]\n");
+      return 0;
+    } else {
+      throw std::invalid_argument("unknown option '" + arg + "'");
+    }
+  }
+  if (tie > 0) return RunTie(tie, mirror, nodes);
+  if (stability) return RunStability(quick, json, plot);
+  if (accuracy) return RunAccuracy(quick, json);
+  return RunSpeed(quick, json);
+}
+
+}  // namespace
+}  // namespace microdex::thread
+
+MICRODEX_REGISTER_BENCH(thread, "thread",
+                        "suture thread: --stability, --accuracy, speed during knot tying",
+                        microdex::thread::Main);
