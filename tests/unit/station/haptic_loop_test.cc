@@ -1,0 +1,211 @@
+// The haptic loop: no allocation after warm-up (the whole tick: device, cues, modules, force,
+// snapshot), regular periods and overruns on an injected clock, cues applied at a definite
+// step and acknowledged with it, forces always finite and saturated, and bit-for-bit
+// determinism for a given seed.
+#include "station/haptic_loop.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "station/sim_trainee.h"
+#include "tests/unit/station/alloc_counter.h"
+
+namespace microdex::station {
+namespace {
+
+scene::SceneModel NeedleScene() {
+  return scene::ParseScene(R"(
+name: test-needle
+modules: [needle, tremor]
+vessel: {core_radius_m: 5.0e-3, tube_radius_m: 0.5e-3, segment_angle_rad: 4.71238898}
+needle: {radius_m: 5.0e-3, sweep_rad: 1.04719755}
+task: {pass_duration_s: 2.0, start_azimuth_rad: 0.2, end_azimuth_rad: 3.3}
+haptic: {rate_hz: 1000, max_force_N: 0.5, wall_stiffness_N_per_m: 1000}
+)",
+                           "inline");
+}
+
+struct Rig {
+  explicit Rig(double skill = 0.0, std::uint64_t seed = 7, std::int64_t lateness_ns = 0)
+      : scene(NeedleScene()),
+        device(scene, Def(skill, seed)),
+        clock(1'000'000'000, lateness_ns),
+        loop(scene, device, MakeModules(scene), rings, clock) {}
+  static SimTraineeDef Def(double skill, std::uint64_t seed) {
+    SimTraineeDef d;
+    d.skill = skill;
+    d.seed = seed;
+    return d;
+  }
+  // Runs n more steps, draining the snapshot ring into `out` (when given) as the publisher
+  // thread would.
+  void Steps(std::uint64_t n, std::vector<TickSnapshot>* out = nullptr) {
+    const std::uint64_t end = loop.step() + n;
+    std::atomic<bool> stop{false};
+    while (loop.step() < end) {
+      loop.Run(stop, std::min(end, loop.step() + 256));
+      TickSnapshot s;
+      while (rings.snapshots.TryPop(s)) {
+        if (out) out->push_back(s);
+      }
+    }
+  }
+  scene::SceneModel scene;
+  SimTrainee device;
+  rt::ManualClock clock;
+  StationRings rings;
+  HapticLoop loop;
+};
+
+TEST(HapticLoop, TickNeverAllocatesAfterWarmUp) {
+  Rig rig(/*skill=*/0.0);  // a novice: contacts, wall forces, contact events
+  rig.Steps(500);          // warm-up
+  // Cues enter as they would from the publisher thread.
+  ASSERT_TRUE(rig.rings.cues.TryPush({1, net::CueKind::kDivergentField, 300, 0}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({2, net::CueKind::kAmplifiedTremor, 3, 1500}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({3, net::CueKind::kConvergentField, 500, 3000}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({4, net::CueKind::kClear, 0, 4000}));
+  std::atomic<bool> stop{false};
+  testing::StartCountingAllocations();
+  // 5000 steps without draining: the ring (4096) fills and drops are counted, not allocated.
+  rig.loop.Run(stop, rig.loop.step() + 5000);
+  const std::uint64_t allocations = testing::StopCountingAllocations();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(rig.loop.ring_dropped(), 0u);
+  EXPECT_GT(rig.loop.last_snapshot().score.contacts, 0u) << "the test should exercise contacts";
+}
+
+TEST(HapticLoop, PeriodsAndOverrunsOnTheInjectedClock) {
+  Rig rig;
+  std::vector<TickSnapshot> snaps;
+  rig.Steps(1000, &snaps);
+  ASSERT_EQ(snaps.size(), 1000u);
+  for (std::size_t i = 0; i < snaps.size(); ++i) {
+    EXPECT_EQ(snaps[i].step, i);
+    EXPECT_EQ(snaps[i].period_ns, 1'000'000);
+    EXPECT_EQ(snaps[i].overrun, 0);
+    if (i > 0) {
+      EXPECT_EQ(snaps[i].tick_start_ns - snaps[i - 1].tick_start_ns, 1'000'000);
+    }
+  }
+  // A clock that wakes 1.5 ms after every deadline it sleeps for: the deadlines stay on the
+  // absolute 1 ms grid, so the loop catches up (the next deadline is already past, no sleep)
+  // and 1000 steps still take 1000 ms of clock time: lateness does not accumulate. Ticks that
+  // start more than a period after their deadline are overruns: every second one here.
+  Rig late(0.0, 7, 1'500'000);
+  const std::int64_t t0 = late.clock.NowNs();
+  std::vector<TickSnapshot> late_snaps;
+  late.Steps(1000, &late_snaps);
+  const std::int64_t elapsed = late.clock.NowNs() - t0;
+  EXPECT_NEAR(static_cast<double>(elapsed), 1000e6, 3e6);
+  EXPECT_EQ(late.loop.overruns(), 500u);
+  std::uint64_t flagged = 0;
+  for (const auto& s : late_snaps) flagged += s.overrun;
+  EXPECT_EQ(flagged, 500u);
+}
+
+TEST(HapticLoop, CueAppliedAtItsStepAndAcknowledged) {
+  Rig rig;
+  std::vector<TickSnapshot> snaps;
+  rig.Steps(100, &snaps);
+  ASSERT_TRUE(rig.rings.cues.TryPush({42, net::CueKind::kConvergentField, 250, 777}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({43, net::CueKind::kAmplifiedTremor, 4, 0}));  // now
+  rig.Steps(1000, &snaps);
+  int acks_42 = 0, acks_43 = 0;
+  for (const auto& s : snaps) {
+    for (int i = 0; i < s.ack_count; ++i) {
+      if (s.acks[i].cue_id == 42) {
+        ++acks_42;
+        EXPECT_EQ(s.step, 777u);
+        EXPECT_EQ(s.acks[i].kind, net::CueKind::kConvergentField);
+      }
+      if (s.acks[i].cue_id == 43) {
+        ++acks_43;
+        EXPECT_EQ(s.step, 100u) << "a cue due at once is applied at the next step";
+      }
+    }
+    const bool field = (s.active_cues >> unsigned(net::CueKind::kConvergentField)) & 1u;
+    EXPECT_EQ(field, s.step >= 777) << "at step " << s.step;
+  }
+  EXPECT_EQ(acks_42, 1);
+  EXPECT_EQ(acks_43, 1);
+}
+
+TEST(HapticLoop, ConvergentFieldPullsTowardsThePath) {
+  // The simulated hand yields to the force, so a convergent field must shrink the distance
+  // of the tool to its ideal circle and a divergent one grow it (same seed, same script).
+  auto mean_error = [](net::CueKind kind, double k) {
+    Rig rig(0.0, 11);
+    if (k > 0) {
+      EXPECT_TRUE(rig.rings.cues.TryPush({1, kind, k, 0}));
+    }
+    std::vector<TickSnapshot> snaps;
+    rig.Steps(4000, &snaps);
+    cues::PathCircle path{rig.scene.vessel.X_WV, rig.scene.needle.radius_m};
+    double sum = 0;
+    for (const auto& s : snaps) {
+      const Eigen::Vector3d p(s.p_WT[0], s.p_WT[1], s.p_WT[2]);
+      Eigen::Vector3d q;
+      EXPECT_TRUE(cues::CalcNearestOnCircle(path, p, &q));
+      sum += (p - q).norm();
+    }
+    return sum / static_cast<double>(snaps.size());
+  };
+  const double none = mean_error(net::CueKind::kClear, 0);
+  const double conv = mean_error(net::CueKind::kConvergentField, 400);
+  const double div = mean_error(net::CueKind::kDivergentField, 200);
+  EXPECT_LT(conv, 0.8 * none);
+  EXPECT_GT(div, 1.1 * none);
+}
+
+TEST(HapticLoop, ForceIsFiniteAndSaturated) {
+  Rig rig(0.0, 3);
+  ASSERT_TRUE(rig.rings.cues.TryPush({1, net::CueKind::kDivergentField, 2000, 0}));
+  std::vector<TickSnapshot> snaps;
+  rig.Steps(5000, &snaps);
+  double max_force = 0;
+  for (const auto& s : snaps) {
+    const Eigen::Vector3d f(s.f_T_W[0], s.f_T_W[1], s.f_T_W[2]);
+    ASSERT_TRUE(f.allFinite());
+    max_force = std::max(max_force, f.norm());
+  }
+  EXPECT_LE(max_force, rig.scene.haptic.max_force_N * (1 + 1e-12));
+  EXPECT_GT(max_force, 0.9 * rig.scene.haptic.max_force_N) << "saturation not exercised";
+}
+
+TEST(HapticLoop, SameSeedSameRunBitForBit) {
+  auto run = [](std::uint64_t seed) {
+    Rig rig(0.3, seed);
+    EXPECT_TRUE(rig.rings.cues.TryPush({5, net::CueKind::kDivergentField, 150, 1234}));
+    std::vector<TickSnapshot> snaps;
+    rig.Steps(3000, &snaps);
+    return snaps;
+  };
+  const auto a = run(21), b = run(21), c = run(22);
+  ASSERT_EQ(a.size(), b.size());
+  bool differs_from_c = false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].p_WT, b[i].p_WT) << i;
+    EXPECT_EQ(a[i].f_T_W, b[i].f_T_W) << i;
+    EXPECT_EQ(std::memcmp(&a[i].needle.clearance_m, &b[i].needle.clearance_m, sizeof(double)), 0);
+    if (a[i].p_WT != c[i].p_WT) differs_from_c = true;
+  }
+  EXPECT_EQ(a.back().score.time_in_contact_s, b.back().score.time_in_contact_s);
+  EXPECT_TRUE(differs_from_c) << "another seed gave the same trainee";
+}
+
+TEST(HapticLoop, CueLimits) {
+  EXPECT_STREQ(CheckCue(net::CueKind::kClear, 0), "");
+  EXPECT_STREQ(CheckCue(net::CueKind::kConvergentField, 100), "");
+  EXPECT_STRNE(CheckCue(net::CueKind::kConvergentField, 0), "");
+  EXPECT_STRNE(CheckCue(net::CueKind::kDivergentField, 1e6), "");
+  EXPECT_STRNE(CheckCue(net::CueKind::kAmplifiedTremor, 0.5), "");
+  EXPECT_STRNE(CheckCue(net::CueKind::kAmplifiedTremor, std::nan("")), "");
+  EXPECT_STRNE(CheckCue(static_cast<net::CueKind>(17), 1), "");
+}
+
+}  // namespace
+}  // namespace microdex::station

@@ -1,0 +1,102 @@
+// The scene loader: the shipped needle-in-tube scene loads; bad files are refused with the
+// file and field named; the ideal path keeps the needle inside the tube.
+#include "common/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "station/needle_module.h"
+
+namespace microdex::scene {
+namespace {
+
+const char* kGood = R"(
+name: t
+modules: [needle, tremor]
+vessel: {core_radius_m: 5.0e-3, tube_radius_m: 0.5e-3, segment_angle_rad: 4.71238898}
+needle: {radius_m: 5.0e-3, sweep_rad: 1.04719755}
+task: {pass_duration_s: 4.0, start_azimuth_rad: 0.2, end_azimuth_rad: 3.3}
+)";
+
+std::string ErrorOf(const std::string& yaml) {
+  try {
+    ParseScene(yaml, "test.yaml");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scene, ShippedSceneLoads) {
+  const std::string dir =
+      std::getenv("MICRODEX_SOURCE_DIR") ? std::getenv("MICRODEX_SOURCE_DIR") : ".";
+  const SceneModel s = LoadScene(dir + "/assets/scenes/needle_tube.yaml");
+  EXPECT_EQ(s.name, "needle-in-tube");
+  EXPECT_TRUE(s.HasModule("needle"));
+  EXPECT_TRUE(s.HasModule("tremor"));
+  EXPECT_FALSE(s.HasModule("thread"));
+  EXPECT_DOUBLE_EQ(s.vessel.tube_radius_m, 0.5e-3);
+  const SceneModel m = LoadScene(dir + "/assets/scenes/needle_tube_minimal.yaml");
+  EXPECT_EQ(m.modules, std::vector<std::string>{"needle"});
+}
+
+TEST(Scene, BadInputNamesFileAndField) {
+  EXPECT_NE(ErrorOf("name: [").find("test.yaml"), std::string::npos);
+  auto has = [](const std::string& err, const char* field) {
+    return err.find("test.yaml") != std::string::npos && err.find(field) != std::string::npos;
+  };
+  std::string y = kGood;
+  EXPECT_EQ(ErrorOf(y), "");
+  EXPECT_TRUE(has(ErrorOf(y + "colour: red\n"), "colour"));
+  std::string bad = y;
+  bad.replace(bad.find("tube_radius_m: 0.5e-3"), 21, "tube_radius_m: 6.0e-3");
+  EXPECT_TRUE(has(ErrorOf(bad), "vessel.tube_radius_m"));
+  bad = y;
+  bad.replace(bad.find("end_azimuth_rad: 3.3"), 20, "end_azimuth_rad: 4.0");
+  EXPECT_TRUE(has(ErrorOf(bad), "task.end_azimuth_rad"));
+  bad = y;
+  bad.replace(bad.find("[needle, tremor]"), 16, "[needle, vortex]");
+  EXPECT_TRUE(has(ErrorOf(bad), "vortex"));
+  bad = y;
+  bad.replace(bad.find("radius_m: 5.0e-3, sweep"), 16, "radius_m: abc");
+  EXPECT_TRUE(has(ErrorOf(bad), "needle.radius_m"));
+  bad = y;
+  bad.replace(bad.find("radius_m: 5.0e-3, sweep"), 16, "radius_m: 6.0e-3");
+  EXPECT_TRUE(has(ErrorOf(bad), "needle.radius_m"));
+  EXPECT_NE(ErrorOf("name: t\nmodules: []\n").find("modules"), std::string::npos);
+  try {
+    LoadScene("/nonexistent/scene.yaml");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.yaml"), std::string::npos);
+  }
+}
+
+TEST(Scene, IdealPathStaysOnTheCoreCircle) {
+  const SceneModel s = ParseScene(kGood, "t");
+  EXPECT_DOUBLE_EQ(s.CalcIdealAzimuth(0), s.task.start_azimuth_rad);
+  EXPECT_NEAR(s.CalcIdealAzimuth(s.task.pass_duration_s), s.task.end_azimuth_rad, 1e-12);
+  EXPECT_NEAR(s.CalcIdealAzimuth(2 * s.task.pass_duration_s), s.task.start_azimuth_rad, 1e-12);
+  // Minimum jerk: halfway in time is halfway in angle; the motion starts at rest.
+  EXPECT_NEAR(s.CalcIdealAzimuth(s.task.pass_duration_s / 2),
+              (s.task.start_azimuth_rad + s.task.end_azimuth_rad) / 2, 1e-12);
+  EXPECT_NEAR(s.CalcIdealAzimuth(1e-4), s.task.start_azimuth_rad, 1e-9);
+  geometry::ArcDef arc;
+  arc.radius_m = s.needle.radius_m;
+  arc.sweep_rad = s.needle.sweep_rad;
+  geometry::TorusSegmentDef torus;
+  torus.core_radius_m = s.vessel.core_radius_m;
+  torus.tube_radius_m = s.vessel.tube_radius_m;
+  torus.segment_angle_rad = s.vessel.segment_angle_rad;
+  for (double t = 0; t < 8; t += 0.37) {
+    const Eigen::Isometry3d X_WT = s.CalcIdealX_WT(s.CalcIdealAzimuth(t));
+    EXPECT_NEAR(X_WT.translation().head<2>().norm(), s.needle.radius_m, 1e-15);
+    arc.X_WN = X_WT * s.X_TN();
+    // The ideal needle lies on the core circle: its clearance is the tube radius.
+    EXPECT_NEAR(station::CalcSampledClearance(arc, torus, 65), s.vessel.tube_radius_m, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace microdex::scene
