@@ -83,8 +83,18 @@ Eigen::Vector3d ChooseExitDirection(std::span<const Eigen::Vector3d> nodes, bool
     }
   };
   consider(tangent);
-  if ((p - centroid).norm() > 0) consider((p - centroid).normalized());
-  for (int i = 0; i < kNumCandidates; ++i) consider(FibonacciDirection(i, kNumCandidates));
+  const Eigen::Vector3d outward = p - centroid;
+  if (outward.norm() > 0) consider(outward.normalized());
+  // Candidates in a frame made of the end's direction and the direction away from the
+  // centroid, so that the choice turns with the thread (rigid motions change nothing).
+  Eigen::Vector3d side = outward - outward.dot(tangent) * tangent;
+  side = side.norm() > 1e-9 * outward.norm() && side.norm() > 0 ? side.normalized()
+                                                                : tangent.unitOrthogonal();
+  Eigen::Matrix3d frame;
+  frame << tangent, side, tangent.cross(side);
+  for (int i = 0; i < kNumCandidates; ++i) {
+    consider(frame * FibonacciDirection(i, kNumCandidates));
+  }
   return best;
 }
 

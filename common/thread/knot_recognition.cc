@@ -51,10 +51,11 @@ struct KnotClass {
 };
 
 // Invariants of the classified knots (README_knots.md derives them). Right-handed trefoil
-// V = t + t^3 - t^4 (Jones' skein relation with L+ a positive crossing); the positive 5_2
-// (all crossings positive, as a double overhand tied with the wraps of a right overhand)
-// V = t - t^2 + 2t^3 - t^4 + t^5 - t^6. Connected sums multiply both polynomials and add
-// signatures.
+// V = t + t^3 - t^4 (Jones' skein relation with L+ a positive crossing). The double
+// overhand closes to the cinquefoil 5_1 = T(2,5) (an end passed twice through the loop is a
+// 2-braid with five crossings); positive: V = t^2 + t^4 - t^5 + t^6 - t^7, signature -4.
+// Connected sums multiply both polynomials and add signatures; the square and the surgeon's
+// knot pair components of opposite handedness.
 const std::vector<KnotClass>& KnotTable() {
   static const std::vector<KnotClass> table = [] {
     using knot::Mirror;
@@ -62,26 +63,26 @@ const std::vector<KnotClass>& KnotTable() {
     const LaurentPolynomial one{0, {1}};
     const LaurentPolynomial a31{-1, {1, -1, 1}};
     const LaurentPolynomial a41{-1, {1, -3, 1}};
-    const LaurentPolynomial a52{-1, {2, -3, 2}};
+    const LaurentPolynomial a51{-2, {1, -1, 1, -1, 1}};
     const LaurentPolynomial v31r{1, {1, 0, 1, -1}};
     const LaurentPolynomial v31l = Mirror(v31r);
     const LaurentPolynomial v41{-2, {1, -1, 1, -1, 1}};
-    const LaurentPolynomial v52p{1, {1, -1, 2, -1, 1, -1}};
-    const LaurentPolynomial v52n = Mirror(v52p);
+    const LaurentPolynomial v51r{2, {1, 0, 1, -1, 1, -1}};
+    const LaurentPolynomial v51l = Mirror(v51r);
     const LaurentPolynomial a_sum33 = Multiply(a31, a31);
-    const LaurentPolynomial a_sum53 = Multiply(a52, a31);
+    const LaurentPolynomial a_sum53 = Multiply(a51, a31);
     return std::vector<KnotClass>{
         {KnotType::kNone, one, 0, one},
         {KnotType::kOverhandRight, a31, -2, v31r},
         {KnotType::kOverhandLeft, a31, 2, v31l},
         {KnotType::kFigureEight, a41, 0, v41},
-        {KnotType::kDoubleOverhand, a52, -2, v52p},
-        {KnotType::kDoubleOverhand, a52, 2, v52n},
+        {KnotType::kDoubleOverhand, a51, -4, v51r},
+        {KnotType::kDoubleOverhand, a51, 4, v51l},
         {KnotType::kSquare, a_sum33, 0, Multiply(v31r, v31l)},
         {KnotType::kGranny, a_sum33, -4, Multiply(v31r, v31r)},
         {KnotType::kGranny, a_sum33, 4, Multiply(v31l, v31l)},
-        {KnotType::kSurgeons, a_sum53, 0, Multiply(v52p, v31l)},
-        {KnotType::kSurgeons, a_sum53, 0, Multiply(v52n, v31r)},
+        {KnotType::kSurgeons, a_sum53, -2, Multiply(v51r, v31l)},
+        {KnotType::kSurgeons, a_sum53, 2, Multiply(v51l, v31r)},
     };
   }();
   return table;

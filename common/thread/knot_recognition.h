@@ -25,11 +25,11 @@ enum class KnotType {
   kNone,            // unknot
   kOverhandLeft,    // left-handed trefoil 3_1*
   kOverhandRight,   // right-handed trefoil 3_1
-  kDoubleOverhand,  // 5_2 (either chirality)
+  kDoubleOverhand,  // cinquefoil 5_1 = T(2,5), the closed double overhand (either chirality)
   kFigureEight,     // 4_1 (amphichiral)
   kSquare,          // reef knot 3_1 # 3_1*
   kGranny,          // 3_1 # 3_1 or 3_1* # 3_1*
-  kSurgeons,        // 5_2 # 3_1 with the trefoil of the chirality opposite to the double throw
+  kSurgeons,        // 5_1 # 3_1, the trefoil of the handedness opposite to the double throw
   kUnknown,         // anything else, or no consistent answer
 };
 

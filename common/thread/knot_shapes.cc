@@ -42,7 +42,7 @@ Curve FigureEightCurve(int samples) {
 }
 
 Curve BraidClosure(int strands, std::span<const int> word, int samples_per_generator) {
-  MICRODEX_CHECK(strands >= 1 && !word.empty());
+  MICRODEX_CHECK(strands >= 1 && !word.empty() && samples_per_generator % 2 == 0);
   const int g = static_cast<int>(word.size());
   // Strand at slot j sits at radius kR0 + j; over/under by +-kLift in z mid-exchange.
   constexpr double kR0 = 3.0;
@@ -60,7 +60,9 @@ Curve BraidClosure(int strands, std::span<const int> word, int samples_per_gener
     MICRODEX_CHECK(gen >= 1 && gen < strands);
     const int lo = gen - 1;
     for (int step = 0; step < samples_per_generator; ++step) {
-      const double u = static_cast<double>(step) / samples_per_generator;
+      // Half-step offset: no sample at mid-exchange, where two strands would project
+      // onto the same point.
+      const double u = (step + 0.5) / samples_per_generator;
       const double phi = 2.0 * kPi * (k + u) / g;
       for (int slot = 0; slot < strands; ++slot) {
         const int strand = strand_at_slot[slot];
@@ -102,19 +104,28 @@ Curve OverhandAsTied(int passes, bool right) {
   const double loop_z = right ? 0.3 : -0.3;
   const double helix = right ? -1.0 : 1.0;
   Curve c;
-  // Standing part along +x, then the loop (y > 0) crossing back over / under it at x = -2.
+  // Standing part along +x, then the loop (y > 0) crossing back over / under it at x = -2.1.
   for (double x = -6.0; x < 2.0; x += 0.25) c.push_back({x, 0.0, 0.0});
-  const Curve loop = {{2.0, 0.0, 0.0},     {2.6, 1.2, 0.0},
-                      {2.0, 2.6, 0.0},     {0.5, 3.2, 0.0},
-                      {-1.0, 3.1, 0.0},    {-2.0, 2.4, 0.0},
-                      {-2.2, 1.2, 0.0},    {-2.0, 0.4, 0.5 * loop_z},
-                      {-2.0, 0.0, loop_z}, {-2.0, -0.4, 0.5 * loop_z},
-                      {-1.9, -1.2, 0.0},   {-1.5, -0.9, 0.0}};
+  // (The crossing at x = -2.1, y = 0 lies inside edges of both strands.)
+  const Curve loop = {{2.0, 0.0, 0.0},
+                      {2.6, 1.2, 0.0},
+                      {2.0, 2.6, 0.0},
+                      {0.5, 3.2, 0.0},
+                      {-1.0, 3.1, 0.0},
+                      {-2.0, 2.4, 0.0},
+                      {-2.2, 1.2, 0.0},
+                      {-2.1, 0.4, 0.5 * loop_z},
+                      {-2.1, 0.1, loop_z},
+                      {-2.1, -0.2, loop_z},
+                      {-2.1, -0.5, 0.5 * loop_z},
+                      {-1.9, -1.2, 0.0},
+                      {-1.5, -0.9, 0.0}};
   c.insert(c.end(), loop.begin(), loop.end());
   // The end passes through the loop: a helix of radius 0.6 around the standing part.
   const int samples = 48 * passes;
   for (int k = 0; k <= samples; ++k) {
-    const double theta = 2.0 * kPi * passes * k / samples;
+    // A small phase keeps samples off the standing part's line in projection.
+    const double theta = 2.0 * kPi * passes * k / samples + 0.05;
     c.push_back({-1.0 + 2.0 * k / samples, -0.6 * std::cos(theta), helix * 0.6 * std::sin(theta)});
   }
   for (const Eigen::Vector3d& p : Curve{{1.5, -0.9, 0.0}, {2.2, -1.6, 0.0}, {3.5, -2.0, 0.0}}) {
