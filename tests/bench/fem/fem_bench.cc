@@ -542,7 +542,8 @@ int RunFem(int argc, char** argv) {
                    "set key noautotitle\nset xlabel 'x (cm)'\nset ylabel 'line force (N/cm)'\n"
                    "set yrange [0:*]\n"
                    "plot '%sfig3_5_force_G1.dat' index 0 with lines lw 2 title 'Navier', "
-                   "for [b=1:%d] '' index b with linespoints title sprintf('FEM block %%d', b)\n",
+                   "for [b=1:%d] '' index b with linespoints title sprintf('%%s L%%d', (b %% 2 == "
+                   "1 ? 'fine' : 'multi-scale'), (b + 1) / 2)\n",
                    dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str(),
                    dir.c_str(), dir.c_str(), 2 * opt.max_level);
       std::fclose(f);
