@@ -206,7 +206,9 @@ int RunAccuracy(bool quick, const std::string& json) {
   const std::vector<double> dts = quick ? std::vector<double>{1e-3, 4e-3}
                                         : std::vector<double>{1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3};
   SwingPullOptions ref_opt;
-  ref_opt.integrator = Integrator::kSemiImplicitEuler;
+  // The implicit scheme at 10 us: it converges to the same trajectory as dt -> 0 and, unlike the
+  // baseline, stays stable through the rod contacts and snaps of this motion.
+  ref_opt.integrator = Integrator::kLinearlyImplicitEuler;
   ref_opt.time_step_s = ref_dt;
   ref_opt.stop_when_unstable = false;
   const SwingPullReport ref = RunSwingPull(def, ref_opt);
