@@ -263,25 +263,22 @@ struct Piece {
 
 struct Node {
   double b[kN + 1];
-  double noise[kN + 1];
+  double noise;   // rounding bound of every b[i]
   double y0, y1;  // in the piece's y = (x + 1)/2
 };
 
+// The deepest needle point so far, at s = m + 2 atan(t) (the arctangent is taken once, at
+// the end).
 struct Best {
   double d = -1;
-  double s = 0;
+  double cos_s = 1, sin_s = 0;
+  double m = 0, t = 0;
+  double s() const { return m + 2 * std::atan(t); }
 };
 
 class Solver {
  public:
   explicit Solver(const Curve& cv) : cv_(cv) {}
-
-  void Consider(double s, double c1, double s1) {
-    const PointEval pe = EvalPoint(cv_, c1, s1);
-    if (pe.d > best_.d) best_ = {pe.d, s};
-  }
-
-  void ConsiderEnd(double s) { Consider(s, std::cos(s), std::sin(s)); }
 
   void SolveInterval(double s_begin, double s_end) {
     const double width = s_end - s_begin;
@@ -297,21 +294,16 @@ class Solver {
   ExactDiagnostics& diagnostics() { return diag_; }
 
  private:
-  // cos s, sin s and s at the piece variable x.
-  void AtX(const Piece& pc, double x, double* c1, double* s1, double* s) const {
+  // The needle point at the piece variable x, through the half-angle formulas (no
+  // trigonometric call); it becomes the best one if it is deeper.
+  PointEval EvalX(const Piece& pc, double x) {
     const double t = pc.tau * x;
     const double den = 1 + t * t;
     const double cs = (1 - t * t) / den, sn = 2 * t / den;
-    *c1 = pc.cos_m * cs - pc.sin_m * sn;
-    *s1 = pc.sin_m * cs + pc.cos_m * sn;
-    *s = pc.m + 2 * std::atan(t);
-  }
-
-  PointEval EvalX(const Piece& pc, double x, double* s) {
-    double c1, s1;
-    AtX(pc, x, &c1, &s1, s);
+    const double c1 = pc.cos_m * cs - pc.sin_m * sn;
+    const double s1 = pc.sin_m * cs + pc.cos_m * sn;
     const PointEval pe = EvalPoint(cv_, c1, s1);
-    if (pe.d > best_.d) best_ = {pe.d, *s};
+    if (pe.d > best_.d) best_ = {pe.d, c1, s1, pc.m, t};
     return pe;
   }
 
@@ -347,6 +339,7 @@ class Solver {
     Node root;
     root.y0 = 0;
     root.y1 = 1;
+    root.noise = 0;
     for (int i = 0; i <= kN; ++i) {
       double sum = 0, abs_sum = 0;
       for (int j = 0; j <= kN; ++j) {
@@ -354,8 +347,11 @@ class Solver {
         abs_sum += kBernstein.abs_m[i][j] * q_abs[j];
       }
       root.b[i] = sum;
-      root.noise[i] = kNoiseFactor * kEps * abs_sum;
+      root.noise = std::max(root.noise, kNoiseFactor * kEps * abs_sum);
     }
+    // The piece's ends are candidates (the clipped interval's ends among them).
+    EvalX(pc, -1);
+    EvalX(pc, 1);
     Isolate(pc, root, sb - sa);
   }
 
@@ -369,7 +365,7 @@ class Solver {
       int signs[kN + 1];
       bool any_fuzzy = false, all_fuzzy = true;
       for (int i = 0; i <= kN; ++i) {
-        if (std::abs(node.b[i]) <= node.noise[i]) {
+        if (std::abs(node.b[i]) <= node.noise) {
           signs[i] = 0;
           any_fuzzy = true;
         } else {
@@ -396,27 +392,18 @@ class Solver {
       }
       // De Casteljau split at kSplit; the rounding of the convex combinations is added to
       // the children's noise.
+      // (Convex combinations: the parent's noise bound carries over.)
       Node left, right;
-      double b[kN + 1], n[kN + 1];
+      double b[kN + 1];
       std::copy(node.b, node.b + kN + 1, b);
-      std::copy(node.noise, node.noise + kN + 1, n);
       double max_b = 0;
       for (int i = 0; i <= kN; ++i) max_b = std::max(max_b, std::abs(b[i]));
       for (int level = 0; level <= kN; ++level) {
         left.b[level] = b[0];
-        left.noise[level] = n[0];
         right.b[kN - level] = b[kN - level];
-        right.noise[kN - level] = n[kN - level];
-        for (int i = 0; i < kN - level; ++i) {
-          b[i] = (1 - kSplit) * b[i] + kSplit * b[i + 1];
-          n[i] = (1 - kSplit) * n[i] + kSplit * n[i + 1];
-        }
+        for (int i = 0; i < kN - level; ++i) b[i] = (1 - kSplit) * b[i] + kSplit * b[i + 1];
       }
-      const double extra = 2 * kN * kEps * max_b;
-      for (int i = 0; i <= kN; ++i) {
-        left.noise[i] += extra;
-        right.noise[i] += extra;
-      }
+      left.noise = right.noise = node.noise + 2 * kN * kEps * max_b;
       const double ym = node.y0 + kSplit * (node.y1 - node.y0);
       left.y0 = node.y0;
       left.y1 = ym;
@@ -459,8 +446,7 @@ class Solver {
       x = next;
       if (done || hi - lo <= 4 * kEps) break;
     }
-    double s;
-    EvalX(pc, x, &s);
+    EvalX(pc, x);
   }
 
   // P could not be resolved inside the node (it is zero to rounding there, or the node
@@ -469,13 +455,12 @@ class Solver {
   void SettleByPhi(const Piece& pc, const Node& node) {
     ++diag_.num_fuzzy;
     double lo = 2 * node.y0 - 1, hi = 2 * node.y1 - 1;
-    double s;
-    const PointEval pe_lo = EvalX(pc, lo, &s);
-    const PointEval pe_hi = EvalX(pc, hi, &s);
+    const PointEval pe_lo = EvalX(pc, lo);
+    const PointEval pe_hi = EvalX(pc, hi);
     if (!(pe_lo.phi > 0 && pe_hi.phi < 0)) return;
     for (int it = 0; it < 80 && hi - lo > 2 * kEps * std::max(1.0, std::abs(lo)); ++it) {
       const double mid = 0.5 * (lo + hi);
-      const PointEval pe = EvalX(pc, mid, &s);
+      const PointEval pe = EvalX(pc, mid);
       if (pe.phi > 0) {
         lo = mid;
       } else if (pe.phi < 0) {
@@ -494,16 +479,16 @@ class Solver {
 }  // namespace
 
 ArcTorusClearance MakeArcTorusClearance(const TorusSegmentDef& torus, const ArcInTorusFrame& f,
-                                        double s_rad, double distance_to_core_m) {
+                                        double s_rad, double cos_s, double sin_s,
+                                        double distance_to_core_m) {
   const double R = torus.core_radius_m, r = torus.tube_radius_m;
   ArcTorusClearance out;
   out.status = ClearanceStatus::kOk;
   out.clearance_m = r - distance_to_core_m;
   out.contact = out.clearance_m <= 0;
   out.s_rad = s_rad;
-  const Eigen::Vector3d p_V =
-      R * (f.center + f.radius * (f.u * std::cos(s_rad) + f.v * std::sin(s_rad)));
-  const double k = std::hypot(p_V.x(), p_V.y());
+  const Eigen::Vector3d p_V = R * (f.center + f.radius * (f.u * cos_s + f.v * sin_s));
+  const double k = std::sqrt(p_V.x() * p_V.x() + p_V.y() * p_V.y());
   // Nearest core point; on the z axis every core point is nearest: take azimuth 0.
   const Eigen::Vector3d radial =
       k > 0 ? Eigen::Vector3d(p_V.x() / k, p_V.y() / k, 0) : Eigen::Vector3d::UnitX();
@@ -535,14 +520,13 @@ ArcTorusClearance CalcArcTorusClearanceExact(const ArcDef& arc, const TorusSegme
   const Curve curve = MakeCurve(frame);
   Solver solver(curve);
   for (int i = 0; i < intervals.count; ++i) {
-    solver.ConsiderEnd(intervals.begin[i]);
-    solver.ConsiderEnd(intervals.end[i]);
     solver.SolveInterval(intervals.begin[i], intervals.end[i]);
   }
   solver.diagnostics().num_intervals = intervals.count;
   if (diagnostics != nullptr) *diagnostics = solver.diagnostics();
   const Best& best = solver.best();
-  return MakeArcTorusClearance(torus, frame, best.s, best.d * torus.core_radius_m);
+  return MakeArcTorusClearance(torus, frame, best.s(), best.cos_s, best.sin_s,
+                               best.d * torus.core_radius_m);
 }
 
 ArcTorusClearance CalcArcTorusClearanceExact(const ArcDef& arc, const TorusSegmentDef& torus) {

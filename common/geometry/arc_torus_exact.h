@@ -36,6 +36,7 @@ ArcTorusClearance CalcArcTorusClearanceExact(const ArcDef& arc, const TorusSegme
 // The clearance result for the needle point at parameter s (already known to be inside the
 // azimuth range): closest points in world. Shared by the sampled and exact methods.
 ArcTorusClearance MakeArcTorusClearance(const TorusSegmentDef& torus, const ArcInTorusFrame& frame,
-                                        double s_rad, double distance_to_core_m);
+                                        double s_rad, double cos_s, double sin_s,
+                                        double distance_to_core_m);
 
 }  // namespace microdex::geometry

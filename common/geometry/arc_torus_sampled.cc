@@ -27,6 +27,7 @@ ArcTorusClearance CalcArcTorusClearanceSampled(const ArcDef& arc, const TorusSeg
   double c = 1, s = 0;
   double best_d2 = -1;
   int best_i = -1;
+  double best_c = 1, best_s = 0;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d p = f.center + f.radius * (f.u * c + f.v * s);
     if (whole || IsAzimuthInSegment(p.x(), p.y(), torus.segment_angle_rad)) {
@@ -35,6 +36,8 @@ ArcTorusClearance CalcArcTorusClearanceSampled(const ArcDef& arc, const TorusSeg
       if (d2 > best_d2) {
         best_d2 = d2;
         best_i = i;
+        best_c = c;
+        best_s = s;
       }
     }
     const double next_c = c * cos_step - s * sin_step;
@@ -45,7 +48,8 @@ ArcTorusClearance CalcArcTorusClearanceSampled(const ArcDef& arc, const TorusSeg
     out.status = ClearanceStatus::kEmptyRange;
     return out;
   }
-  return MakeArcTorusClearance(torus, f, step * best_i, std::sqrt(best_d2) * torus.core_radius_m);
+  return MakeArcTorusClearance(torus, f, step * best_i, best_c, best_s,
+                               std::sqrt(best_d2) * torus.core_radius_m);
 }
 
 }  // namespace microdex::geometry

@@ -1,0 +1,156 @@
+// Runs `microdex-bench needle` as a user would: --cases on analytic cases, malformed input,
+// and the --quick JSON report's shape.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace microdex::bench {
+namespace {
+
+// Absolute, for a 5 mm core radius: 1e-12 relative.
+constexpr double kExactTol_m = 5e-15;
+// The SP column is held to the touch / no-touch agreement and a looser clearance bound.
+constexpr double kSpTol_m = 5e-12;
+
+std::string Env(const char* name) {
+  const char* v = std::getenv(name);
+  return v == nullptr ? std::string() : std::string(v);
+}
+
+std::string Bench() { return Env("MICRODEX_BIN_DIR") + "/microdex-bench"; }
+std::string Source() { return Env("MICRODEX_SOURCE_DIR"); }
+std::string Tmp(const std::string& name) {
+  return ::testing::TempDir() + "/needle_bench_cli_" + name;
+}
+
+int RunBench(const std::string& args, const std::string& stderr_file) {
+  const std::string cmd = Bench() + " " + args + " 2> '" + stderr_file + "'";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+TEST(NeedleBenchCli, CasesGiveTheAnalyticClearances) {
+  ASSERT_FALSE(Source().empty());
+  const std::string out = Tmp("cases_out.csv"), err = Tmp("cases_err.txt");
+  ASSERT_EQ(
+      RunBench("needle --cases '" + Source() + "/tests/data/needle_cases.csv' --out '" + out + "'",
+               err),
+      0)
+      << ReadAll(err);
+  const auto got = ReadCsv(out);
+  const auto expected = ReadCsv(Source() + "/tests/data/needle_cases_expected.csv");
+  ASSERT_EQ(got.size(), expected.size());
+  ASSERT_EQ(got[0], (std::vector<std::string>{"sp_clearance", "exact_clearance", "sp_contact",
+                                              "exact_contact"}));
+  for (size_t i = 1; i < got.size(); ++i) {
+    ASSERT_EQ(got[i].size(), 4u) << "row " << i;
+    const std::string& what = expected[i][2];
+    if (expected[i][0] == "nan") {
+      EXPECT_EQ(got[i][0], "nan") << what;
+      EXPECT_EQ(got[i][1], "nan") << what;
+      EXPECT_EQ(got[i][2], "0") << what;
+      EXPECT_EQ(got[i][3], "0") << what;
+      continue;
+    }
+    const double want = std::stod(expected[i][0]);
+    EXPECT_NEAR(std::stod(got[i][1]), want, kExactTol_m) << what;
+    EXPECT_EQ(got[i][3], expected[i][1]) << what;
+    EXPECT_NEAR(std::stod(got[i][0]), want, kSpTol_m) << what;
+    EXPECT_EQ(got[i][2], expected[i][1]) << what;
+  }
+}
+
+TEST(NeedleBenchCli, MalformedCasesExitTwoNamingFileAndLine) {
+  const std::string in = Tmp("bad_cases.csv"), out = Tmp("bad_out.csv"), err = Tmp("bad_err.txt");
+  {
+    std::ofstream f(in);
+    f << "nx,ny,nz,nqw,nqx,nqy,nqz,needle_radius,needle_sweep,tx,ty,tz,tqw,tqx,tqy,tqz,R,r,"
+         "segment_angle\n"
+      << "0,0,0,1,0,0,0,0.005,1.5,0,0,0,1,0,0,0,0.005,0.0005,6.28\n"
+      << "0,0,0,1,0,0,0,0.005,abc,0,0,0,1,0,0,0,0.005,0.0005,6.28\n";
+  }
+  EXPECT_EQ(RunBench("needle --cases '" + in + "' --out '" + out + "'", err), 2);
+  const std::string message = ReadAll(err);
+  EXPECT_NE(message.find(in + ":3"), std::string::npos) << message;
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+  {
+    std::ofstream f(in);
+    f << "nx,ny,nz\n1,2,3\n";
+  }
+  EXPECT_EQ(RunBench("needle --cases '" + in + "' --out '" + out + "'", err), 2);
+  EXPECT_NE(ReadAll(err).find(in + ":1"), std::string::npos) << ReadAll(err);
+  {
+    std::ofstream f(in);
+    f << "nx,ny,nz,nqw,nqx,nqy,nqz,needle_radius,needle_sweep,tx,ty,tz,tqw,tqx,tqy,tqz,R,r,"
+         "segment_angle\n"
+      << "0,0,0,1,0,0,0,0.005,1.5,0,0,0,1,0,0,0,0.005,0.006,6.28\n";
+  }
+  EXPECT_EQ(RunBench("needle --cases '" + in + "' --out '" + out + "'", err), 2);
+  EXPECT_NE(ReadAll(err).find("tube_radius_m"), std::string::npos) << ReadAll(err);
+  EXPECT_EQ(RunBench("needle --cases '" + Tmp("missing.csv") + "' --out '" + out + "'", err), 2);
+}
+
+TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
+  const std::string json = Tmp("report.json"), err = Tmp("report_err.txt");
+  ASSERT_EQ(RunBench("needle --quick --json '" + json + "' --mesh-dir '" + ::testing::TempDir() +
+                         "/needle_meshes'",
+                     err),
+            0)
+      << ReadAll(err);
+  const std::string text = ReadAll(json);
+  const std::regex method(
+      R"re(\{"name": "(sp|exact|sampling|mesh)", "setting": "[^"]*", "ns_per_query": [0-9.e+-]+, "max_abs_error": [0-9.e+-]+, "rms_error": [0-9.e+-]+, "agreement": [0-9.e+-]+)re");
+  int count[4] = {0, 0, 0, 0};
+  const char* names[4] = {"sp", "exact", "sampling", "mesh"};
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), method);
+       it != std::sregex_iterator(); ++it) {
+    for (int k = 0; k < 4; ++k) count[k] += (*it)[1] == names[k];
+  }
+  EXPECT_GE(count[0], 2) << text;
+  EXPECT_EQ(count[1], 1) << text;
+  EXPECT_GE(count[2], 5) << text;
+  EXPECT_GE(count[3], 2) << text;
+  EXPECT_TRUE(std::regex_search(
+      text,
+      std::regex(
+          R"re("ratios": \{"mesh_over_sp": ([0-9.e+-]+|null), "sampling_over_sp": ([0-9.e+-]+|null), "exact_over_sp": ([0-9.e+-]+|null)\})re")))
+      << text;
+  // The exact method is the reference: its own error is zero and it agrees everywhere.
+  EXPECT_TRUE(std::regex_search(
+      text,
+      std::regex(
+          R"re("name": "exact", "setting": "closed form", "ns_per_query": [0-9.e+-]+, "max_abs_error": 0, "rms_error": 0, "agreement": 1)re")))
+      << text;
+}
+
+}  // namespace
+}  // namespace microdex::bench
