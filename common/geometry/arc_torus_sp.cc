@@ -1,1 +1,563 @@
-#include "common/geometry/arc_torus.h"
+#include "common/geometry/arc_torus_sp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/geometry/quartic.h"
+#include "common/geometry/stereographic.h"
+
+namespace microdex::geometry {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kTwoPi = 2 * kPi;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Rotation parts of the poses may carry float-level rounding (e.g. from a normalised
+// float quaternion); anything further from orthonormal is not a rigid pose.
+constexpr double kRotationTol = 1e-6;
+// Azimuths this close below 2π are the boundary at azimuth 0 (the plane y = 0).
+constexpr double kAzimuthWrapTol_rad = 1e-12;
+// The lifted circle's geometry loses about eps/R̂ relative accuracy; below this radius, or
+// when its centre and radius are inconsistent with S³, the robust path takes over.
+constexpr double kMinLiftedRadius = 1e-9;
+constexpr double kLiftedConsistencyTol = 1e-8;
+// φ'(θ) below this fraction of |φ|'s size is rounding noise: φ is constant on the circle.
+constexpr double kPhiConstantRel = 1e-12;
+// When the v of a quartic root cannot be told from −v (βu + δ ≈ 0 or v ≈ 0), keep both.
+constexpr double kKeepBothResidual = 1e-6;
+// Largest step of the distance ascent [rad of needle parameter].
+constexpr double kMaxPolishStep_rad = 0.5;
+// Uniform starting points per in-range piece on the robust path.
+constexpr int kRobustSamples = 24;
+
+constexpr int kMaxIntervals = 6;
+constexpr int kMaxCandidates = 16 + kMaxIntervals * (kRobustSamples + 2);
+
+struct Interval {
+  double lo = 0, hi = 0;
+};
+
+// The needle circle x(s) = o + ρ(cos s e1 + sin s e2) in the vessel frame V [m].
+struct NeedleInV {
+  Eigen::Vector3d o, e1, e2;
+  double rho = 0;
+  Eigen::Vector3d PointAt(double s) const {
+    return o + rho * (std::cos(s) * e1 + std::sin(s) * e2);
+  }
+};
+
+bool IsFinitePose(const Eigen::Isometry3d& X) { return X.matrix().allFinite(); }
+
+bool IsRotation(const Eigen::Matrix3d& R) {
+  const Eigen::Matrix3d E = R.transpose() * R - Eigen::Matrix3d::Identity();
+  return E.cwiseAbs().maxCoeff() <= kRotationTol && R.determinant() > 0;
+}
+
+// The checks of ValidateArcTorus, without building a message (no allocation in the loop).
+bool IsValidQuery(const ArcDef& arc, const TorusSegmentDef& torus) {
+  const bool radii_ok = std::isfinite(arc.radius_m) && arc.radius_m > 0 &&
+                        std::isfinite(torus.core_radius_m) && torus.core_radius_m > 0 &&
+                        std::isfinite(torus.tube_radius_m) && torus.tube_radius_m > 0 &&
+                        torus.tube_radius_m < torus.core_radius_m;
+  const bool angles_ok = std::isfinite(arc.sweep_rad) && arc.sweep_rad > 0 &&
+                         arc.sweep_rad <= kTwoPi && std::isfinite(torus.segment_angle_rad) &&
+                         torus.segment_angle_rad > 0 && torus.segment_angle_rad <= kTwoPi;
+  if (!radii_ok || !angles_ok) return false;
+  if (!IsFinitePose(arc.X_WN) || !IsFinitePose(torus.X_WV)) return false;
+  return IsRotation(arc.X_WN.linear()) && IsRotation(torus.X_WV.linear());
+}
+
+double AzimuthOf(const Eigen::Vector3d& p) {
+  double az = std::atan2(p.y(), p.x());
+  if (az < 0) az += kTwoPi;
+  if (az >= kTwoPi - kAzimuthWrapTol_rad) az = 0;
+  return az;
+}
+
+double WrapTo2Pi(double s) {
+  s = std::fmod(s, kTwoPi);
+  return s < 0 ? s + kTwoPi : s;
+}
+
+// §4.2.4, last paragraph: the pieces of the arc s ∈ [0, S] whose azimuth lies in [0, Ω]. The
+// arc crosses the boundary half-planes (azimuth 0 and Ω) where it crosses their planes through
+// the z axis, A cos s + B sin s + C = 0; between consecutive crossings the azimuth test of
+// one point decides the whole piece.
+int ClipArcToSegment(const NeedleInV& nv, double sweep, double omega, Interval out[]) {
+  if (omega >= kTwoPi) {
+    out[0] = {0, sweep};
+    return 1;
+  }
+  double cuts[8];
+  int nc = 0;
+  cuts[nc++] = 0;
+  const auto add_plane = [&](double nx, double ny) {
+    const double a = nv.rho * (nx * nv.e1.x() + ny * nv.e1.y());
+    const double b = nv.rho * (nx * nv.e2.x() + ny * nv.e2.y());
+    const double c = nx * nv.o.x() + ny * nv.o.y();
+    const double m = std::sqrt(a * a + b * b);
+    if (!(m > 0) || std::abs(c) > m) return;
+    const double base = std::atan2(b, a);
+    const double half = std::acos(std::clamp(-c / m, -1.0, 1.0));
+    for (const double s : {WrapTo2Pi(base - half), WrapTo2Pi(base + half)}) {
+      if (s > 0 && s < sweep) cuts[nc++] = s;
+    }
+  };
+  add_plane(0, 1);                               // azimuth 0 (and π)
+  add_plane(std::sin(omega), -std::cos(omega));  // azimuth Ω (and Ω + π)
+  cuts[nc++] = sweep;
+  for (int a = 1; a < nc; ++a) {  // insertion sort, nc ≤ 6
+    for (int b = a; b > 0 && cuts[b] < cuts[b - 1]; --b) std::swap(cuts[b], cuts[b - 1]);
+  }
+  int n = 0;
+  for (int i = 0; i + 1 < nc; ++i) {
+    const double lo = cuts[i], hi = cuts[i + 1];
+    if (!(hi > lo)) continue;
+    if (AzimuthOf(nv.PointAt(0.5 * (lo + hi))) > omega) continue;
+    if (n > 0 && out[n - 1].hi == lo) {
+      out[n - 1].hi = hi;
+    } else {
+      out[n++] = {lo, hi};
+    }
+  }
+  return n;
+}
+
+// f(s) = distance² from x(s) to the core circle, and its first two derivatives in s.
+struct CoreDistSq {
+  double f = 0, df = 0, d2f = 0;
+};
+
+// At the needle point with parameter s, given (cos s, sin s).
+CoreDistSq EvalCoreDistSq(const NeedleInV& nv, double core_radius, double cs, double sn) {
+  const Eigen::Vector3d u = cs * nv.e1 + sn * nv.e2;   // (x − o)/ρ
+  const Eigen::Vector3d du = cs * nv.e2 - sn * nv.e1;  // x'/ρ;  x'' = −ρ u
+  const Eigen::Vector3d p = nv.o + nv.rho * u;
+  const Eigen::Vector3d dp = nv.rho * du;
+  const Eigen::Vector3d ddp = -nv.rho * u;
+  const double w = std::sqrt(p.x() * p.x() + p.y() * p.y());
+  CoreDistSq r;
+  r.f = (w - core_radius) * (w - core_radius) + p.z() * p.z();
+  if (w <= 1e-12 * core_radius) {
+    // On the z axis the distance has a ridge (every core point is equally far): no slope.
+    return r;
+  }
+  const double dw = (p.x() * dp.x() + p.y() * dp.y()) / w;
+  const double d2w =
+      (dp.x() * dp.x() + dp.y() * dp.y() + p.x() * ddp.x() + p.y() * ddp.y() - dw * dw) / w;
+  r.df = 2 * (w - core_radius) * dw + 2 * p.z() * dp.z();
+  r.d2f = 2 * dw * dw + 2 * (w - core_radius) * d2w + 2 * dp.z() * dp.z() + 2 * p.z() * ddp.z();
+  return r;
+}
+
+// (cos, sin) of s + h from those of s: a rotation by h, with h's cosine and sine from their
+// Taylor series when h is small (truncation < 1e-28), so a converging ascent calls no libm.
+void AdvanceAngle(double s_new, double h, double* cs, double* sn) {
+  if (std::abs(h) < 1e-3) {
+    const double h2 = h * h;
+    const double ch = 1 - 0.5 * h2 * (1 - h2 / 12 * (1 - h2 / 30));
+    const double sh = h * (1 - h2 / 6 * (1 - h2 / 20 * (1 - h2 / 42)));
+    const double c0 = *cs, s0 = *sn;
+    *cs = c0 * ch - s0 * sh;
+    *sn = s0 * ch + c0 * sh;
+  } else {
+    *cs = std::cos(s_new);
+    *sn = std::sin(s_new);
+  }
+}
+
+// Safeguarded Newton ascent of the distance² on [iv.lo, iv.hi] from s (cos s = cs,
+// sin s = sn, values cur there): the Newton step where f is concave, a bounded step uphill
+// elsewhere, halved until f does not decrease. Returns the best f and writes its s.
+double AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval& iv, double s,
+                        double cs, double sn, CoreDistSq cur, const SpOptions& opt,
+                        double* s_best) {
+  for (int it = 0; it < opt.polish_max_iters; ++it) {
+    const bool newton = cur.d2f < 0;
+    double step;
+    if (newton) {
+      step = -cur.df / cur.d2f;
+    } else {
+      step = cur.df > 0 ? kMaxPolishStep_rad : (cur.df < 0 ? -kMaxPolishStep_rad : 0.0);
+    }
+    step = std::clamp(step, -kMaxPolishStep_rad, kMaxPolishStep_rad);
+    double s1 = std::clamp(s + step, iv.lo, iv.hi);
+    double h = s1 - s;
+    // A Newton step this small leaves an error of O(h²) in f: converged.
+    if (h == 0 || (newton && std::abs(h) <= opt.polish_tol_rad)) break;
+    double cs1 = cs, sn1 = sn;
+    AdvanceAngle(s1, h, &cs1, &sn1);
+    CoreDistSq next = EvalCoreDistSq(nv, core_radius, cs1, sn1);
+    for (int k = 0; k < 8 && next.f < cur.f; ++k) {
+      step *= 0.5;
+      s1 = std::clamp(s + step, iv.lo, iv.hi);
+      h = s1 - s;
+      cs1 = cs;
+      sn1 = sn;
+      AdvanceAngle(s1, h, &cs1, &sn1);
+      next = EvalCoreDistSq(nv, core_radius, cs1, sn1);
+    }
+    if (next.f < cur.f) break;
+    s = s1;
+    cs = cs1;
+    sn = sn1;
+    cur = next;
+    if (std::abs(h) <= opt.polish_tol_rad) break;
+  }
+  *s_best = s;
+  return cur.f;
+}
+
+// A starting point of the distance ascent. Piece ends start it only when the distance grows
+// into the piece (otherwise the end itself is the local deepest point).
+enum class CandidateKind { kLowEnd, kHighEnd, kInterior };
+// No member initialisers: the candidate buffer is large and must cost nothing to declare.
+struct Candidate {
+  double s, cos_s, sin_s;
+  int interval;
+  CandidateKind kind;
+};
+
+int FindInterval(const Interval* iv, int n, double s) {
+  for (int i = 0; i < n; ++i) {
+    if (s >= iv[i].lo && s <= iv[i].hi) return i;
+  }
+  // Just past an end of a piece by rounding (or s ≈ 2π for a closed needle): snap.
+  constexpr double kSnap_rad = 1e-12;
+  for (int i = 0; i < n; ++i) {
+    if (s >= iv[i].lo - kSnap_rad && s <= iv[i].hi + kSnap_rad) return i;
+    if (s - kTwoPi >= iv[i].lo - kSnap_rad && s - kTwoPi <= iv[i].hi + kSnap_rad) return i;
+  }
+  return -1;
+}
+
+}  // namespace
+
+LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                              const Eigen::Vector3d& e2, double rho) {
+  // The needle circle is its plane n·x = n·o cut by its sphere |x − o|² = ρ². Through P (4.2)
+  // each becomes a hyperplane of R⁴: (n, n·o)·X = n·o and (−2o, 1 − k)·X = −(1 + k) with
+  // k = |o|² − ρ² (substitute x = (l, m, p)/(1 − q), |x|² = (1 + q)/(1 − q)). Their
+  // intersection is the plane π of (4.7); its point nearest the origin is the centre c (4.8).
+  // This replaces the triple cross products of (4.7) by Gram–Schmidt on two normals: the
+  // same c, without subtracting nearly equal lifted points.
+  const Eigen::Vector3d n = e1.cross(e2).normalized();
+  const double h1 = n.dot(o);
+  const double k = o.squaredNorm() - rho * rho;
+  const Eigen::Vector4d n1(n.x(), n.y(), n.z(), h1);
+  const Eigen::Vector4d n2(-2 * o.x(), -2 * o.y(), -2 * o.z(), 1 - k);
+  const double h2 = -(1 + k);
+  const double len1 = n1.norm();
+  const Eigen::Vector4d u1 = n1 / len1;
+  const double c1 = h1 / len1;  // component of c along u1
+  const Eigen::Vector4d n2p = n2 - n2.dot(u1) * u1;
+  const double len2 = n2p.norm();
+  const Eigen::Vector4d u2 = n2p / len2;
+  const double c2 = (h2 - n2.dot(u1) * c1) / len2;
+  LiftedCircle lc;
+  lc.center = c1 * u1 + c2 * u2;
+  // (4.9)–(4.10): radius and first axis through the lift of the needle's s = 0 point.
+  const Eigen::Vector3d x0 = o + rho * e1;
+  const Eigen::Vector4d r0 = LiftToS3(x0) - lc.center;
+  lc.radius = r0.norm();
+  lc.bx = r0 / lc.radius;
+  // (4.11)–(4.12): the second axis, here the lifted tangent at s = 0 (in π and ⊥ b_x), which
+  // also orients θ with s.
+  Eigen::Vector4d t = LiftTangentToS3(x0, rho * e2);
+  t -= t.dot(lc.bx) * lc.bx;
+  lc.by = t.normalized();
+  return lc;
+}
+
+CircleConic CalcCircleConic(double alpha, const LiftedCircle& lc) {
+  // (4.15): G = α²(l² + m²) − (p² + q²) at c + x b_x + y b_y, with x = R̂ cos θ, y = R̂ sin θ.
+  const double a2 = alpha * alpha;
+  const auto q = [a2](const Eigen::Vector4d& u, const Eigen::Vector4d& v) {
+    return a2 * (u[0] * v[0] + u[1] * v[1]) - u[2] * v[2] - u[3] * v[3];
+  };
+  const double rr = lc.radius;
+  CircleConic k;
+  k.a = q(lc.bx, lc.bx) * rr * rr;
+  k.b = 2 * q(lc.bx, lc.by) * rr * rr;
+  k.c = q(lc.by, lc.by) * rr * rr;
+  k.d = 2 * q(lc.center, lc.bx) * rr;
+  k.e = 2 * q(lc.center, lc.by) * rr;
+  k.f = q(lc.center, lc.center);
+  return k;
+}
+
+ExtremaCondition CalcExtremaCondition(const CircleConic& k) {
+  // (4.17) on the unit circle: φ'(θ) = B(x² − y²) + 2g xy + E x − D y with g = C − A.
+  // (4.19)–(4.20): rotating by ψ turns B(x² − y²) + 2g xy into
+  // (u² − v²)(B cos 2ψ + g sin 2ψ) + 2uv(g cos 2ψ − B sin 2ψ). (4.21) as printed sets
+  // tan 2ψ = −b/d; the u² − v² term vanishes for tan 2ψ = −B/g, which is used here (checked
+  // in arc_torus_sp_test.cc). Then β = 2(g cos 2ψ − B sin 2ψ) = 2√(B² + g²) (4.22), and the
+  // linear part E x − D y becomes γ u + δ v with γ = E cos ψ − D sin ψ and
+  // δ = −(E sin ψ + D cos ψ) (the printed (4.23) swaps these and drops a sign).
+  ExtremaCondition x;
+  const double g = k.c - k.a;
+  const double n = std::sqrt(k.b * k.b + g * g);
+  double c2 = 1, s2 = 0;
+  if (n > 0) {
+    c2 = g / n;
+    s2 = -k.b / n;
+  }
+  // Half angle of (c2, s2) = (cos 2ψ, sin 2ψ) without trigonometry, stable on both branches.
+  if (c2 >= 0) {
+    x.cos_psi = std::sqrt(0.5 * (1 + c2));
+    x.sin_psi = s2 / (2 * x.cos_psi);
+  } else {
+    x.sin_psi = std::sqrt(0.5 * (1 - c2));
+    if (s2 < 0) x.sin_psi = -x.sin_psi;
+    x.cos_psi = s2 / (2 * x.sin_psi);
+  }
+  x.beta = 2 * n;
+  x.gamma = k.e * x.cos_psi - k.d * x.sin_psi;
+  x.delta = -(k.e * x.sin_psi + k.d * x.cos_psi);
+  return x;
+}
+
+int FindConicExtremaOnCircle(const CircleConic& k, const SpOptions& opt, double cos_t[8],
+                             double sin_t[8], bool* phi_constant) {
+  bool unused;
+  return FindConicExtremaOnCircle(k, opt, cos_t, sin_t, phi_constant, &unused);
+}
+
+int FindConicExtremaOnCircle(const CircleConic& k, const SpOptions& opt, double cos_t[8],
+                             double sin_t[8], bool* phi_constant, bool* quartic_fallback) {
+  *quartic_fallback = false;
+  const ExtremaCondition x = CalcExtremaCondition(k);
+  const double size =
+      std::abs(k.a) + std::abs(k.b) + std::abs(k.c) + std::abs(k.d) + std::abs(k.e) + std::abs(k.f);
+  const double amp = std::max({x.beta, std::abs(x.gamma), std::abs(x.delta)});
+  *phi_constant = !(amp > kPhiConstantRel * size);
+  if (*phi_constant) return 0;
+  // Normalised so that the quartic's coefficients are O(1).
+  const double b = x.beta / amp, g = x.gamma / amp, d = x.delta / amp;
+  // (4.24)–(4.26) with R̂ = 1: v = −γu/(βu + δ) on u² + v² = 1 gives
+  // β²u⁴ + 2βδu³ + (γ² + δ² − β²)u² − 2βδu − δ² = 0.
+  const double quartic[5] = {-d * d, -2 * b * d, g * g + d * d - b * b, 2 * b * d, b * b};
+  PolyRootOptions ro;
+  ro.tol = opt.quartic_tol;
+  ro.max_iters = opt.quartic_max_iters;
+  // p(±1) = γ² ≥ 0: extend the interval a little so that roots at u = ±1 show a sign change.
+  double roots[4];
+  const double lo = -1 - 1e-9, hi = 1 + 1e-9;
+  const int nr = opt.quartic_method == SpQuarticMethod::kClosedForm
+                     ? SolveQuarticInInterval(quartic, lo, hi, opt.closed_form_polish, ro, roots,
+                                              quartic_fallback)
+                     : FindPolyRootsInInterval(quartic, lo, hi, ro, roots);
+  int n = 0;
+  for (int i = 0; i < nr; ++i) {
+    const double u = std::clamp(roots[i], -1.0, 1.0);
+    const double v0 = std::sqrt(std::max(0.0, 1 - u * u));
+    // (4.25) picks the sign of v; evaluate (4.23) for both signs instead of dividing by
+    // βu + δ, which vanishes when β = δ = 0 or at the pole of (4.25).
+    const double res_pos = std::abs(b * u * v0 + g * u + d * v0);
+    const double res_neg = std::abs(-b * u * v0 + g * u - d * v0);
+    const bool keep_pos = res_pos <= res_neg || res_pos <= kKeepBothResidual;
+    const bool keep_neg = res_neg < res_pos || res_neg <= kKeepBothResidual;
+    for (int sgn = 0; sgn < 2; ++sgn) {
+      if (!(sgn == 0 ? keep_pos : keep_neg)) continue;
+      const double v = sgn == 0 ? v0 : -v0;
+      // (4.19): back to the circle's (x, y) = (cos θ, sin θ).
+      cos_t[n] = u * x.cos_psi - v * x.sin_psi;
+      sin_t[n] = u * x.sin_psi + v * x.cos_psi;
+      ++n;
+    }
+  }
+  return n;
+}
+
+ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentDef& torus,
+                                          const SpOptions& options) {
+  return CalcArcTorusClearanceSP(arc, torus, options, nullptr);
+}
+
+ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentDef& torus,
+                                          const SpOptions& opt, SpDiagnostics* diagnostics) {
+  SpDiagnostics local_diag;
+  SpDiagnostics& diag = diagnostics != nullptr ? *diagnostics : local_diag;
+  diag = SpDiagnostics{};
+  ArcTorusClearance out;
+  out.clearance_m = kNaN;
+  if (!IsValidQuery(arc, torus)) {
+    out.status = ClearanceStatus::kInvalidInput;
+    return out;
+  }
+  const double core_r = torus.core_radius_m;
+  const double tube_r = torus.tube_radius_m;
+
+  // The needle circle in the vessel frame V (axes re-orthonormalised).
+  const Eigen::Matrix3d R_VW = torus.X_WV.linear().transpose();
+  NeedleInV nv;
+  nv.o = R_VW * (arc.X_WN.translation() - torus.X_WV.translation());
+  nv.e1 = (R_VW * arc.X_WN.linear().col(0)).normalized();
+  nv.e2 = R_VW * arc.X_WN.linear().col(1);
+  nv.e2 = (nv.e2 - nv.e2.dot(nv.e1) * nv.e1).normalized();
+  nv.rho = arc.radius_m;
+
+  // §4.2.4: clip the arc to the segment.
+  Interval iv[kMaxIntervals];
+  const int n_iv = ClipArcToSegment(nv, arc.sweep_rad, torus.segment_angle_rad, iv);
+  diag.num_intervals = n_iv;
+  if (n_iv == 0) {
+    out.status = ClearanceStatus::kEmptyRange;
+    return out;
+  }
+
+  Candidate cand[kMaxCandidates];
+  int n_cand = 0;
+  for (int i = 0; i < n_iv; ++i) {
+    cand[n_cand++] = {iv[i].lo, std::cos(iv[i].lo), std::sin(iv[i].lo), i, CandidateKind::kLowEnd};
+    cand[n_cand++] = {iv[i].hi, std::cos(iv[i].hi), std::sin(iv[i].hi), i, CandidateKind::kHighEnd};
+  }
+
+  // Appendix B, then §4.2.3: lift the torus and the needle circle to S³.
+  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_r);
+  const double lambda = scale.lambda;
+  const LiftedCircle lc = CalcLiftedCircle(lambda * nv.o, nv.e1, nv.e2, lambda * nv.rho);
+  diag.lifted_radius = lc.radius;
+  const bool lift_ok =
+      lc.center.allFinite() && lc.bx.allFinite() && lc.by.allFinite() &&
+      lc.radius > kMinLiftedRadius &&
+      std::abs(lc.center.squaredNorm() + lc.radius * lc.radius - 1) <= kLiftedConsistencyTol;
+
+  // φ at the extrema inside the arc, for the sign-change test of §4.2.4 (diagnostics only).
+  double ext_s[8], ext_phi[8];
+  int n_ext_in = 0;
+  bool robust = !lift_ok;
+  if (lift_ok) {
+    const CircleConic conic = CalcCircleConic(scale.alpha, lc);
+    double ct[8], st[8];
+    bool phi_const = false;
+    const int n_ext =
+        FindConicExtremaOnCircle(conic, opt, ct, st, &phi_const, &diag.quartic_fallback);
+    diag.phi_constant = phi_const;
+    diag.num_extrema = n_ext;
+    robust = phi_const;
+    const double g = conic.c - conic.a;
+    const double d2_scale = std::abs(conic.b) + std::abs(g) + std::abs(conic.d) + std::abs(conic.e);
+    for (int j = 0; j < n_ext; ++j) {
+      const double c = ct[j], sn = st[j];
+      // φ''(θ) = −4B xy + 2g(x² − y²) − D x − E y: minima of φ (and flat points) are the
+      // candidates for the deepest point; maxima only matter to the sign-change count.
+      const double d2phi =
+          -4 * conic.b * c * sn + 2 * g * (c * c - sn * sn) - conic.d * c - conic.e * sn;
+      const bool is_min = d2phi >= -1e-9 * d2_scale;
+      if (!is_min && diagnostics == nullptr) continue;
+      // Back to R³ through (4.13) and P (4.2), then to the needle parameter s.
+      const Eigen::Vector4d X = lc.center + lc.radius * (c * lc.bx + sn * lc.by);
+      const Eigen::Vector3d rel = ProjectFromS3(X) / lambda - nv.o;
+      const double rx = rel.dot(nv.e1), ry = rel.dot(nv.e2);
+      const double s = WrapTo2Pi(std::atan2(ry, rx));
+      const int i = FindInterval(iv, n_iv, s);
+      if (i < 0) continue;
+      const double s_in = std::clamp(s, iv[i].lo, iv[i].hi);
+      if (is_min) {
+        const double inv = 1 / std::sqrt(rx * rx + ry * ry);
+        if (s_in == s && std::isfinite(inv)) {
+          cand[n_cand++] = {s_in, rx * inv, ry * inv, i, CandidateKind::kInterior};
+        } else {
+          cand[n_cand++] = {s_in, std::cos(s_in), std::sin(s_in), i, CandidateKind::kInterior};
+        }
+      }
+      if (diagnostics != nullptr) {
+        ext_s[n_ext_in] = s_in;
+        ext_phi[n_ext_in] = conic.Eval(c, sn);
+        ++n_ext_in;
+      }
+    }
+  }
+  if (robust) {
+    // No usable extrema: start the ascent from uniform points of every piece.
+    diag.fallback = !lift_ok;
+    for (int i = 0; i < n_iv; ++i) {
+      for (int j = 1; j <= kRobustSamples; ++j) {
+        const double s = iv[i].lo + (iv[i].hi - iv[i].lo) * j / (kRobustSamples + 1);
+        cand[n_cand++] = {s, std::cos(s), std::sin(s), i, CandidateKind::kInterior};
+      }
+    }
+  }
+
+  // The clearance at every candidate, refined by the distance ascent; keep the deepest.
+  double best_f = -1, best_s = 0;
+  for (int j = 0; j < n_cand; ++j) {
+    double s = cand[j].s;
+    const CoreDistSq e = EvalCoreDistSq(nv, core_r, cand[j].cos_s, cand[j].sin_s);
+    double f = e.f;
+    bool ascend = opt.polish_max_iters > 0;
+    if (cand[j].kind == CandidateKind::kLowEnd) ascend = ascend && e.df > 0;
+    if (cand[j].kind == CandidateKind::kHighEnd) ascend = ascend && e.df < 0;
+    if (ascend) {
+      f = AscendCoreDistSq(nv, core_r, iv[cand[j].interval], s, cand[j].cos_s, cand[j].sin_s, e,
+                           opt, &s);
+    }
+    if (f > best_f) {
+      best_f = f;
+      best_s = s;
+    }
+  }
+
+  if (diagnostics != nullptr) {
+    // §4.2.4: sign changes of φ along each piece, ends and interior extrema in order of s.
+    double min_phi = std::numeric_limits<double>::infinity();
+    int changes = 0;
+    for (int i = 0; i < n_iv; ++i) {
+      double s_list[10], phi_list[10];
+      int m = 0;
+      for (const double s : {iv[i].lo, iv[i].hi}) {
+        s_list[m] = s;
+        phi_list[m] = EvalLiftedTorus(scale.alpha, LiftToS3(lambda * nv.PointAt(s)));
+        ++m;
+      }
+      for (int j = 0; j < n_ext_in; ++j) {
+        if (ext_s[j] >= iv[i].lo && ext_s[j] <= iv[i].hi && m < 10) {
+          s_list[m] = ext_s[j];
+          phi_list[m] = ext_phi[j];
+          ++m;
+        }
+      }
+      // Insertion sort by s (m ≤ 10).
+      for (int a = 1; a < m; ++a) {
+        for (int b = a; b > 0 && s_list[b] < s_list[b - 1]; --b) {
+          std::swap(s_list[b], s_list[b - 1]);
+          std::swap(phi_list[b], phi_list[b - 1]);
+        }
+      }
+      for (int a = 0; a < m; ++a) {
+        min_phi = std::min(min_phi, phi_list[a]);
+        if (a > 0 && (phi_list[a] > 0) != (phi_list[a - 1] > 0)) ++changes;
+      }
+    }
+    diag.min_phi = min_phi;
+    diag.num_sign_changes = changes;
+  }
+
+  const double clearance = tube_r - std::sqrt(best_f);
+  if (!std::isfinite(clearance)) {
+    // Finite input whose squares overflow: report it as invalid rather than a NaN.
+    out.status = ClearanceStatus::kInvalidInput;
+    return out;
+  }
+  out.status = ClearanceStatus::kOk;
+  out.clearance_m = clearance;
+  out.contact = clearance <= 0;
+  out.s_rad = best_s;
+  const Eigen::Vector3d p_VN = nv.PointAt(best_s);
+  out.p_WN = torus.X_WV * p_VN;
+  // Nearest wall point: along the ray from the nearest core point through the needle point.
+  const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());
+  const Eigen::Vector3d radial =
+      w > 0 ? Eigen::Vector3d(p_VN.x() / w, p_VN.y() / w, 0) : Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d core_pt = core_r * radial;
+  const Eigen::Vector3d off = p_VN - core_pt;
+  const double off_len = off.norm();
+  const Eigen::Vector3d dir = off_len > 0 ? Eigen::Vector3d(off / off_len) : radial;
+  out.p_WW = torus.X_WV * Eigen::Vector3d(core_pt + tube_r * dir);
+  return out;
+}
+
+}  // namespace microdex::geometry

@@ -1,0 +1,99 @@
+#pragma once
+// The needle–vessel query by stereographic projection (SP), thesis §4.2 and appendix B.
+//
+// The torus is normalised (appendix B) and lifted to the quadric G = α²(l² + m²) − (p² + q²)
+// on S³ (4.4); the needle's circle lifts to a circle of S³, the section of S³ by an affine
+// 2-plane π (4.7)–(4.14); on π, G is a conic T (4.15), and its extrema on the lifted circle are
+// the real roots of a quartic (4.26). Because sign(G) = sign(r − distance to the core circle),
+// the values of φ(θ) = T on the circle (4.28) at those extrema and at the arc ends decide
+// touch / no-touch exactly. The clearance (arc_torus.h) is then evaluated at the SP candidates
+// and refined by a safeguarded Newton ascent of the true distance to the core circle,
+// because the extrema of G are not those of the distance (README_sp.md).
+//
+// Hot path: no allocation, no virtual call, no exception. Invalid input returns kInvalidInput.
+
+#include <Eigen/Core>
+
+#include "common/geometry/arc_torus.h"
+
+namespace microdex::geometry {
+
+enum class SpQuarticMethod {
+  kClosedForm,  // Ferrari's closed form, polished by Newton steps, checked (quartic.h)
+  kNewton,      // bracketed Newton iteration to quartic_tol (the thesis's §4.3 setting)
+};
+
+struct SpOptions {
+  SpQuarticMethod quartic_method = SpQuarticMethod::kClosedForm;
+  int closed_form_polish = 2;  // Newton steps on each closed-form root
+  // End criterion of the Newton iteration on the quartic (4.26), in the unit-circle
+  // coordinate u (dimensionless, ≈ radians on the lifted circle): the thesis's accuracy knob.
+  double quartic_tol = 1e-15;
+  int quartic_max_iters = 80;
+  // Newton ascent of the distance to the core circle from the SP candidates, per candidate.
+  // 0 evaluates the clearance at the extrema of G only (the thesis's "nearest point in the
+  // sense of lowest G").
+  int polish_max_iters = 12;
+  double polish_tol_rad = 1e-9;  // stop at a Newton step below this: f is then off by O(step²)
+};
+
+// What the SP path did for one query (tests, benchmark, telemetry). Optional output.
+struct SpDiagnostics {
+  bool fallback = false;          // the lifted circle was too ill-conditioned: robust path used
+  bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
+  bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
+  int num_extrema = 0;            // critical points of φ found on the whole lifted circle
+  int num_intervals = 0;          // pieces of the arc inside the segment's azimuth range
+  int num_sign_changes = 0;       // sign changes of φ along the clipped arc (§4.2.4)
+  double min_phi = 0;             // min of φ (4.28) over the clipped arc: > 0 ⇔ no contact
+  double lifted_radius = 0;       // radius of the lifted circle in R⁴ (4.9)
+};
+
+ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentDef& torus,
+                                          const SpOptions& options = {});
+ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentDef& torus,
+                                          const SpOptions& options, SpDiagnostics* diagnostics);
+
+// ---- Building blocks, exposed for tests. -------------------------------------------------
+
+// The lifted needle circle: centre c, radius R̂ and an orthonormal basis (b_x, b_y) of its
+// plane π in R⁴ (4.8)–(4.12); b_x points at the lift of the needle's s = 0 point and b_y
+// is oriented so that θ grows with the needle parameter s.
+struct LiftedCircle {
+  Eigen::Vector4d center = Eigen::Vector4d::Zero();
+  double radius = 0;
+  Eigen::Vector4d bx = Eigen::Vector4d::Zero();
+  Eigen::Vector4d by = Eigen::Vector4d::Zero();
+};
+
+// The circle with centre o, unit in-plane axes e1, e2 and radius rho (x(s) = o + rho(cos s e1
+// + sin s e2)), all in the normalised torus frame.
+LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                              const Eigen::Vector3d& e2, double rho);
+
+// φ(θ) = A cos²θ + B cosθ sinθ + C sin²θ + D cosθ + E sinθ + F: the conic (4.15) on the
+// lifted circle, with R̂ folded into the coefficients (A = aR̂², D = dR̂, …) (4.28).
+struct CircleConic {
+  double a = 0, b = 0, c = 0, d = 0, e = 0, f = 0;
+  double Eval(double cos_t, double sin_t) const {
+    return a * cos_t * cos_t + b * cos_t * sin_t + c * sin_t * sin_t + d * cos_t + e * sin_t + f;
+  }
+};
+CircleConic CalcCircleConic(double alpha, const LiftedCircle& circle);
+
+// The rotation ψ of (4.19)–(4.21) that removes the u² − v² term of φ'(θ) = 0 (4.17)–(4.18),
+// and the coefficients of the rotated condition β uv + γ u + δ v = 0 (4.23).
+struct ExtremaCondition {
+  double cos_psi = 1, sin_psi = 0;
+  double beta = 0, gamma = 0, delta = 0;
+};
+ExtremaCondition CalcExtremaCondition(const CircleConic& conic);
+
+// Up to 4 extrema of φ on the unit circle as (cos θ, sin θ) from the quartic (4.26); returns
+// their count. Candidates that the quartic cannot separate (both signs of v) are all kept.
+int FindConicExtremaOnCircle(const CircleConic& conic, const SpOptions& options, double cos_t[8],
+                             double sin_t[8], bool* phi_constant);
+int FindConicExtremaOnCircle(const CircleConic& conic, const SpOptions& options, double cos_t[8],
+                             double sin_t[8], bool* phi_constant, bool* quartic_fallback);
+
+}  // namespace microdex::geometry
