@@ -142,8 +142,9 @@ Eigen::Vector3d RandomDirection(std::mt19937_64& rng) {
 
 // Closed, reduced polygon of an open thread.
 std::vector<Eigen::Vector3d> ReducedClosure(std::span<const Eigen::Vector3d> nodes,
-                                            double diameter_m) {
+                                            double diameter_m, bool reduce = true) {
   const std::vector<Eigen::Vector3d> closed = knot::CloseThread(nodes, diameter_m);
+  if (!reduce) return closed;
   const std::vector<int> kept = knot::ReducePolygon(closed);
   std::vector<Eigen::Vector3d> reduced;
   reduced.reserve(kept.size());
@@ -246,7 +247,8 @@ KnotAnalysis AnalyzeKnot(std::span<const Eigen::Vector3d> polyline, const KnotOp
   std::mt19937_64 rng(options.seed);
 
   KnotAnalysis analysis;
-  const std::vector<Eigen::Vector3d> reduced = ReducedClosure(nodes, diameter);
+  const std::vector<Eigen::Vector3d> reduced =
+      ReducedClosure(nodes, diameter, options.reduce_polygon);
   analysis.reduced_vertices = static_cast<int>(reduced.size());
   int tried = 0;
   const std::vector<ProjectionInvariants> votes =

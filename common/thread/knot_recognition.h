@@ -50,6 +50,9 @@ struct KnotOptions {
   // Above this many crossings after simplification the Jones polynomial (a 2^n state sum) is
   // skipped and the class is decided by the Alexander polynomial and the signature alone.
   int max_jones_crossings = 16;
+  // Reduce the closed polygon by triangle moves before projecting (false projects the whole
+  // closed thread: slower, kept as the benchmark's baseline).
+  bool reduce_polygon = true;
   // AnalyzeKnot: also find the knotted core along the thread (costs ~2 log2(n) extra
   // recognitions of sub-arcs).
   bool locate = true;

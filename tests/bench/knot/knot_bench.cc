@@ -1,0 +1,193 @@
+// microdex-bench knot: the recognised knot of an OBJ polyline (../shared/DESIGN.md), and
+// --speed, the cost of recognition against thread length (README_knots.md "Speed").
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bench_registry.h"
+#include "common/thread/knot_invariants.h"
+#include "common/thread/knot_obj.h"
+#include "common/thread/knot_recognition.h"
+#include "common/thread/knot_shapes.h"
+
+namespace microdex::bench {
+namespace {
+
+using thread::knot_shapes::Curve;
+namespace shapes = thread::knot_shapes;
+
+// Thread diameter of the speed cases (10-0 nylon); nodes one diameter apart.
+constexpr double kDiameter_m = 3e-5;
+
+int PrintKnot(const std::string& path, bool verbose) {
+  std::vector<Eigen::Vector3d> nodes;
+  try {
+    nodes = thread::ReadObjPolyline(path);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-bench knot: %s\n", e.what());
+    return 2;
+  }
+  thread::KnotAnalysis a;
+  try {
+    a = thread::AnalyzeKnot(nodes, {.locate = verbose});
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "microdex-bench knot: %s: %s\n", path.c_str(), e.what());
+    return 2;
+  }
+  std::printf("%s\n", std::string(thread::KnotName(a.type)).c_str());
+  if (verbose) {
+    std::fprintf(stderr,
+                 "nodes %zu, reduced vertices %d, crossings %d -> %d, Alexander %s, "
+                 "determinant %lld, signature %d, Jones %s, projections %d/%d agree",
+                 nodes.size(), a.reduced_vertices, a.raw_crossings, a.crossings,
+                 thread::knot::ToString(a.alexander).c_str(), static_cast<long long>(a.determinant),
+                 a.signature,
+                 a.jones_computed ? thread::knot::ToString(a.jones).c_str() : "(skipped)",
+                 a.projections_agreeing, a.projections_tried);
+    if (a.located) {
+      std::fprintf(stderr, ", core s = [%.6g, %.6g] m", a.core_start_s_m, a.core_end_s_m);
+    }
+    std::fprintf(stderr, "\n");
+  }
+  return 0;
+}
+
+// A speed case: a thread of `nodes` nodes spaced one diameter apart.
+struct SpeedCase {
+  std::string name;
+  std::function<Curve()> shape;  // open thread in shape units
+  const char* expected;
+};
+
+std::vector<SpeedCase> SpeedCases() {
+  auto long_knot = [](Curve closed) { return shapes::LongKnot(closed, 4.0); };
+  return {
+      {"trefoil", [=] { return long_knot(shapes::TorusKnot(2, 3, 400)); }, "overhand-right"},
+      {"square",
+       [=] {
+         return shapes::Splice(long_knot(shapes::TorusKnot(2, 3, 400)),
+                               long_knot(shapes::TorusKnot(2, 3, 400, true)), 2.0);
+       },
+       "square"},
+      {"surgeons",
+       [] {
+         return shapes::Splice(shapes::OverhandAsTied(2, true), shapes::OverhandAsTied(1, false),
+                               2.0);
+       },
+       "surgeons"},
+      {"coil", [] { return shapes::Coil(12, 1.0, 0.4, 40); }, "none"},
+      {"messy-unknot", [] { return shapes::AscendingRandomWalk(400, 0.5, 0.02, 7); }, "none"},
+  };
+}
+
+double MedianMicroseconds(const std::function<void()>& f, int repeats) {
+  std::vector<double> t;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    t.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+  }
+  std::nth_element(t.begin(), t.begin() + static_cast<long>(t.size() / 2), t.end());
+  return t[t.size() / 2];
+}
+
+int RunSpeed(const std::vector<int>& sizes, int repeats, const std::string& json_path) {
+  std::string json = "{\n  \"diameter_m\": " + std::to_string(kDiameter_m) + ",\n  \"runs\": [";
+  std::printf("%-13s %6s %-15s %12s %12s %14s %8s\n", "case", "nodes", "result", "recognize_us",
+              "analyze_us", "unreduced_us", "speedup");
+  bool first = true;
+  int wrong = 0;
+  for (const SpeedCase& c : SpeedCases()) {
+    const Curve shape = c.shape();
+    const double length = shapes::Length(shape);
+    for (int n : sizes) {
+      const double spacing = length / (n - 1);
+      Curve thread = shapes::ResampleOpen(shape, spacing);
+      for (auto& p : thread) p *= kDiameter_m / spacing;
+      thread::KnotType type = thread::KnotType::kUnknown;
+      const double recognize_us =
+          MedianMicroseconds([&] { type = thread::RecognizeKnot(thread); }, repeats);
+      const double analyze_us =
+          MedianMicroseconds([&] { (void)thread::AnalyzeKnot(thread); }, std::max(3, repeats / 4));
+      thread::KnotType unreduced_type = thread::KnotType::kUnknown;
+      const double unreduced_us = MedianMicroseconds(
+          [&] {
+            unreduced_type =
+                thread::RecognizeKnot(thread, {.reduce_polygon = false, .locate = false});
+          },
+          std::max(3, repeats / 4));
+      const std::string result(thread::KnotName(type));
+      if (result != c.expected) ++wrong;
+      std::printf("%-13s %6zu %-15s %12.1f %12.1f %14.1f %8.1f\n", c.name.c_str(), thread.size(),
+                  result.c_str(), recognize_us, analyze_us, unreduced_us,
+                  unreduced_us / recognize_us);
+      char row[512];
+      std::snprintf(row, sizeof(row),
+                    "%s\n    {\"case\": \"%s\", \"nodes\": %zu, \"result\": \"%s\", "
+                    "\"expected\": \"%s\", \"recognize_us\": %.2f, \"analyze_us\": %.2f, "
+                    "\"unreduced_us\": %.2f, \"unreduced_result\": \"%s\"}",
+                    first ? "" : ",", c.name.c_str(), thread.size(), result.c_str(), c.expected,
+                    recognize_us, analyze_us, unreduced_us,
+                    std::string(thread::KnotName(unreduced_type)).c_str());
+      json += row;
+      first = false;
+    }
+  }
+  json += "\n  ]\n}\n";
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    out << json;
+    if (!out) {
+      std::fprintf(stderr, "microdex-bench knot: cannot write %s\n", json_path.c_str());
+      return 2;
+    }
+  }
+  std::printf(
+      "(medians over %d runs; recognize = RecognizeKnot, analyze = AnalyzeKnot with the "
+      "knotted core, unreduced = no triangle reduction, the baseline)\n",
+      repeats);
+  if (wrong > 0) std::fprintf(stderr, "microdex-bench knot: %d case(s) misrecognised\n", wrong);
+  return wrong > 0 ? 1 : 0;
+}
+
+int RunKnot(int argc, char** argv) {
+  CLI::App app{"microdex-bench knot FILE.obj: print the recognised knot of the polyline"};
+  std::string file;
+  bool speed = false;
+  bool verbose = false;
+  std::vector<int> sizes = {200, 500, 1000};
+  int repeats = 21;
+  std::string json;
+  app.add_option("file", file, "OBJ file with the thread as an 'l' element");
+  app.add_flag("--speed", speed, "time recognition on reference threads instead");
+  app.add_flag("--verbose,-v", verbose, "print the invariants and the knotted core on stderr");
+  app.add_option("--nodes", sizes, "--speed: thread sizes")->check(CLI::Range(8, 100000));
+  app.add_option("--repeats", repeats, "--speed: runs per median")->check(CLI::Range(1, 10000));
+  app.add_option("--json", json, "--speed: write the runs as JSON");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  if (speed) return RunSpeed(sizes, repeats, json);
+  if (file.empty()) {
+    std::fprintf(stderr, "microdex-bench knot: expected FILE.obj (or --speed)\n");
+    return 2;
+  }
+  return PrintKnot(file, verbose);
+}
+
+}  // namespace
+
+MICRODEX_REGISTER_BENCH(knot, "knot", "recognised knot of an OBJ polyline; --speed timings",
+                        RunKnot);
+
+}  // namespace microdex::bench
