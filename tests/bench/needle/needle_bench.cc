@@ -152,14 +152,14 @@ Scene MakeScene(int queries, uint64_t seed) {
   std::uniform_real_distribution<double> u(-1, 1);
   const double R = scene.torus.core_radius_m, r = scene.torus.tube_radius_m;
   for (int i = 0; i < queries; ++i) {
-    // On the core circle at a random azimuth, then moved by up to 0.7 r and turned by up to
-    // 0.7 r/R about a random axis: mostly inside the tube, about a third in contact.
+    // On the core circle at a random azimuth, then moved by up to 0.9 r along each axis and
+    // turned by up to 0.9 r/R about a random axis: mostly inside the tube, some in contact.
     Eigen::Isometry3d X_VN = Eigen::Isometry3d::Identity();
     const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
-    X_VN.linear() = (Eigen::AngleAxisd(0.7 * r / R * std::abs(u(rng)), axis) *
+    X_VN.linear() = (Eigen::AngleAxisd(0.9 * r / R * std::abs(u(rng)), axis) *
                      Eigen::AngleAxisd(kPi * u(rng), Eigen::Vector3d::UnitZ()))
                         .matrix();
-    X_VN.translation() = 0.7 * r * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    X_VN.translation() = 0.9 * r * Eigen::Vector3d(u(rng), u(rng), u(rng));
     scene.X_WN.push_back(X_WV * X_VN);
   }
   return scene;

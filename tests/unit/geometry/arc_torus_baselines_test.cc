@@ -1,0 +1,116 @@
+// The baselines (sampled and mesh) against the exact clearance: what each can and cannot
+// get wrong.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <random>
+
+#include "common/geometry/arc_torus_exact.h"
+#include "common/geometry/arc_torus_mesh.h"
+#include "common/geometry/arc_torus_sampled.h"
+#include "tests/unit/geometry/random_arc_torus.h"
+
+namespace microdex::geometry {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+TEST(ArcTorusSampled, NeverDeeperThanExactAndConvergesQuadratically) {
+  std::mt19937_64 rng(11);
+  // Worst error over the whole-torus cases (no range boundary) for 1000 and 4000 samples.
+  double worst[2] = {0, 0};
+  for (int i = 0; i < 3000; ++i) {
+    const auto c = testing::MakeNearCoreArcTorus(rng);
+    const ArcTorusClearance exact = CalcArcTorusClearanceExact(c.arc, c.torus);
+    if (exact.status != ClearanceStatus::kOk) continue;
+    const double R = c.torus.core_radius_m;
+    for (int k = 0; k < 2; ++k) {
+      const ArcTorusClearance sampled =
+          CalcArcTorusClearanceSampled(c.arc, c.torus, k == 0 ? 1000 : 4000);
+      if (sampled.status != ClearanceStatus::kOk) continue;
+      // Samples are needle points in range: their deepest can only be shallower.
+      EXPECT_GE(sampled.clearance_m, exact.clearance_m - 1e-12 * R) << i;
+      if (c.torus.segment_angle_rad >= 2 * kPi) {
+        worst[k] = std::max(worst[k], (sampled.clearance_m - exact.clearance_m) / R);
+      }
+    }
+  }
+  // A smooth maximum is missed by O(h²): four times the samples, a sixteenth of the error
+  // (a factor 8 allowed for where the worst case falls on the grid).
+  EXPECT_GT(worst[0], 0);
+  EXPECT_LT(worst[1], worst[0] / 8);
+}
+
+TEST(ArcTorusSampled, EmptyAndInvalid) {
+  ArcDef arc;
+  TorusSegmentDef torus;
+  torus.segment_angle_rad = 1;
+  arc.radius_m = torus.core_radius_m;
+  arc.sweep_rad = 1;
+  arc.X_WN.linear() = Eigen::AngleAxisd(2.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_EQ(CalcArcTorusClearanceSampled(arc, torus, 100).status, ClearanceStatus::kEmptyRange);
+  torus.tube_radius_m = 2 * torus.core_radius_m;
+  EXPECT_EQ(CalcArcTorusClearanceSampled(arc, torus, 100).status, ClearanceStatus::kInvalidInput);
+}
+
+TEST(ArcTorusMesh, ObjRoundTripThroughAssimp) {
+  const std::string path = ::testing::TempDir() + "/arc_torus_mesh_roundtrip.obj";
+  const TriangleMesh wall = MakeTorusWallMesh(5e-3, 0.5e-3, kPi, 12, 6);
+  WriteObjMesh(wall, path);
+  const TriangleMesh loaded = LoadMeshWithAssimp(path);
+  ASSERT_EQ(loaded.triangles.size(), wall.triangles.size());
+  // Same triangles, vertex positions to the printed precision.
+  for (size_t t = 0; t < wall.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d a = wall.vertices[wall.triangles[t][k]];
+      const Eigen::Vector3d b = loaded.vertices[loaded.triangles[t][k]];
+      EXPECT_LT((a - b).norm(), 1e-9) << t;  // assimp stores floats
+    }
+  }
+  EXPECT_THROW(LoadMeshWithAssimp(::testing::TempDir() + "/no_such_mesh.obj"), std::runtime_error);
+}
+
+TEST(ArcTorusMesh, ApproachesExactClearanceAsTheMeshesRefine) {
+  const std::string dir = ::testing::TempDir() + "/arc_torus_mesh_test";
+  std::filesystem::remove_all(dir);
+  ArcDef arc;
+  TorusSegmentDef torus;
+  arc.radius_m = torus.core_radius_m;
+  arc.sweep_rad = 0.75 * kPi;
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double r = torus.tube_radius_m;
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < 40; ++i) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = Eigen::AngleAxisd(kPi * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    X.translation() = 0.4 * r * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    poses.push_back(X);
+  }
+  double previous_max_error = 1e9;
+  for (const MeshResolution& res :
+       {MeshResolution{16, 32, 8}, MeshResolution{64, 128, 32}, MeshResolution{128, 256, 64}}) {
+    const ArcTorusMeshModel model(arc, torus, res, dir);
+    EXPECT_TRUE(std::filesystem::exists(model.vessel_path()));
+    double max_error = 0;
+    for (const Eigen::Isometry3d& X_WN : poses) {
+      arc.X_WN = X_WN;
+      const ArcTorusClearance exact = CalcArcTorusClearanceExact(arc, torus);
+      const ArcTorusClearance mesh = model.Calc(X_WN, torus.X_WV);
+      ASSERT_EQ(mesh.status, ClearanceStatus::kOk);
+      ASSERT_FALSE(exact.contact);
+      // Inscribed meshes: the wall is drawn in, the needle chords cut inwards; the mesh
+      // clearance is an underestimate up to the sagittas.
+      EXPECT_FALSE(mesh.contact);
+      max_error = std::max(max_error, std::abs(mesh.clearance_m - exact.clearance_m));
+    }
+    EXPECT_LT(max_error, previous_max_error / 2);
+    previous_max_error = max_error;
+  }
+  EXPECT_LT(previous_max_error, 1e-2 * r);
+}
+
+}  // namespace
+}  // namespace microdex::geometry
