@@ -1,0 +1,369 @@
+#include "instructor/instructor.h"
+
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fastdds/dds/core/condition/GuardCondition.hpp>
+#include <fastdds/dds/core/condition/StatusCondition.hpp>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/core/status/LivelinessChangedStatus.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/net/convert.h"
+#include "cue_commandPubSubTypes.h"
+#include "device_inputPubSubTypes.h"
+#include "needle_statePubSubTypes.h"
+#include "scorePubSubTypes.h"
+#include "station_infoPubSubTypes.h"
+#include "task_eventPubSubTypes.h"
+#include "telemetryPubSubTypes.h"
+#include "tool_statePubSubTypes.h"
+
+namespace microdex::instructor {
+
+namespace dds = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+namespace {
+
+std::int64_t RealtimeNowNs() {
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::string HandleKey(const eprosima::fastrtps::rtps::InstanceHandle_t& h) {
+  const eprosima::fastrtps::rtps::octet* bytes = h.value;
+  return std::string(reinterpret_cast<const char*>(bytes), 16);
+}
+
+}  // namespace
+
+std::int64_t MonotonicNowNs() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+const char* PresenceName(Presence p) {
+  switch (p) {
+    case Presence::kAlive:
+      return "alive";
+    case Presence::kLost:
+      return "LOST";
+    case Presence::kDeparted:
+      return "left";
+  }
+  return "?";
+}
+
+struct Instructor::Dds {
+  std::unique_ptr<net::DdsContext> context;
+  dds::DataReader* info = nullptr;
+  dds::DataReader* input = nullptr;
+  dds::DataReader* tool = nullptr;
+  dds::DataReader* needle = nullptr;
+  dds::DataReader* telemetry = nullptr;
+  dds::DataReader* events = nullptr;
+  dds::DataReader* score = nullptr;
+  dds::DataWriter* cue = nullptr;
+  dds::WaitSet waitset;
+  dds::GuardCondition guard;
+  std::map<std::string, std::string> instance_to_station;  // StationInfo instance → id
+};
+
+Instructor::Instructor(const InstructorOptions& options)
+    : options_(options), dds_(std::make_unique<Dds>()) {
+  session_id_ = (options_.issuer + "-" + std::to_string(RealtimeNowNs() / 1'000'000) + "-" +
+                 std::to_string(getpid()))
+                    .substr(0, 64);
+  Dds& d = *dds_;
+  d.context = std::make_unique<net::DdsContext>(options_.dds);
+  d.info = d.context->CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+  d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+  d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(net::kToolStateTopic);
+  d.needle = d.context->CreateReader<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
+  d.telemetry = d.context->CreateReader<msg::TelemetryPubSubType>(net::kTelemetryTopic);
+  d.events = d.context->CreateReader<msg::TaskEventPubSubType>(net::kTaskEventTopic);
+  d.score = d.context->CreateReader<msg::ScorePubSubType>(net::kScoreTopic);
+  d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
+  for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.telemetry, d.events, d.score}) {
+    dds::StatusMask mask = dds::StatusMask::data_available();
+    if (r == d.info) mask << dds::StatusMask::liveliness_changed();
+    r->get_statuscondition().set_enabled_statuses(mask);
+    d.waitset.attach_condition(r->get_statuscondition());
+  }
+  d.waitset.attach_condition(d.guard);
+  thread_ = std::thread([this] { Run(); });
+}
+
+Instructor::~Instructor() {
+  stop_ = true;
+  dds_->guard.set_trigger_value(true);
+  if (thread_.joinable()) thread_.join();
+  Dds& d = *dds_;
+  d.waitset.detach_condition(d.guard);
+  for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.telemetry, d.events, d.score}) {
+    d.waitset.detach_condition(r->get_statuscondition());
+  }
+  d.context.reset();
+}
+
+StationView& Instructor::ViewFor(const std::string& station_id) {
+  auto it = stations_.find(station_id);
+  if (it == stations_.end()) {
+    it = stations_.emplace(station_id, StationView{}).first;
+    it->second.info.header.station_id = station_id;
+    it->second.presence_changed_ns = MonotonicNowNs();
+  }
+  return it->second;
+}
+
+void Instructor::Run() {
+  dds::ConditionSeq active;
+  while (!stop_.load()) {
+    dds_->waitset.wait(active, eprosima::fastrtps::Duration_t(0, 200'000'000));
+    if (stop_.load()) break;
+    dds_->guard.set_trigger_value(false);
+    SendQueuedCues();
+    HandleStationInfo();
+    HandleLiveliness();
+    HandleInputs();
+    TakeAll<msg::ToolState, net::ToolState>(dds_->tool, &StationView::tool);
+    TakeAll<msg::NeedleState, net::NeedleState>(dds_->needle, &StationView::needle);
+    TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry);
+    HandleEvents();
+    HandleScores();
+  }
+}
+
+void Instructor::HandleStationInfo() {
+  msg::StationInfo m;
+  dds::SampleInfo si;
+  while (dds_->info->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    const std::int64_t now = MonotonicNowNs();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (si.valid_data) {
+      net::StationInfo info;
+      if (!net::FromMsg(m, info)) continue;
+      dds_->instance_to_station[HandleKey(si.instance_handle)] = info.header.station_id;
+      writer_to_station_[HandleKey(si.publication_handle)] = info.header.station_id;
+      StationView& v = ViewFor(info.header.station_id);
+      const bool known = v.info.header.session_id.size() > 0;
+      if (known && v.presence != Presence::kAlive) ++v.comebacks;
+      if (v.presence != Presence::kAlive || !known) v.presence_changed_ns = now;
+      v.presence = Presence::kAlive;
+      v.info = info;
+      continue;
+    }
+    auto it = dds_->instance_to_station.find(HandleKey(si.instance_handle));
+    if (it == dds_->instance_to_station.end()) continue;
+    StationView& v = ViewFor(it->second);
+    if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
+      if (v.presence != Presence::kDeparted) v.presence_changed_ns = now;
+      v.presence = Presence::kDeparted;
+    } else if (si.instance_state == dds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE &&
+               v.presence == Presence::kAlive) {
+      v.presence = Presence::kLost;
+      v.presence_changed_ns = now;
+    }
+  }
+}
+
+void Instructor::HandleLiveliness() {
+  dds::LivelinessChangedStatus status;
+  dds_->info->get_liveliness_changed_status(status);
+  if (status.not_alive_count_change <= 0) return;
+  // A StationInfo writer missed its lease. The status names the last writer that changed;
+  // the instance state (NOT_ALIVE_NO_WRITERS, in HandleStationInfo) covers the others.
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = writer_to_station_.find(HandleKey(status.last_publication_handle));
+  if (it == writer_to_station_.end()) return;
+  StationView& v = ViewFor(it->second);
+  if (v.presence == Presence::kAlive) {
+    v.presence = Presence::kLost;
+    v.presence_changed_ns = MonotonicNowNs();
+  }
+}
+
+template <class Msg, class Plain>
+void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror) {
+  auto* reader = static_cast<dds::DataReader*>(reader_ptr);
+  Msg m;
+  dds::SampleInfo si;
+  while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (!si.valid_data) continue;
+    Plain p;
+    if (!net::FromMsg(m, p)) continue;
+    const std::int64_t now = MonotonicNowNs();
+    const std::int64_t now_rt = RealtimeNowNs();
+    std::lock_guard<std::mutex> lock(mutex_);
+    StationView& v = ViewFor(p.header.station_id);
+    if (options_.record_latency) {
+      latency_.state_age_us.push_back(static_cast<double>(now_rt - p.header.stamp_ns) * 1e-3);
+      latency_.transport_us.push_back(static_cast<double>(now_rt - si.source_timestamp.to_ns()) *
+                                      1e-3);
+    }
+    Mirror<Plain>& mir = v.*mirror;
+    mir.latest = std::move(p);
+    mir.received_ns = now;
+    ++mir.count;
+  }
+}
+
+void Instructor::HandleInputs() {
+  msg::DeviceInput m;
+  dds::SampleInfo si;
+  net::DeviceInput p;
+  while (dds_->input->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (!si.valid_data || !net::FromMsg(m, p)) continue;
+    std::lock_guard<std::mutex> lock(mutex_);
+    StationView& v = ViewFor(p.header.station_id);
+    ++v.inputs_received;
+    if (v.input_session != p.header.session_id) {
+      v.input_session = p.header.session_id;  // a new run: no gap before its first sample
+    } else if (p.header.step > v.last_input_step + 1) {
+      v.inputs_lost += p.header.step - v.last_input_step - 1;
+    }
+    v.last_input_step = p.header.step;
+  }
+}
+
+void Instructor::HandleEvents() {
+  msg::TaskEvent m;
+  dds::SampleInfo si;
+  while (dds_->events->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    net::TaskEvent e;
+    if (!si.valid_data || !net::FromMsg(m, e)) continue;
+    std::lock_guard<std::mutex> lock(mutex_);
+    StationView& v = ViewFor(e.header.station_id);
+    v.events.push_back(e);
+    if (v.events.size() > kMaxEventsPerStation) v.events.pop_front();
+    new_events_.push_back(std::move(e));
+  }
+}
+
+void Instructor::HandleScores() {
+  TakeAll<msg::Score, net::Score>(dds_->score, &StationView::score);
+}
+
+void Instructor::SendQueuedCues() {
+  std::vector<net::CueCommand> cues;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cues.swap(queued_cues_);
+  }
+  msg::CueCommand m;
+  for (const auto& c : cues) {
+    net::ToMsg(c, m);
+    dds_->cue->write(&m);
+  }
+}
+
+std::uint64_t Instructor::SendCue(const std::string& station_id, net::CueKind kind, double param,
+                                  std::uint64_t at_step) {
+  if (station_id.empty() || station_id.size() > net::kMaxIdLength) {
+    throw std::invalid_argument("cue target: expected a station id or 'all'");
+  }
+  net::CueCommand c;
+  c.header = {station_id, session_id_, at_step, RealtimeNowNs()};
+  c.cue_id = next_cue_id_++;
+  c.kind = kind;
+  c.param = param;
+  c.issuer = options_.issuer.substr(0, net::kMaxIdLength);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queued_cues_.push_back(c);
+  }
+  dds_->guard.set_trigger_value(true);
+  return c.cue_id;
+}
+
+std::vector<StationView> Instructor::Stations() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<StationView> out;
+  for (const auto& [id, v] : stations_) out.push_back(v);
+  return out;
+}
+
+std::optional<StationView> Instructor::Station(const std::string& station_id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = stations_.find(station_id);
+  if (it == stations_.end()) return std::nullopt;
+  return it->second;
+}
+
+std::vector<net::TaskEvent> Instructor::TakeEvents() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<net::TaskEvent> out;
+  out.swap(new_events_);
+  return out;
+}
+
+LatencySamples Instructor::TakeLatency() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  LatencySamples out;
+  std::swap(out, latency_);
+  return out;
+}
+
+std::string FormatStationTable(const std::vector<StationView>& stations, std::int64_t now_ns) {
+  std::ostringstream os;
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "%-12s %-18s %-22s %-14s %-6s %7s %5s %9s %4s %-12s %6s %7s %13s\n", "STATION",
+                "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "CLEAR_mm", "CNT", "CUES",
+                "SCORE", "AGE_ms", "INPUT_rx/lost");
+  os << line;
+  for (const StationView& v : stations) {
+    std::string modules;
+    for (const auto& m : v.info.modules) {
+      if (!modules.empty()) modules += ',';
+      modules += m;
+    }
+    std::string scene = v.info.scene;
+    if (const auto slash = scene.rfind('/'); slash != std::string::npos)
+      scene = scene.substr(slash + 1);
+    double p99 = NAN, clear = NAN, score = NAN, age = NAN;
+    std::uint64_t overruns = 0;
+    std::uint32_t contacts = 0;
+    std::string cues;  // active cue kinds, "" shown as "-"
+    if (v.telemetry.latest) {
+      p99 = v.telemetry.latest->period_p99_s * 1e3;
+      overruns = v.telemetry.latest->overruns;
+    }
+    if (v.needle.latest) clear = v.needle.latest->clearance_m * 1e3;
+    if (v.tool.latest) {
+      age = static_cast<double>(now_ns - v.tool.received_ns) * 1e-6;
+      for (std::uint32_t k = 1; k < net::kCueKindCount; ++k) {
+        if ((v.tool.latest->active_cues >> k) & 1u) {
+          if (!cues.empty()) cues += ',';
+          cues += net::CueKindName(net::CueKind(k));
+        }
+      }
+    }
+    if (v.score.latest) {
+      score = v.score.latest->score;
+      contacts = v.score.latest->contacts;
+    }
+    char io[64];
+    std::snprintf(io, sizeof io, "%llu/%llu", static_cast<unsigned long long>(v.inputs_received),
+                  static_cast<unsigned long long>(v.inputs_lost));
+    std::snprintf(line, sizeof line,
+                  "%-12.12s %-18.18s %-22.22s %-14.14s %-6s %7.3f %5llu %9.3f %4u %-12.12s %6.1f "
+                  "%7.1f %13s\n",
+                  v.info.header.station_id.c_str(), v.info.trainee.c_str(), scene.c_str(),
+                  modules.c_str(), PresenceName(v.presence), p99,
+                  static_cast<unsigned long long>(overruns), clear, contacts,
+                  cues.empty() ? "-" : cues.c_str(), score, age, io);
+    os << line;
+  }
+  return os.str();
+}
+
+}  // namespace microdex::instructor

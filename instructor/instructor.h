@@ -1,0 +1,132 @@
+#pragma once
+// The instructor console's engine, used by microdex-instructor's text view, the tests and the
+// future GUI: discovers stations (StationInfo, liveliness), mirrors each station's latest
+// state per module with its age, sends cue commands to one station or all, and collects task
+// events and scores.
+//
+// Threads: one DDS thread owns every DDS entity and waits on a WaitSet (reader conditions and
+// a guard); it is the only writer of the registry. API calls from other threads read copies
+// of the registry and queue cues under a mutex: the instructor has no real-time thread, so a
+// short mutex is the simplest correct handoff here.
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/net/dds_context.h"
+#include "common/net/messages.h"
+
+namespace microdex::instructor {
+
+struct InstructorOptions {
+  net::DdsOptions dds;
+  std::string issuer = "instructor";
+  bool record_latency = false;  // keep state-latency samples (benchmark)
+};
+
+enum class Presence {
+  kAlive,     // its StationInfo writer is alive (liveliness lease kept)
+  kLost,      // the lease expired: the station died or its network did
+  kDeparted,  // it disposed its StationInfo: a clean shutdown
+};
+const char* PresenceName(Presence p);
+
+template <class T>
+struct Mirror {
+  std::optional<T> latest;
+  std::int64_t received_ns = 0;  // monotonic, when latest arrived
+  std::uint64_t count = 0;
+};
+
+struct StationView {
+  net::StationInfo info;
+  Presence presence = Presence::kAlive;
+  std::int64_t presence_changed_ns = 0;  // monotonic
+  int comebacks = 0;                     // times it became alive again after lost/departed
+  Mirror<net::ToolState> tool;
+  Mirror<net::NeedleState> needle;
+  Mirror<net::Telemetry> telemetry;
+  Mirror<net::Score> score;
+  std::uint64_t inputs_received = 0;
+  std::uint64_t inputs_lost = 0;  // gaps in the DeviceInput step sequence of a session
+  std::uint64_t last_input_step = 0;
+  std::string input_session;
+  std::deque<net::TaskEvent> events;  // the latest kMaxEventsPerStation
+};
+
+struct LatencySamples {
+  std::vector<double> state_age_us;  // receive − stamp_ns (tick start of the state)
+  std::vector<double> transport_us;  // receive − the writer's source timestamp
+};
+
+class Instructor {
+ public:
+  static constexpr std::size_t kMaxEventsPerStation = 256;
+
+  // Creates the participant (throws std::runtime_error naming the profile) and starts the
+  // DDS thread.
+  explicit Instructor(const InstructorOptions& options);
+  ~Instructor();
+  Instructor(const Instructor&) = delete;
+  Instructor& operator=(const Instructor&) = delete;
+
+  // Copies of the registry, sorted by station id.
+  std::vector<StationView> Stations() const;
+  std::optional<StationView> Station(const std::string& station_id) const;
+
+  // Queues a cue for `station_id` (or net::kAllStations) applied at `at_step` (0: on
+  // receipt); returns its cue id. Throws std::invalid_argument for a bad target.
+  std::uint64_t SendCue(const std::string& station_id, net::CueKind kind, double param,
+                        std::uint64_t at_step = 0);
+
+  // Task events of every station received since the last call, in arrival order.
+  std::vector<net::TaskEvent> TakeEvents();
+
+  // Latency samples so far (record_latency only); clears them.
+  LatencySamples TakeLatency();
+
+  std::string session_id() const { return session_id_; }
+
+ private:
+  struct Dds;
+  void Run();
+  void HandleStationInfo();
+  void HandleLiveliness();
+  template <class Msg, class Plain>
+  void TakeAll(void* reader, Mirror<Plain> StationView::*mirror);
+  void HandleInputs();
+  void HandleEvents();
+  void HandleScores();
+  void SendQueuedCues();
+  StationView& ViewFor(const std::string& station_id);
+
+  InstructorOptions options_;
+  std::string session_id_;
+  std::unique_ptr<Dds> dds_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> next_cue_id_{1};
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::map<std::string, StationView> stations_;
+  std::map<std::string, std::string> writer_to_station_;  // StationInfo writer GUID → id
+  std::vector<net::TaskEvent> new_events_;
+  std::vector<net::CueCommand> queued_cues_;
+  LatencySamples latency_;
+
+  std::thread thread_;
+};
+
+// The text view: one line per station.
+std::string FormatStationTable(const std::vector<StationView>& stations, std::int64_t now_ns);
+
+// CLOCK_MONOTONIC now, ns (the clock of the *_ns fields above).
+std::int64_t MonotonicNowNs();
+
+}  // namespace microdex::instructor

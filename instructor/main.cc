@@ -1,0 +1,141 @@
+// microdex-instructor: the instructor console, headless text view (DESIGN.md
+// "Command-line contracts").
+#include <pthread.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <cstdio>
+#include <thread>
+
+#include "instructor/cue_spec.h"
+#include "instructor/instructor.h"
+
+namespace {
+std::atomic<bool> g_stop{false};
+}
+
+int main(int argc, char** argv) {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  using namespace microdex;
+  instructor::InstructorOptions o;
+  o.dds.profile_file = net::DefaultDdsProfileFile();
+  o.dds.participant_name = "microdex-instructor";
+  bool headless = false;
+  double duration_s = 0;
+  double table_period_s = 1;
+  std::vector<std::string> cue_texts;
+  std::string record, security;
+  CLI::App app{"microdex-instructor: discovers stations, mirrors their state, sends cues"};
+  app.add_flag("--headless", headless, "text view on stdout (the GUI is not in this build)");
+  app.add_option("--duration", duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
+  app.add_option("--cue", cue_texts,
+                 "STATION:KIND:PARAM[@SECONDS], KIND one of clear, "
+                 "convergent, divergent, tremor; STATION may be 'all'");
+  app.add_option("--table-period", table_period_s, "seconds between tables (0: only at the end)");
+  app.add_option("--issuer", o.issuer, "name of this console in the cues it sends");
+  app.add_option("--dds-profile", o.dds.profile_file, "DDS XML profiles")->capture_default_str();
+  app.add_option("--domain", o.dds.domain_id, "DDS domain id");
+  app.add_option("--partition", o.dds.partition, "DDS partition (the course)");
+  app.add_option("--record", record, "(not available in this build)");
+  app.add_option("--security", security, "(not available in this build)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "microdex-instructor: %s\n", e.what());
+    return 2;
+  }
+  if (!record.empty() || !security.empty()) {
+    std::fprintf(stderr, "microdex-instructor: %s: not available in this build yet\n",
+                 record.empty() ? "--security" : "--record");
+    return 2;
+  }
+  if (!headless) {
+    std::fprintf(stderr, "microdex-instructor: the GUI is not in this build yet; use --headless\n");
+    return 2;
+  }
+  if (!(duration_s >= 0) || !(table_period_s >= 0)) {
+    std::fprintf(stderr, "microdex-instructor: --duration/--table-period: expected >= 0\n");
+    return 2;
+  }
+  if (std::string why = o.dds.Validate(); !why.empty()) {
+    std::fprintf(stderr, "microdex-instructor: --%s\n", why.c_str());
+    return 2;
+  }
+  std::vector<instructor::CueSpec> cues;
+  try {
+    for (const auto& t : cue_texts) cues.push_back(instructor::ParseCueSpec(t));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-instructor: %s\n", e.what());
+    return 2;
+  }
+
+  std::thread([&] {
+    int sig = 0;
+    sigwait(&signals, &sig);
+    g_stop = true;
+  }).detach();
+
+  try {
+    instructor::Instructor console(o);
+    const std::int64_t start = instructor::MonotonicNowNs();
+    std::int64_t next_table = start + static_cast<std::int64_t>(table_period_s * 1e9);
+    std::vector<bool> sent(cues.size(), false);
+    std::printf("instructor %s on domain %d%s%s\n", console.session_id().c_str(), o.dds.domain_id,
+                o.dds.partition.empty() ? "" : ", partition ", o.dds.partition.c_str());
+    std::fflush(stdout);
+    for (;;) {
+      const std::int64_t now = instructor::MonotonicNowNs();
+      const double t = static_cast<double>(now - start) * 1e-9;
+      for (std::size_t i = 0; i < cues.size(); ++i) {
+        if (!sent[i] && t >= cues[i].at_s) {
+          const auto id = console.SendCue(cues[i].station, cues[i].kind, cues[i].param);
+          std::printf("[%7.3f] cue %llu sent: %s %s %g\n", t, static_cast<unsigned long long>(id),
+                      cues[i].station.c_str(), net::CueKindName(cues[i].kind), cues[i].param);
+          sent[i] = true;
+        }
+      }
+      for (const auto& e : console.TakeEvents()) {
+        if (e.kind == net::TaskEventKind::kContactBegin ||
+            e.kind == net::TaskEventKind::kContactEnd) {
+          continue;  // in the table's contact count; too many to list
+        }
+        std::printf("[%7.3f] %s %s step %llu", t, e.header.station_id.c_str(),
+                    net::TaskEventKindName(e.kind), static_cast<unsigned long long>(e.header.step));
+        if (e.cue_id) std::printf(" cue %llu", static_cast<unsigned long long>(e.cue_id));
+        if (!e.text.empty()) std::printf(" (%s)", e.text.c_str());
+        std::printf("\n");
+      }
+      if (table_period_s > 0 && now >= next_table) {
+        std::printf("--- t = %.1f s\n%s", t,
+                    instructor::FormatStationTable(console.Stations(), now).c_str());
+        next_table += static_cast<std::int64_t>(table_period_s * 1e9);
+      }
+      std::fflush(stdout);
+      if (g_stop || (duration_s > 0 && t >= duration_s)) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    const std::int64_t now = instructor::MonotonicNowNs();
+    std::printf("--- final\n%s", instructor::FormatStationTable(console.Stations(), now).c_str());
+    for (const auto& v : console.Stations()) {
+      if (!v.score.latest) continue;
+      const auto& s = *v.score.latest;
+      std::printf(
+          "score %s: %.1f%s (contact %.2f s in %u episodes, mean clearance %.3f mm, "
+          "tremor %.1f um)\n",
+          v.info.header.station_id.c_str(), s.score, s.is_final ? " final" : "",
+          s.time_in_contact_s, s.contacts, s.mean_clearance_m * 1e3, s.tremor_rms_m * 1e6);
+    }
+    std::fflush(stdout);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-instructor: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
