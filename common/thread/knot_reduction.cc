@@ -14,11 +14,12 @@ namespace {
 constexpr double kRelTol = 1e-9;
 // Below this many vertices every edge is tested (no grid).
 constexpr int kBruteForceBelow = 96;
-// Grid resolution cap per axis, and the largest cell span registered per edge / visited per
-// query before falling back to the list of long edges / to testing every edge.
+// Grid resolution cap per axis; the largest cell span registered per edge before the edge
+// goes to the list of long edges; a query visiting more cells than there are edges (and
+// more than kMinCellsPerQuery) tests every edge instead.
 constexpr int kMaxCellsPerAxis = 48;
 constexpr int kMaxCellsPerEdge = 27;
-constexpr int kMaxCellsPerQuery = 64;
+constexpr long kMinCellsPerQuery = 64;
 
 double Cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();
@@ -169,6 +170,7 @@ class Reducer {
     head_.assign(static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2], -1);
     pool_.clear();
     long_edges_.clear();
+    in_long_list_.assign(n_, false);
     v = head;
     for (int k = 0; k < alive_count_; ++k) {
       Register(v);
@@ -179,7 +181,11 @@ class Reducer {
   void Register(int s) {
     const auto r = CellRange(EdgeBox(s));
     if (CellCount(r) > kMaxCellsPerEdge) {
-      long_edges_.push_back(s);
+      // Once listed, an edge starting at s stays listed: the list holds start vertices.
+      if (!in_long_list_[s]) {
+        in_long_list_[s] = true;
+        long_edges_.push_back(s);
+      }
       return;
     }
     for (int z = r[2]; z <= r[5]; ++z) {
@@ -223,7 +229,7 @@ class Reducer {
     box.extend(pts_[v]);
     box.extend(pts_[b]);
     const auto r = use_grid_ ? CellRange(box) : std::array<int, 6>{};
-    if (!use_grid_ || CellCount(r) > kMaxCellsPerQuery) {
+    if (!use_grid_ || CellCount(r) > std::max<long>(kMinCellsPerQuery, alive_count_)) {
       int s = b;
       for (int k = 0; k < alive_count_; ++k) {
         if (Blocks(s, a, v, b)) return true;
@@ -274,6 +280,7 @@ class Reducer {
   std::vector<int> head_;
   std::vector<Entry> pool_;
   std::vector<int> long_edges_;
+  std::vector<bool> in_long_list_;
 };
 
 }  // namespace
