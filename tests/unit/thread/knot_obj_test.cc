@@ -1,0 +1,77 @@
+// OBJ polylines (common/thread/knot_obj): round trip, the forms of `l` elements exporters
+// write, and one-line errors naming the file and the line.
+#include "common/thread/knot_obj.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace microdex::thread {
+namespace {
+
+std::filesystem::path WriteTemp(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("microdex_knot_obj_" + name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string ErrorOf(const std::filesystem::path& path) {
+  try {
+    ReadObjPolyline(path);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(KnotObjTest, RoundTrip) {
+  const std::vector<Eigen::Vector3d> nodes = {{0, 0, 0}, {1e-5, 2e-5, -3e-5}, {4.25, -1, 0.5}};
+  const auto path = std::filesystem::temp_directory_path() / "microdex_knot_obj_roundtrip.obj";
+  WriteObjPolyline(path, nodes, {"three nodes"});
+  const auto read = ReadObjPolyline(path);
+  ASSERT_EQ(read.size(), nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    EXPECT_LT((read[i] - nodes[i]).norm(), 1e-8 * (1.0 + nodes[i].norm()));
+  }
+}
+
+TEST(KnotObjTest, ExporterForms) {
+  // One element per segment, out of order and reversed, with v/vt forms, negative indices,
+  // CRLF line ends and unrelated statements.
+  const auto path = WriteTemp("forms.obj",
+                              "o thread\r\nv 0 0 0\r\nv 1 0 0\r\nv 2 0 0\r\nv 3 0 0\r\n"
+                              "vt 0 0\r\nl 2/1 3/1\r\nl 2 1\r\nl -2 -1\r\ns off\r\n");
+  const auto nodes = ReadObjPolyline(path);
+  ASSERT_EQ(nodes.size(), 4u);
+  // The chain runs 1-2-3-4 or its reverse.
+  const double first_x = nodes.front().x();
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    EXPECT_DOUBLE_EQ(nodes[i].x(), first_x == 0.0 ? double(i) : 3.0 - double(i));
+  }
+}
+
+TEST(KnotObjTest, ErrorsNameFileAndLine) {
+  EXPECT_NE(ErrorOf(WriteTemp("v.obj", "v 0 0 0\nv 1 nan_ 0\nl 1 2\n")).find("v.obj:2:"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(WriteTemp("short.obj", "v 0 0\nl 1 1\n")).find("short.obj:1:"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(WriteTemp("range.obj", "v 0 0 0\nv 1 0 0\nl 1 3\n")).find("range.obj:3:"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(WriteTemp("zero.obj", "v 0 0 0\nv 1 0 0\nl 0 1\n")).find("zero.obj:3:"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(WriteTemp("one.obj", "v 0 0 0\nl 1\n")).find("one.obj:2:"), std::string::npos);
+  EXPECT_NE(ErrorOf(WriteTemp("none.obj", "v 0 0 0\nv 1 0 0\n")).find("no 'l' element"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(WriteTemp("apart.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nl 1 2\nl 3 4\n"))
+                .find("apart.obj:6:"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("/nonexistent/microdex.obj").find("cannot open"), std::string::npos);
+  // Every message is one line.
+  EXPECT_EQ(ErrorOf(WriteTemp("v2.obj", "v 0 0 x\n")).find('\n'), std::string::npos);
+}
+
+}  // namespace
+}  // namespace microdex::thread
