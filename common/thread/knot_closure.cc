@@ -88,6 +88,8 @@ Eigen::Vector3d ChooseExitDirection(std::span<const Eigen::Vector3d> nodes, bool
     back += step;
   }
   Eigen::Vector3d tangent = p - nodes[back];
+  // A thread that comes back onto its end node: use the last link (never zero).
+  if (tangent.norm() <= 0.0) tangent = p - nodes[end + step];
   MICRODEX_CHECK(tangent.norm() > 0);
   tangent.normalize();
   const View view = ViewFrom(nodes, end, 0.5 * thread_diameter_m);

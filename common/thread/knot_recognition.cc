@@ -27,6 +27,8 @@ constexpr std::array<std::string_view, 9> kKnotNames = {
 
 // Consecutive nodes closer than this fraction of the thread's extent are merged.
 constexpr double kDuplicateRelTol = 1e-12;
+// Diagrams with more crossings after Reidemeister I/II are not classified (unknown).
+constexpr int kMaxClassifiedCrossings = 60;
 // Projection attempts per requested projection before giving up (non-generic directions).
 constexpr int kAttemptsPerProjection = 8;
 
@@ -159,6 +161,9 @@ std::optional<ProjectionInvariants> InvariantsAlong(std::span<const Eigen::Vecto
   ProjectionInvariants inv;
   inv.raw_crossings = raw->num_crossings();
   inv.code = knot::SimplifyReidemeister(*raw);
+  // Beyond this the O(n^4) exact Alexander polynomial would take too long; such a tangle is
+  // none of the classes anyway (their diagrams reduce to at most 8 crossings).
+  if (inv.code.num_crossings() > kMaxClassifiedCrossings) return std::nullopt;
   const knot::PlanarDiagram pd = knot::MakePlanarDiagram(inv.code);
   inv.alexander = knot::AlexanderPolynomial(pd);
   const knot::GoeritzResult g = knot::GoeritzSignature(pd);
