@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/geometry/arc_torus_exact.h"
 #include "common/geometry/quartic.h"
 #include "common/geometry/stereographic.h"
 
@@ -14,11 +15,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 2 * kPi;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Rotation parts of the poses may carry float-level rounding (e.g. from a normalised
-// float quaternion); anything further from orthonormal is not a rigid pose.
-constexpr double kRotationTol = 1e-6;
-// Azimuths this close below 2π are the boundary at azimuth 0 (the plane y = 0).
-constexpr double kAzimuthWrapTol_rad = 1e-12;
 // The lifted circle's geometry loses about eps/R̂ relative accuracy; below this radius, or
 // when its centre and radius are inconsistent with S³, the robust path takes over.
 constexpr double kMinLiftedRadius = 1e-9;
@@ -29,6 +25,12 @@ constexpr double kPhiConstantRel = 1e-12;
 constexpr double kKeepBothResidual = 1e-6;
 // Largest step of the distance ascent [rad of needle parameter].
 constexpr double kMaxPolishStep_rad = 0.5;
+// Certificate passes: distances within this fraction of R count as beyond the horn torus;
+// below this fraction of R the level torus is too thin for the lifted conic's precision (the
+// clearance is then within this of r); φ_t below −this·|φ|'s size marks a farther point.
+constexpr double kDeepRel = 1e-6;
+constexpr double kMinCertifyRel = 1e-6;
+constexpr double kCertifyPhiRel = 1e-12;
 // Uniform starting points per in-range piece on the robust path.
 constexpr int kRobustSamples = 24;
 
@@ -47,34 +49,6 @@ struct NeedleInV {
     return o + rho * (std::cos(s) * e1 + std::sin(s) * e2);
   }
 };
-
-bool IsFinitePose(const Eigen::Isometry3d& X) { return X.matrix().allFinite(); }
-
-bool IsRotation(const Eigen::Matrix3d& R) {
-  const Eigen::Matrix3d E = R.transpose() * R - Eigen::Matrix3d::Identity();
-  return E.cwiseAbs().maxCoeff() <= kRotationTol && R.determinant() > 0;
-}
-
-// The checks of ValidateArcTorus, without building a message (no allocation in the loop).
-bool IsValidQuery(const ArcDef& arc, const TorusSegmentDef& torus) {
-  const bool radii_ok = std::isfinite(arc.radius_m) && arc.radius_m > 0 &&
-                        std::isfinite(torus.core_radius_m) && torus.core_radius_m > 0 &&
-                        std::isfinite(torus.tube_radius_m) && torus.tube_radius_m > 0 &&
-                        torus.tube_radius_m < torus.core_radius_m;
-  const bool angles_ok = std::isfinite(arc.sweep_rad) && arc.sweep_rad > 0 &&
-                         arc.sweep_rad <= kTwoPi && std::isfinite(torus.segment_angle_rad) &&
-                         torus.segment_angle_rad > 0 && torus.segment_angle_rad <= kTwoPi;
-  if (!radii_ok || !angles_ok) return false;
-  if (!IsFinitePose(arc.X_WN) || !IsFinitePose(torus.X_WV)) return false;
-  return IsRotation(arc.X_WN.linear()) && IsRotation(torus.X_WV.linear());
-}
-
-double AzimuthOf(const Eigen::Vector3d& p) {
-  double az = std::atan2(p.y(), p.x());
-  if (az < 0) az += kTwoPi;
-  if (az >= kTwoPi - kAzimuthWrapTol_rad) az = 0;
-  return az;
-}
 
 double WrapTo2Pi(double s) {
   s = std::fmod(s, kTwoPi);
@@ -115,7 +89,8 @@ int ClipArcToSegment(const NeedleInV& nv, double sweep, double omega, Interval o
   for (int i = 0; i + 1 < nc; ++i) {
     const double lo = cuts[i], hi = cuts[i + 1];
     if (!(hi > lo)) continue;
-    if (AzimuthOf(nv.PointAt(0.5 * (lo + hi))) > omega) continue;
+    const Eigen::Vector3d mid = nv.PointAt(0.5 * (lo + hi));
+    if (!IsAzimuthInSegment(mid.x(), mid.y(), omega)) continue;
     if (n > 0 && out[n - 1].hi == lo) {
       out[n - 1].hi = hi;
     } else {
@@ -371,6 +346,151 @@ int FindConicExtremaOnCircle(const CircleConic& k, const SpOptions& opt, double 
   return n;
 }
 
+namespace {
+
+// One SP pass (§4.2.2–§4.2.4) against the torus of core radius R and tube radius t: the
+// minima of φ(θ) that lie on the clipped arc, as needle parameters. With `all` set, the
+// maxima are kept too (for the sign-change count).
+struct SpPass {
+  bool ok = false;  // false: lifted circle unusable or φ constant (see diag flags)
+  bool lift_ok = false;
+  bool phi_constant = false;
+  bool quartic_fallback = false;
+  double lifted_radius = 0;
+  double phi_size = 0;  // |A| + … + |F|: the scale of φ's values and of their rounding
+  int n = 0;
+  double s[8], cos_s[8], sin_s[8], phi[8];
+  bool is_min[8];
+  int interval[8];
+};
+
+void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval* iv, int n_iv,
+               const SpOptions& opt, bool all, SpPass* out) {
+  SpPass& r = *out;
+  r.ok = false;
+  r.n = 0;
+  // Appendix B, then §4.2.3: lift the torus and the needle circle to S³.
+  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_t);
+  const double lambda = scale.lambda;
+  const LiftedCircle lc = CalcLiftedCircle(lambda * nv.o, nv.e1, nv.e2, lambda * nv.rho);
+  r.lifted_radius = lc.radius;
+  r.lift_ok =
+      lc.center.allFinite() && lc.bx.allFinite() && lc.by.allFinite() &&
+      lc.radius > kMinLiftedRadius &&
+      std::abs(lc.center.squaredNorm() + lc.radius * lc.radius - 1) <= kLiftedConsistencyTol;
+  if (!r.lift_ok) return;
+  // (4.15), (4.28): the conic on the lifted circle; (4.17)–(4.26): its extrema.
+  const CircleConic conic = CalcCircleConic(scale.alpha, lc);
+  r.phi_size = std::abs(conic.a) + std::abs(conic.b) + std::abs(conic.c) + std::abs(conic.d) +
+               std::abs(conic.e) + std::abs(conic.f);
+  double ct[8], st[8];
+  const int n_ext =
+      FindConicExtremaOnCircle(conic, opt, ct, st, &r.phi_constant, &r.quartic_fallback);
+  if (r.phi_constant) return;
+  r.ok = true;
+  const double g = conic.c - conic.a;
+  const double d2_scale = std::abs(conic.b) + std::abs(g) + std::abs(conic.d) + std::abs(conic.e);
+  for (int j = 0; j < n_ext; ++j) {
+    const double c = ct[j], sn = st[j];
+    // φ''(θ) = −4B xy + 2g(x² − y²) − D x − E y: minima of φ (and flat points) are the
+    // candidates for the deepest point; maxima only matter to the sign-change count.
+    const double d2phi =
+        -4 * conic.b * c * sn + 2 * g * (c * c - sn * sn) - conic.d * c - conic.e * sn;
+    const bool is_min = d2phi >= -1e-9 * d2_scale;
+    if (!is_min && !all) continue;
+    // Back to R³ through (4.13) and P (4.2), then to the needle parameter s.
+    const Eigen::Vector4d X = lc.center + lc.radius * (c * lc.bx + sn * lc.by);
+    const Eigen::Vector3d rel = ProjectFromS3(X) / lambda - nv.o;
+    const double rx = rel.dot(nv.e1), ry = rel.dot(nv.e2);
+    const double s = WrapTo2Pi(std::atan2(ry, rx));
+    const int i = FindInterval(iv, n_iv, s);
+    if (i < 0) continue;
+    const double s_in = std::clamp(s, iv[i].lo, iv[i].hi);
+    const double inv = 1 / std::sqrt(rx * rx + ry * ry);
+    const int k = r.n++;
+    r.s[k] = s_in;
+    if (s_in == s && std::isfinite(inv)) {
+      r.cos_s[k] = rx * inv;
+      r.sin_s[k] = ry * inv;
+    } else {
+      r.cos_s[k] = std::cos(s_in);
+      r.sin_s[k] = std::sin(s_in);
+    }
+    r.phi[k] = conic.Eval(c, sn);
+    r.is_min[k] = is_min;
+    r.interval[k] = i;
+  }
+}
+
+// The deepest point found so far: the needle parameter of the largest distance² to the core.
+struct Best {
+  double f = -1, s = 0;
+};
+
+// Distance ascent from one candidate, keeping the best. Returns the f it reached.
+double TryCandidate(const NeedleInV& nv, double core_r, const Interval* iv, const Candidate& c,
+                    const SpOptions& opt, Best* best) {
+  double s = c.s;
+  const CoreDistSq e = EvalCoreDistSq(nv, core_r, c.cos_s, c.sin_s);
+  double f = e.f;
+  bool ascend = opt.polish_max_iters > 0;
+  if (c.kind == CandidateKind::kLowEnd) ascend = ascend && e.df > 0;
+  if (c.kind == CandidateKind::kHighEnd) ascend = ascend && e.df < 0;
+  if (ascend) f = AscendCoreDistSq(nv, core_r, iv[c.interval], s, c.cos_s, c.sin_s, e, opt, &s);
+  if (f > best->f) {
+    best->f = f;
+    best->s = s;
+  }
+  return f;
+}
+
+void AddUniformCandidates(const Interval* iv, int n_iv, Candidate* cand, int* n_cand) {
+  for (int i = 0; i < n_iv; ++i) {
+    for (int j = 1; j <= kRobustSamples; ++j) {
+      const double s = iv[i].lo + (iv[i].hi - iv[i].lo) * j / (kRobustSamples + 1);
+      cand[(*n_cand)++] = {s, std::cos(s), std::sin(s), i, CandidateKind::kInterior};
+    }
+  }
+}
+
+// §4.2.4: sign changes of φ along each piece (ends and interior extrema in order of s), and
+// the minimum of φ, for the diagnostics.
+void CountSignChanges(const NeedleInV& nv, double core_r, double tube_r, const Interval* iv,
+                      int n_iv, const SpPass& pass, SpDiagnostics* diag) {
+  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_r);
+  double min_phi = std::numeric_limits<double>::infinity();
+  int changes = 0;
+  for (int i = 0; i < n_iv; ++i) {
+    double s_list[10], phi_list[10];
+    int m = 0;
+    for (const double s : {iv[i].lo, iv[i].hi}) {
+      s_list[m] = s;
+      phi_list[m] = EvalLiftedTorus(scale.alpha, LiftToS3(scale.lambda * nv.PointAt(s)));
+      ++m;
+    }
+    for (int j = 0; j < pass.n && m < 10; ++j) {
+      if (pass.interval[j] != i) continue;
+      s_list[m] = pass.s[j];
+      phi_list[m] = pass.phi[j];
+      ++m;
+    }
+    for (int a = 1; a < m; ++a) {  // insertion sort by s
+      for (int b = a; b > 0 && s_list[b] < s_list[b - 1]; --b) {
+        std::swap(s_list[b], s_list[b - 1]);
+        std::swap(phi_list[b], phi_list[b - 1]);
+      }
+    }
+    for (int a = 0; a < m; ++a) {
+      min_phi = std::min(min_phi, phi_list[a]);
+      if (a > 0 && (phi_list[a] > 0) != (phi_list[a - 1] > 0)) ++changes;
+    }
+  }
+  diag->min_phi = min_phi;
+  diag->num_sign_changes = changes;
+}
+
+}  // namespace
+
 ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentDef& torus,
                                           const SpOptions& options) {
   return CalcArcTorusClearanceSP(arc, torus, options, nullptr);
@@ -383,7 +503,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   diag = SpDiagnostics{};
   ArcTorusClearance out;
   out.clearance_m = kNaN;
-  if (!IsValidQuery(arc, torus)) {
+  if (FindArcTorusInputError(arc, torus) != nullptr) {
     out.status = ClearanceStatus::kInvalidInput;
     return out;
   }
@@ -408,135 +528,77 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     return out;
   }
 
+  // The thesis's pass against the vessel itself: its minima of φ with the piece ends decide
+  // touch / no-touch, and they start the distance ascent.
+  SpPass pass;
+  RunSpPass(nv, core_r, tube_r, iv, n_iv, opt, diagnostics != nullptr, &pass);
+  diag.lifted_radius = pass.lifted_radius;
+  diag.phi_constant = pass.phi_constant;
+  diag.quartic_fallback = pass.quartic_fallback;
+  diag.num_extrema = pass.n;
+  if (diagnostics != nullptr && pass.ok) {
+    CountSignChanges(nv, core_r, tube_r, iv, n_iv, pass, &diag);
+  }
+
   Candidate cand[kMaxCandidates];
   int n_cand = 0;
   for (int i = 0; i < n_iv; ++i) {
     cand[n_cand++] = {iv[i].lo, std::cos(iv[i].lo), std::sin(iv[i].lo), i, CandidateKind::kLowEnd};
     cand[n_cand++] = {iv[i].hi, std::cos(iv[i].hi), std::sin(iv[i].hi), i, CandidateKind::kHighEnd};
   }
+  for (int j = 0; j < pass.n; ++j) {
+    if (!pass.is_min[j]) continue;
+    cand[n_cand++] = {pass.s[j], pass.cos_s[j], pass.sin_s[j], pass.interval[j],
+                      CandidateKind::kInterior};
+  }
+  if (!pass.ok) {
+    // No usable extrema (README_sp.md, "Fallbacks"): start from uniform points instead.
+    diag.fallback = true;
+    AddUniformCandidates(iv, n_iv, cand, &n_cand);
+  }
+  Best best;
+  for (int j = 0; j < n_cand; ++j) TryCandidate(nv, core_r, iv, cand[j], opt, &best);
 
-  // Appendix B, then §4.2.3: lift the torus and the needle circle to S³.
-  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_r);
-  const double lambda = scale.lambda;
-  const LiftedCircle lc = CalcLiftedCircle(lambda * nv.o, nv.e1, nv.e2, lambda * nv.rho);
-  diag.lifted_radius = lc.radius;
-  const bool lift_ok =
-      lc.center.allFinite() && lc.bx.allFinite() && lc.by.allFinite() &&
-      lc.radius > kMinLiftedRadius &&
-      std::abs(lc.center.squaredNorm() + lc.radius * lc.radius - 1) <= kLiftedConsistencyTol;
-
-  // φ at the extrema inside the arc, for the sign-change test of §4.2.4 (diagnostics only).
-  double ext_s[8], ext_phi[8];
-  int n_ext_in = 0;
-  bool robust = !lift_ok;
-  if (lift_ok) {
-    const CircleConic conic = CalcCircleConic(scale.alpha, lc);
-    double ct[8], st[8];
-    bool phi_const = false;
-    const int n_ext =
-        FindConicExtremaOnCircle(conic, opt, ct, st, &phi_const, &diag.quartic_fallback);
-    diag.phi_constant = phi_const;
-    diag.num_extrema = n_ext;
-    robust = phi_const;
-    const double g = conic.c - conic.a;
-    const double d2_scale = std::abs(conic.b) + std::abs(g) + std::abs(conic.d) + std::abs(conic.e);
-    for (int j = 0; j < n_ext; ++j) {
-      const double c = ct[j], sn = st[j];
-      // φ''(θ) = −4B xy + 2g(x² − y²) − D x − E y: minima of φ (and flat points) are the
-      // candidates for the deepest point; maxima only matter to the sign-change count.
-      const double d2phi =
-          -4 * conic.b * c * sn + 2 * g * (c * c - sn * sn) - conic.d * c - conic.e * sn;
-      const bool is_min = d2phi >= -1e-9 * d2_scale;
-      if (!is_min && diagnostics == nullptr) continue;
-      // Back to R³ through (4.13) and P (4.2), then to the needle parameter s.
-      const Eigen::Vector4d X = lc.center + lc.radius * (c * lc.bx + sn * lc.by);
-      const Eigen::Vector3d rel = ProjectFromS3(X) / lambda - nv.o;
-      const double rx = rel.dot(nv.e1), ry = rel.dot(nv.e2);
-      const double s = WrapTo2Pi(std::atan2(ry, rx));
-      const int i = FindInterval(iv, n_iv, s);
-      if (i < 0) continue;
-      const double s_in = std::clamp(s, iv[i].lo, iv[i].hi);
-      if (is_min) {
-        const double inv = 1 / std::sqrt(rx * rx + ry * ry);
-        if (s_in == s && std::isfinite(inv)) {
-          cand[n_cand++] = {s_in, rx * inv, ry * inv, i, CandidateKind::kInterior};
-        } else {
-          cand[n_cand++] = {s_in, std::cos(s_in), std::sin(s_in), i, CandidateKind::kInterior};
+  // Certificate: the extrema of G are not those of the distance, so the ascent may have
+  // stopped at a local maximum. The level set {distance = t} with t = the best distance so
+  // far is itself a torus (tube radius t); an SP pass against it finds a point farther than
+  // t wherever one exists (min φ < 0). Repeat from such a point until none is left.
+  const double d_best = std::sqrt(best.f);
+  if (d_best >= (1 - kDeepRel) * core_r) {
+    // Beyond the horn torus (t ≥ R) the level sets are spindle tori, which (4.4) cannot
+    // express: the exact method answers for these deep contacts.
+    diag.deep_fallback = true;
+    return CalcArcTorusClearanceExact(arc, torus);
+  }
+  for (int round = 0; round < opt.max_certify_rounds; ++round) {
+    ++diag.certify_passes;
+    const double t = std::max(std::sqrt(best.f), kMinCertifyRel * core_r);
+    SpPass cert;
+    RunSpPass(nv, core_r, t, iv, n_iv, opt, false, &cert);
+    int n_start = 0;
+    Candidate starts[kMaxCandidates];
+    if (cert.ok) {
+      for (int j = 0; j < cert.n; ++j) {
+        if (cert.is_min[j] && cert.phi[j] < -kCertifyPhiRel * cert.phi_size) {
+          starts[n_start++] = {cert.s[j], cert.cos_s[j], cert.sin_s[j], cert.interval[j],
+                               CandidateKind::kInterior};
         }
       }
-      if (diagnostics != nullptr) {
-        ext_s[n_ext_in] = s_in;
-        ext_phi[n_ext_in] = conic.Eval(c, sn);
-        ++n_ext_in;
-      }
+    } else {
+      diag.fallback = true;
+      AddUniformCandidates(iv, n_iv, starts, &n_start);
     }
-  }
-  if (robust) {
-    // No usable extrema: start the ascent from uniform points of every piece.
-    diag.fallback = !lift_ok;
-    for (int i = 0; i < n_iv; ++i) {
-      for (int j = 1; j <= kRobustSamples; ++j) {
-        const double s = iv[i].lo + (iv[i].hi - iv[i].lo) * j / (kRobustSamples + 1);
-        cand[n_cand++] = {s, std::cos(s), std::sin(s), i, CandidateKind::kInterior};
-      }
+    const double f_before = best.f;
+    for (int j = 0; j < n_start; ++j) TryCandidate(nv, core_r, iv, starts[j], opt, &best);
+    if (!(best.f > f_before)) break;
+    ++diag.certify_improvements;
+    if (std::sqrt(best.f) >= (1 - kDeepRel) * core_r) {
+      diag.deep_fallback = true;
+      return CalcArcTorusClearanceExact(arc, torus);
     }
   }
 
-  // The clearance at every candidate, refined by the distance ascent; keep the deepest.
-  double best_f = -1, best_s = 0;
-  for (int j = 0; j < n_cand; ++j) {
-    double s = cand[j].s;
-    const CoreDistSq e = EvalCoreDistSq(nv, core_r, cand[j].cos_s, cand[j].sin_s);
-    double f = e.f;
-    bool ascend = opt.polish_max_iters > 0;
-    if (cand[j].kind == CandidateKind::kLowEnd) ascend = ascend && e.df > 0;
-    if (cand[j].kind == CandidateKind::kHighEnd) ascend = ascend && e.df < 0;
-    if (ascend) {
-      f = AscendCoreDistSq(nv, core_r, iv[cand[j].interval], s, cand[j].cos_s, cand[j].sin_s, e,
-                           opt, &s);
-    }
-    if (f > best_f) {
-      best_f = f;
-      best_s = s;
-    }
-  }
-
-  if (diagnostics != nullptr) {
-    // §4.2.4: sign changes of φ along each piece, ends and interior extrema in order of s.
-    double min_phi = std::numeric_limits<double>::infinity();
-    int changes = 0;
-    for (int i = 0; i < n_iv; ++i) {
-      double s_list[10], phi_list[10];
-      int m = 0;
-      for (const double s : {iv[i].lo, iv[i].hi}) {
-        s_list[m] = s;
-        phi_list[m] = EvalLiftedTorus(scale.alpha, LiftToS3(lambda * nv.PointAt(s)));
-        ++m;
-      }
-      for (int j = 0; j < n_ext_in; ++j) {
-        if (ext_s[j] >= iv[i].lo && ext_s[j] <= iv[i].hi && m < 10) {
-          s_list[m] = ext_s[j];
-          phi_list[m] = ext_phi[j];
-          ++m;
-        }
-      }
-      // Insertion sort by s (m ≤ 10).
-      for (int a = 1; a < m; ++a) {
-        for (int b = a; b > 0 && s_list[b] < s_list[b - 1]; --b) {
-          std::swap(s_list[b], s_list[b - 1]);
-          std::swap(phi_list[b], phi_list[b - 1]);
-        }
-      }
-      for (int a = 0; a < m; ++a) {
-        min_phi = std::min(min_phi, phi_list[a]);
-        if (a > 0 && (phi_list[a] > 0) != (phi_list[a - 1] > 0)) ++changes;
-      }
-    }
-    diag.min_phi = min_phi;
-    diag.num_sign_changes = changes;
-  }
-
-  const double clearance = tube_r - std::sqrt(best_f);
+  const double clearance = tube_r - std::sqrt(best.f);
   if (!std::isfinite(clearance)) {
     // Finite input whose squares overflow: report it as invalid rather than a NaN.
     out.status = ClearanceStatus::kInvalidInput;
@@ -545,8 +607,8 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   out.status = ClearanceStatus::kOk;
   out.clearance_m = clearance;
   out.contact = clearance <= 0;
-  out.s_rad = best_s;
-  const Eigen::Vector3d p_VN = nv.PointAt(best_s);
+  out.s_rad = best.s;
+  const Eigen::Vector3d p_VN = nv.PointAt(best.s);
   out.p_WN = torus.X_WV * p_VN;
   // Nearest wall point: along the ray from the nearest core point through the needle point.
   const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());

@@ -34,7 +34,10 @@ struct SpOptions {
   // 0 evaluates the clearance at the extrema of G only (the thesis's "nearest point in the
   // sense of lowest G").
   int polish_max_iters = 12;
-  double polish_tol_rad = 1e-9;  // stop at a Newton step below this: f is then off by O(step²)
+  double polish_tol_rad = 1e-9;
+  // Certificate passes against the level torus through the deepest point found (README_sp.md);
+  // 0 keeps the thesis's single pass.
+  int max_certify_rounds = 4;  // stop at a Newton step below this: f is then off by O(step²)
 };
 
 // What the SP path did for one query (tests, benchmark, telemetry). Optional output.
@@ -42,6 +45,9 @@ struct SpDiagnostics {
   bool fallback = false;          // the lifted circle was too ill-conditioned: robust path used
   bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
+  bool deep_fallback = false;     // a point ≥ R from the core circle: exact method answered
+  int certify_passes = 0;         // SP passes against level tori after the first
+  int certify_improvements = 0;   // of which found a farther point than the ascent had
   int num_extrema = 0;            // critical points of φ found on the whole lifted circle
   int num_intervals = 0;          // pieces of the arc inside the segment's azimuth range
   int num_sign_changes = 0;       // sign changes of φ along the clipped arc (§4.2.4)
