@@ -257,6 +257,7 @@ Curve MakeCurve(const ArcInTorusFrame& f) {
 // One piece [m − w, m + w] of a clipped interval, w ≤ π/4, in the variable
 // x = tan((s − m)/2) / τ ∈ [−1, 1], τ = tan(w/2): Q(x) = Σ q[j] x^j.
 struct Piece {
+  double begin = 0, end = 0;  // needle parameter range
   double m = 0, cos_m = 1, sin_m = 0, tau = 0;
   double q[kN + 1] = {};
 };
@@ -273,7 +274,8 @@ struct Best {
   double d = -1;
   double cos_s = 1, sin_s = 0;
   double m = 0, t = 0;
-  double s() const { return m + 2 * std::atan(t); }
+  double lo = 0, hi = 0;  // the piece: s is clamped to it against rounding at its ends
+  double s() const { return std::clamp(m + 2 * std::atan(t), lo, hi); }
 };
 
 class Solver {
@@ -303,12 +305,14 @@ class Solver {
     const double c1 = pc.cos_m * cs - pc.sin_m * sn;
     const double s1 = pc.sin_m * cs + pc.cos_m * sn;
     const PointEval pe = EvalPoint(cv_, c1, s1);
-    if (pe.d > best_.d) best_ = {pe.d, c1, s1, pc.m, t};
+    if (pe.d > best_.d) best_ = {pe.d, c1, s1, pc.m, t, pc.begin, pc.end};
     return pe;
   }
 
   void SolvePiece(double sa, double sb) {
     Piece pc;
+    pc.begin = sa;
+    pc.end = sb;
     pc.m = 0.5 * (sa + sb);
     pc.tau = std::tan(0.25 * (sb - sa));
     pc.cos_m = std::cos(pc.m);
