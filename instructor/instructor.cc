@@ -139,6 +139,19 @@ void Instructor::Run() {
     TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry);
     HandleEvents();
     HandleScores();
+    CheckSilence();
+  }
+}
+
+void Instructor::CheckSilence() {
+  const std::int64_t now = MonotonicNowNs();
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [id, v] : stations_) {
+    if (v.presence != Presence::kAlive || v.last_heard_ns == 0) continue;
+    if (now - v.last_heard_ns > kSilenceLimit_ns) {
+      v.presence = Presence::kLost;
+      v.presence_changed_ns = now;
+    }
   }
 }
 
@@ -158,6 +171,7 @@ void Instructor::HandleStationInfo() {
       if (known && v.presence != Presence::kAlive) ++v.comebacks;
       if (v.presence != Presence::kAlive || !known) v.presence_changed_ns = now;
       v.presence = Presence::kAlive;
+      v.last_heard_ns = now;
       v.info = info;
       continue;
     }
@@ -178,9 +192,11 @@ void Instructor::HandleStationInfo() {
 void Instructor::HandleLiveliness() {
   dds::LivelinessChangedStatus status;
   dds_->info->get_liveliness_changed_status(status);
-  if (status.not_alive_count_change <= 0) return;
-  // A StationInfo writer missed its lease. The status names the last writer that changed;
-  // the instance state (NOT_ALIVE_NO_WRITERS, in HandleStationInfo) covers the others.
+  // A StationInfo writer missed its lease (not_alive grows) or vanished with its participant
+  // (alive shrinks: Fast DDS 2.9 reports a SIGKILLed station this way). The status names the
+  // last writer that changed; the instance state (NOT_ALIVE_NO_WRITERS, HandleStationInfo)
+  // and the silence watchdog (CheckSilence) cover stations that fail together.
+  if (status.not_alive_count_change <= 0 && status.alive_count_change >= 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = writer_to_station_.find(HandleKey(status.last_publication_handle));
   if (it == writer_to_station_.end()) return;
@@ -209,6 +225,7 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror) {
       latency_.transport_us.push_back(static_cast<double>(now_rt - si.source_timestamp.to_ns()) *
                                       1e-3);
     }
+    v.last_heard_ns = now;
     Mirror<Plain>& mir = v.*mirror;
     mir.latest = std::move(p);
     mir.received_ns = now;
@@ -225,6 +242,7 @@ void Instructor::HandleInputs() {
     std::lock_guard<std::mutex> lock(mutex_);
     StationView& v = ViewFor(p.header.station_id);
     ++v.inputs_received;
+    v.last_heard_ns = MonotonicNowNs();
     if (v.input_session != p.header.session_id) {
       v.input_session = p.header.session_id;  // a new run: no gap before its first sample
     } else if (p.header.step > v.last_input_step + 1) {

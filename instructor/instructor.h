@@ -50,6 +50,7 @@ struct StationView {
   Presence presence = Presence::kAlive;
   std::int64_t presence_changed_ns = 0;  // monotonic
   int comebacks = 0;                     // times it became alive again after lost/departed
+  std::int64_t last_heard_ns = 0;        // monotonic, last sample of any topic from it
   Mirror<net::ToolState> tool;
   Mirror<net::NeedleState> needle;
   Mirror<net::Telemetry> telemetry;
@@ -69,6 +70,9 @@ struct LatencySamples {
 class Instructor {
  public:
   static constexpr std::size_t kMaxEventsPerStation = 256;
+  // A live station publishes DeviceInput at 1 kHz and Telemetry at 10 Hz: silence for this
+  // long marks it lost even if no liveliness change named it.
+  static constexpr std::int64_t kSilenceLimit_ns = 1'000'000'000;
 
   // Creates the participant (throws std::runtime_error naming the profile) and starts the
   // DDS thread.
@@ -105,6 +109,7 @@ class Instructor {
   void HandleEvents();
   void HandleScores();
   void SendQueuedCues();
+  void CheckSilence();
   StationView& ViewFor(const std::string& station_id);
 
   InstructorOptions options_;

@@ -1,0 +1,70 @@
+// The command-line contracts (DESIGN.md): bad input exits 2 with one line on stderr naming
+// the input; options of later issues are refused clearly rather than ignored.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "tests/integration/process.h"
+
+namespace microdex {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct Outcome {
+  int status = -1;
+  std::string output;
+};
+
+Outcome RunApp(const std::string& binary, const std::vector<std::string>& args) {
+  static int n = 0;
+  const std::string log =
+      "/tmp/microdex-cli-" + std::to_string(getpid()) + "-" + std::to_string(n++) + ".log";
+  const pid_t pid = testing::Spawn(binary, args, log);
+  const auto rc = testing::WaitExit(pid, 20000ms);
+  if (!rc) testing::KillAll({pid});
+  Outcome o{rc.value_or(-1), testing::ReadFile(log)};
+  std::remove(log.c_str());
+  return o;
+}
+
+void ExpectBadInput(const std::string& binary, const std::vector<std::string>& args,
+                    const std::string& named) {
+  const Outcome o = RunApp(binary, args);
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find(named), std::string::npos) << o.output;
+  EXPECT_EQ(std::count(o.output.begin(), o.output.end(), '\n'), 1) << o.output;
+}
+
+const std::string kScene = testing::SourceDir() + "/assets/scenes/needle_tube.yaml";
+
+TEST(AppCli, StationRefusesBadInput) {
+  ExpectBadInput("microdex-station", {"--scene", "/nonexistent.yaml"}, "/nonexistent.yaml");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--skill", "1.5"}, "--skill");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--device", "gui"}, "--device gui");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--window"}, "--window");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--security", "/tmp"}, "--security");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--domain", "999"}, "domain");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--dds-profile", "/no/such.xml"},
+                 "/no/such.xml");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--station-id", "all"}, "--station-id");
+  ExpectBadInput("microdex-station", {}, "--scene");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--bogus"}, "--bogus");
+}
+
+TEST(AppCli, InstructorRefusesBadInput) {
+  ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:vortex:3"}, "vortex");
+  ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:tremor"}, "STATION:KIND");
+  ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:tremor:x"}, "PARAM");
+  ExpectBadInput("microdex-instructor", {"--headless", "--record", "a.db"}, "--record");
+  ExpectBadInput("microdex-instructor", {}, "--headless");
+  ExpectBadInput("microdex-instructor", {"--headless", "--partition", "a*"}, "partition");
+}
+
+TEST(AppCli, HelpExitsZero) {
+  EXPECT_EQ(RunApp("microdex-station", {"--help"}).status, 0);
+  EXPECT_EQ(RunApp("microdex-instructor", {"--help"}).status, 0);
+}
+
+}  // namespace
+}  // namespace microdex
