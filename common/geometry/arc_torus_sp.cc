@@ -105,25 +105,29 @@ struct CoreDistSq {
   double f = 0, df = 0, d2f = 0;
 };
 
-// At the needle point with parameter s, given (cos s, sin s).
-CoreDistSq EvalCoreDistSq(const NeedleInV& nv, double core_radius, double cs, double sn) {
-  const Eigen::Vector3d u = cs * nv.e1 + sn * nv.e2;   // (x − o)/ρ
-  const Eigen::Vector3d du = cs * nv.e2 - sn * nv.e1;  // x'/ρ;  x'' = −ρ u
-  const Eigen::Vector3d p = nv.o + nv.rho * u;
-  const Eigen::Vector3d dp = nv.rho * du;
-  const Eigen::Vector3d ddp = -nv.rho * u;
-  const double w = std::sqrt(p.x() * p.x() + p.y() * p.y());
+// At the needle point with parameter s, given (cos s, sin s). Scalar code: this is the
+// inner loop of the ascent.
+inline CoreDistSq EvalCoreDistSq(const NeedleInV& nv, double core_radius, double cs, double sn) {
+  const double ax = nv.rho * nv.e1.x(), ay = nv.rho * nv.e1.y(), az = nv.rho * nv.e1.z();
+  const double bx = nv.rho * nv.e2.x(), by = nv.rho * nv.e2.y(), bz = nv.rho * nv.e2.z();
+  // x(s) = o + cs a + sn b, x' = −sn a + cs b, x'' = o − x.
+  const double ux = cs * ax + sn * bx, uy = cs * ay + sn * by, uz = cs * az + sn * bz;
+  const double x = nv.o.x() + ux, y = nv.o.y() + uy, z = nv.o.z() + uz;
+  const double dx = cs * bx - sn * ax, dy = cs * by - sn * ay, dz = cs * bz - sn * az;
+  const double w2 = x * x + y * y;
+  const double w = std::sqrt(w2);
+  const double e = w - core_radius;
   CoreDistSq r;
-  r.f = (w - core_radius) * (w - core_radius) + p.z() * p.z();
+  r.f = e * e + z * z;
   if (w <= 1e-12 * core_radius) {
     // On the z axis the distance has a ridge (every core point is equally far): no slope.
     return r;
   }
-  const double dw = (p.x() * dp.x() + p.y() * dp.y()) / w;
-  const double d2w =
-      (dp.x() * dp.x() + dp.y() * dp.y() + p.x() * ddp.x() + p.y() * ddp.y() - dw * dw) / w;
-  r.df = 2 * (w - core_radius) * dw + 2 * p.z() * dp.z();
-  r.d2f = 2 * dw * dw + 2 * (w - core_radius) * d2w + 2 * dp.z() * dp.z() + 2 * p.z() * ddp.z();
+  const double iw = 1 / w;
+  const double dw = (x * dx + y * dy) * iw;
+  const double d2w = (dx * dx + dy * dy - x * ux - y * uy - dw * dw) * iw;
+  r.df = 2 * (e * dw + z * dz);
+  r.d2f = 2 * (dw * dw + e * d2w + dz * dz - z * uz);
   return r;
 }
 
@@ -194,6 +198,10 @@ struct Candidate {
   int interval;
   CandidateKind kind;
 };
+// The deep-contact threshold: see kDeepRel.
+inline bool IsDeep(double f, double core_r) {
+  return f >= (1 - kDeepRel) * (1 - kDeepRel) * core_r * core_r;
+}
 
 int FindInterval(const Interval* iv, int n, double s) {
   for (int i = 0; i < n; ++i) {
@@ -364,8 +372,10 @@ struct SpPass {
   int interval[8];
 };
 
+// With phi_below finite, only the minima with φ < phi_below·|φ|'s size are kept (and mapped
+// back to the needle), the others cost nothing more.
 void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval* iv, int n_iv,
-               const SpOptions& opt, bool all, SpPass* out) {
+               const SpOptions& opt, bool all, double phi_below, SpPass* out) {
   SpPass& r = *out;
   r.ok = false;
   r.n = 0;
@@ -398,6 +408,8 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
         -4 * conic.b * c * sn + 2 * g * (c * c - sn * sn) - conic.d * c - conic.e * sn;
     const bool is_min = d2phi >= -1e-9 * d2_scale;
     if (!is_min && !all) continue;
+    const double phi = conic.Eval(c, sn);
+    if (!(phi < phi_below * r.phi_size)) continue;
     // Back to R³ through (4.13) and P (4.2), then to the needle parameter s.
     const Eigen::Vector4d X = lc.center + lc.radius * (c * lc.bx + sn * lc.by);
     const Eigen::Vector3d rel = ProjectFromS3(X) / lambda - nv.o;
@@ -416,7 +428,7 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
       r.cos_s[k] = std::cos(s_in);
       r.sin_s[k] = std::sin(s_in);
     }
-    r.phi[k] = conic.Eval(c, sn);
+    r.phi[k] = phi;
     r.is_min[k] = is_min;
     r.interval[k] = i;
   }
@@ -528,23 +540,36 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     return out;
   }
 
+  Candidate cand[kMaxCandidates];
+  int n_cand = 0;
+  bool deep = false;
+  for (int i = 0; i < n_iv; ++i) {
+    for (const double s : {iv[i].lo, iv[i].hi}) {
+      const Candidate c = {s, std::cos(s), std::sin(s), i,
+                           s == iv[i].lo ? CandidateKind::kLowEnd : CandidateKind::kHighEnd};
+      deep = deep || IsDeep(EvalCoreDistSq(nv, core_r, c.cos_s, c.sin_s).f, core_r);
+      cand[n_cand++] = c;
+    }
+  }
+
   // The thesis's pass against the vessel itself: its minima of φ with the piece ends decide
   // touch / no-touch, and they start the distance ascent.
   SpPass pass;
-  RunSpPass(nv, core_r, tube_r, iv, n_iv, opt, diagnostics != nullptr, &pass);
-  diag.lifted_radius = pass.lifted_radius;
-  diag.phi_constant = pass.phi_constant;
-  diag.quartic_fallback = pass.quartic_fallback;
-  diag.num_extrema = pass.n;
-  if (diagnostics != nullptr && pass.ok) {
-    CountSignChanges(nv, core_r, tube_r, iv, n_iv, pass, &diag);
+  if (!deep || diagnostics != nullptr) {
+    RunSpPass(nv, core_r, tube_r, iv, n_iv, opt, diagnostics != nullptr,
+              std::numeric_limits<double>::infinity(), &pass);
+    diag.lifted_radius = pass.lifted_radius;
+    diag.phi_constant = pass.phi_constant;
+    diag.quartic_fallback = pass.quartic_fallback;
+    diag.num_extrema = pass.n;
+    if (diagnostics != nullptr && pass.ok) {
+      CountSignChanges(nv, core_r, tube_r, iv, n_iv, pass, &diag);
+    }
   }
-
-  Candidate cand[kMaxCandidates];
-  int n_cand = 0;
-  for (int i = 0; i < n_iv; ++i) {
-    cand[n_cand++] = {iv[i].lo, std::cos(iv[i].lo), std::sin(iv[i].lo), i, CandidateKind::kLowEnd};
-    cand[n_cand++] = {iv[i].hi, std::cos(iv[i].hi), std::sin(iv[i].hi), i, CandidateKind::kHighEnd};
+  if (deep) {
+    // A piece end lies beyond the horn torus (see below): the exact method answers.
+    diag.deep_fallback = true;
+    return CalcArcTorusClearanceExact(arc, torus);
   }
   for (int j = 0; j < pass.n; ++j) {
     if (!pass.is_min[j]) continue;
@@ -563,8 +588,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   // stopped at a local maximum. The level set {distance = t} with t = the best distance so
   // far is itself a torus (tube radius t); an SP pass against it finds a point farther than
   // t wherever one exists (min φ < 0). Repeat from such a point until none is left.
-  const double d_best = std::sqrt(best.f);
-  if (d_best >= (1 - kDeepRel) * core_r) {
+  if (IsDeep(best.f, core_r)) {
     // Beyond the horn torus (t ≥ R) the level sets are spindle tori, which (4.4) cannot
     // express: the exact method answers for these deep contacts.
     diag.deep_fallback = true;
@@ -574,12 +598,12 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     ++diag.certify_passes;
     const double t = std::max(std::sqrt(best.f), kMinCertifyRel * core_r);
     SpPass cert;
-    RunSpPass(nv, core_r, t, iv, n_iv, opt, false, &cert);
+    RunSpPass(nv, core_r, t, iv, n_iv, opt, false, -kCertifyPhiRel, &cert);
     int n_start = 0;
     Candidate starts[kMaxCandidates];
     if (cert.ok) {
       for (int j = 0; j < cert.n; ++j) {
-        if (cert.is_min[j] && cert.phi[j] < -kCertifyPhiRel * cert.phi_size) {
+        if (cert.is_min[j]) {
           starts[n_start++] = {cert.s[j], cert.cos_s[j], cert.sin_s[j], cert.interval[j],
                                CandidateKind::kInterior};
         }
@@ -592,7 +616,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     for (int j = 0; j < n_start; ++j) TryCandidate(nv, core_r, iv, starts[j], opt, &best);
     if (!(best.f > f_before)) break;
     ++diag.certify_improvements;
-    if (std::sqrt(best.f) >= (1 - kDeepRel) * core_r) {
+    if (IsDeep(best.f, core_r)) {
       diag.deep_fallback = true;
       return CalcArcTorusClearanceExact(arc, torus);
     }

@@ -25,7 +25,7 @@ enum class SpQuarticMethod {
 
 struct SpOptions {
   SpQuarticMethod quartic_method = SpQuarticMethod::kClosedForm;
-  int closed_form_polish = 2;  // Newton steps on each closed-form root
+  int closed_form_polish = 1;  // Newton steps on each closed-form root
   // End criterion of the Newton iteration on the quartic (4.26), in the unit-circle
   // coordinate u (dimensionless, ≈ radians on the lifted circle): the thesis's accuracy knob.
   double quartic_tol = 1e-15;
@@ -34,7 +34,7 @@ struct SpOptions {
   // 0 evaluates the clearance at the extrema of G only (the thesis's "nearest point in the
   // sense of lowest G").
   int polish_max_iters = 12;
-  double polish_tol_rad = 1e-9;
+  double polish_tol_rad = 1e-8;
   // Certificate passes against the level torus through the deepest point found (README_sp.md);
   // 0 keeps the thesis's single pass.
   int max_certify_rounds = 4;  // stop at a Newton step below this: f is then off by O(step²)

@@ -6,6 +6,11 @@
 namespace microdex::geometry {
 namespace {
 
+// A local extremum of p within this fraction of p's coefficient size from 0 is a double root.
+constexpr double kTouchRel = 1e-12;
+// Roots closer than this fraction of the interval are reported once.
+constexpr double kMergeRel = 1e-7;
+
 // One root of the polynomial k (degree ≤ 4) in [a, b], given p(a)·p(b) < 0: Newton steps
 // that stay inside the shrinking bracket, bisection otherwise.
 double SolveBracketed(const double k[5], double a, double b, double fa, double fb,
@@ -41,20 +46,29 @@ double SolveBracketed(const double k[5], double a, double b, double fa, double f
 }
 
 // Real roots in [lo, hi] of the polynomial k, given the sorted critical points crit[0..nc)
-// that lie strictly inside (lo, hi): p is monotone between consecutive ones.
+// that lie strictly inside (lo, hi): p is monotone between consecutive ones. A critical point
+// where |p| ≤ touch_tol is reported as a (double) root: p touches 0 there without a sign
+// change that rounding would let the bracketing see.
 int RootsOnMonotonePieces(const double k[5], double lo, double hi, const double* crit, int nc,
-                          const PolyRootOptions& opt, double* roots) {
+                          double touch_tol, const PolyRootOptions& opt, double* roots) {
+  // Roots closer than this are one (a double root splits by ~√eps under rounding).
+  const double merge = kMergeRel * (hi - lo);
   int n = 0;
+  const auto push = [&](double t) {
+    if (n > 0 && t - roots[n - 1] <= merge) return;
+    if (n < 4) roots[n++] = t;
+  };
   double a = lo;
   double fa = EvalPoly4(k, a);
-  if (fa == 0) roots[n++] = a;
-  for (int i = 0; i <= nc && n < 4; ++i) {
+  if (fa == 0) push(a);
+  for (int i = 0; i <= nc; ++i) {
     const double b = i < nc ? crit[i] : hi;
     const double fb = EvalPoly4(k, b);
     if (fb == 0) {
-      if (n == 0 || roots[n - 1] != b) roots[n++] = b;
-    } else if (fa != 0 && (fa < 0) != (fb < 0)) {
-      roots[n++] = SolveBracketed(k, a, b, fa, fb, opt);
+      push(b);
+    } else {
+      if (fa != 0 && (fa < 0) != (fb < 0)) push(SolveBracketed(k, a, b, fa, fb, opt));
+      if (i < nc && std::abs(fb) <= touch_tol) push(b);
     }
     a = b;
     fa = fb;
@@ -95,7 +109,7 @@ int FindPolyRootsInInterval(const double k[5], double lo, double hi, const PolyR
   const int n2 = QuadraticRootsInside(2 * k[2], 6 * k[3], 12 * k[4], lo, hi, crit2);
   const double dk[5] = {k[1], 2 * k[2], 3 * k[3], 4 * k[4], 0};
   double crit1_all[4];
-  const int n1_all = RootsOnMonotonePieces(dk, lo, hi, crit2, n2, opt, crit1_all);
+  const int n1_all = RootsOnMonotonePieces(dk, lo, hi, crit2, n2, 0.0, opt, crit1_all);
   // Keep only the critical points strictly inside, strictly increasing.
   double crit1[4];
   int n1 = 0;
@@ -103,7 +117,9 @@ int FindPolyRootsInInterval(const double k[5], double lo, double hi, const PolyR
     const double c = crit1_all[i];
     if (c > lo && c < hi && (n1 == 0 || c > crit1[n1 - 1])) crit1[n1++] = c;
   }
-  return RootsOnMonotonePieces(k, lo, hi, crit1, n1, opt, roots);
+  const double size =
+      std::max({std::abs(k[0]), std::abs(k[1]), std::abs(k[2]), std::abs(k[3]), std::abs(k[4])});
+  return RootsOnMonotonePieces(k, lo, hi, crit1, n1, kTouchRel * size, opt, roots);
 }
 
 namespace {

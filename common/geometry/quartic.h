@@ -8,9 +8,9 @@
 // found there split it into pieces where p is monotone, and each piece whose ends have
 // opposite signs holds exactly one root, found by Newton steps kept inside the bracket
 // (bisection when a step leaves it). Leading coefficients that vanish are handled by the same
-// cascade. A root of even multiplicity (p touches 0 without a sign change) is reported only
-// when p is exactly 0 at a piece end; for the SP method such a root is an inflection of φ(θ),
-// not an extremum, so missing it does not change the minimum of φ.
+// cascade. A root of even multiplicity (p touches 0 without a sign change) is reported when p
+// at the local extremum is within 1e-12 of the coefficients' size from 0: for the SP method a
+// double root of (4.26) can be two distinct extrema of φ(θ), one on each sign of v.
 
 namespace microdex::geometry {
 
