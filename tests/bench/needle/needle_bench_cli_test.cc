@@ -25,8 +25,14 @@ std::string Env(const char* name) {
   return v == nullptr ? std::string() : std::string(v);
 }
 
-std::string Bench() { return Env("MICRODEX_BIN_DIR") + "/microdex-bench"; }
-std::string Source() { return Env("MICRODEX_SOURCE_DIR"); }
+std::string Bench() {
+  const std::string dir = Env("MICRODEX_BIN_DIR");
+  return dir.empty() ? std::string(MICRODEX_NEEDLE_BENCH_EXE) : dir + "/microdex-bench";
+}
+std::string Source() {
+  const std::string dir = Env("MICRODEX_SOURCE_DIR");
+  return dir.empty() ? std::string(MICRODEX_NEEDLE_SOURCE_DIR) : dir;
+}
 std::string Tmp(const std::string& name) {
   return ::testing::TempDir() + "/needle_bench_cli_" + name;
 }
