@@ -30,13 +30,15 @@ cholmod_sparse WrapSparse(const CsrView& a) {
 
 }  // namespace
 
-CholmodSolver::CholmodSolver(int num_slots)
+CholmodSolver::CholmodSolver(int num_slots, bool natural_ordering)
     : common_(new cholmod_common), factors_(num_slots, nullptr) {
   cholmod_start(common_);
   common_->print = 0;  // status is checked by the caller; nothing printed in the loop
   common_->nmethods = 1;
-  common_->method[0].ordering = CHOLMOD_AMD;
-  common_->postorder = 1;
+  common_->method[0].ordering = natural_ordering ? CHOLMOD_NATURAL : CHOLMOD_AMD;
+  common_->postorder = natural_ordering ? 0 : 1;
+  // Simplicial for the multi-scale systems (few flops per entry of L), supernodal for the
+  // large fine meshes: CHOLMOD's own choice.
   common_->supernodal = CHOLMOD_AUTO;
 }
 

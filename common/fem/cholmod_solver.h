@@ -1,7 +1,10 @@
 #pragma once
-// Sparse direct solve with CHOLMOD (SuiteSparse 5): the symbolic analysis (AMD ordering) is
-// done once per sparsity pattern and kept in a slot, the numeric factorisation reuses it, and
-// the solve reuses its dense workspace (cholmod_solve2). CHOLMOD allocates through its own
+// Sparse direct solve with CHOLMOD (SuiteSparse 5): the symbolic analysis is done once per
+// sparsity pattern and kept in a slot, the numeric factorisation reuses it, and the solve
+// reuses its dense workspace (cholmod_solve2). The fill-reducing ordering is either CHOLMOD's
+// AMD (with postordering) or the caller's own numbering (natural order, no postordering: the
+// analysis is then only the elimination tree and column counts, and the factorisation reads
+// the upper triangle in place without a permuted copy). CHOLMOD allocates through its own
 // malloc hooks: on a new pattern (analysis) and when the system size changes; never for a
 // repeated pattern (measured by the allocation test).
 
@@ -17,7 +20,7 @@ namespace microdex::fem {
 
 class CholmodSolver {
  public:
-  explicit CholmodSolver(int num_slots);
+  CholmodSolver(int num_slots, bool natural_ordering);
   ~CholmodSolver();
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;

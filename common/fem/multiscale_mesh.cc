@@ -24,9 +24,25 @@ constexpr std::array<TemplateVertex, 4> kMidpoints = {{{1, 0}, {2, 1}, {1, 2}, {
 
 void MarkNode(MeshSelection& mesh, int node) {
   if (mesh.node_mark[node] != mesh.mark) {
+    MICRODEX_CHECK(mesh.num_active_nodes < static_cast<int>(mesh.active_nodes.size()));
     mesh.node_mark[node] = mesh.mark;
     mesh.active_nodes[mesh.num_active_nodes++] = node;
   }
+}
+
+// The end rule: a level-l cell (level ≤ l < finest) is refined when a zone vertex is closer
+// than grading · max(hx, hy) to it.
+bool EndRefine(const TissueModel& model, const EndZones& zones, int l, int ci, int cj) {
+  if (l >= zones.finest) return false;
+  const double hx = model.CellSizeX_m(l), hy = model.CellSizeY_m(l);
+  const double x0 = ci * hx, y0 = cj * hy, x1 = x0 + hx, y1 = y0 + hy;
+  const double reach = model.def.grading * std::max(hx, hy);
+  for (int k = 0; k < zones.num_vertices; ++k) {
+    const double dx = std::max({x0 - zones.x_m[k], 0.0, zones.x_m[k] - x1});
+    const double dy = std::max({y0 - zones.y_m[k], 0.0, zones.y_m[k] - y1});
+    if (dx * dx + dy * dy < reach * reach) return true;
+  }
+  return false;
 }
 
 struct Selector {
@@ -37,7 +53,7 @@ struct Selector {
   MeshSelection& mesh;
 
   bool Refine(int l, int ci, int cj) const {
-    if (l >= level) return false;
+    if (l >= level) return EndRefine(model, mesh.zones, l, ci, cj);
     if (kind == MeshKind::kFine) return true;
     const double hx = model.CellSizeX_m(l), hy = model.CellSizeY_m(l);
     const double d = ToolBoxDistance_m(tool, ci * hx, cj * hy, (ci + 1) * hx, (cj + 1) * hy);
@@ -68,7 +84,7 @@ MeshSelection MakeMeshSelection(const TissueModel& model) {
   MeshSelection mesh;
   mesh.leaves.resize(model.max_leaves);
   mesh.triangles.resize(model.max_triangles);
-  mesh.active_nodes.resize(model.num_grid_nodes);
+  mesh.active_nodes.resize(model.max_mesh_nodes);
   mesh.node_mark.assign(model.num_grid_nodes, 0);
   return mesh;
 }
@@ -100,9 +116,40 @@ int LeafTriangles(const TissueModel& model, const Leaf& leaf, std::array<Triangl
   return count;
 }
 
+EndZones FindEndZones(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool) {
+  EndZones zones;
+  zones.level = level;
+  zones.finest = level;
+  if (kind != MeshKind::kMultiscale || model.def.end_levels == 0 || tool.num_points < 2 ||
+      tool.contact_radius_m > 0)
+    return zones;
+  for (int k = 0; k < tool.num_points; ++k) {
+    if (!(tool.p_SP[k].z() < 0)) continue;  // not pressed: the contact does not end here
+    zones.x_m[zones.num_vertices] = tool.p_SP[k].x();
+    zones.y_m[zones.num_vertices] = tool.p_SP[k].y();
+    ++zones.num_vertices;
+  }
+  if (zones.num_vertices > 0) zones.finest = level + model.def.end_levels;
+  MICRODEX_CHECK(zones.finest <= model.def.max_level);
+  return zones;
+}
+
+int LeafLevelOnTool(const TissueModel& model, const EndZones& zones, double x_m, double y_m) {
+  int l = zones.level;
+  while (l < zones.finest) {
+    const int n = 1 << l;
+    const int ci = std::clamp(static_cast<int>(x_m / model.CellSizeX_m(l)), 0, n - 1);
+    const int cj = std::clamp(static_cast<int>(y_m / model.CellSizeY_m(l)), 0, n - 1);
+    if (!EndRefine(model, zones, l, ci, cj)) break;
+    ++l;
+  }
+  return l;
+}
+
 void SelectMesh(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool,
                 MeshSelection& mesh) {
-  MICRODEX_CHECK(level >= 1 && level <= model.def.max_level);
+  MICRODEX_CHECK(level >= 1 && level <= model.def.level);
+  mesh.zones = FindEndZones(model, level, kind, tool);
   if (++mesh.mark == 0) {  // wrapped: old marks could alias the new one
     std::fill(mesh.node_mark.begin(), mesh.node_mark.end(), 0u);
     mesh.mark = 1;

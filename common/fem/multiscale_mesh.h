@@ -4,6 +4,8 @@
 // near the tool, each leaf cut into template triangles (element_stiffness.h). A leaf whose
 // neighbour across a side is one level finer is cut as a fan around its centre with that
 // side's midpoint as a vertex, so the mesh is conforming: no hanging nodes, no constraints.
+// Around the ends of a bar or polyline (where the prescribed displacement stops and the
+// solution behaves like r^½) the tree goes TissueDef::end_levels further ("end grading").
 
 #include <array>
 #include <cstdint>
@@ -27,6 +29,16 @@ struct Triangle {
   std::int8_t shape = 0;  // index into kTemplateTriangles / TissueModel::element_matrices
 };
 
+// The vertices of the tool the mesh is graded towards beyond the nominal level: the pressed
+// vertices (z < 0) of a bar or polyline of zero contact radius, multi-scale mesh only.
+struct EndZones {
+  int num_vertices = 0;
+  std::array<double, kMaxToolPoints> x_m{};
+  std::array<double, kMaxToolPoints> y_m{};
+  int level = 0;   // nominal level of the selection
+  int finest = 0;  // level + end_levels, or level when there is no zone
+};
+
 // Per-step mesh buffers, sized once to the model's capacities.
 struct MeshSelection {
   std::vector<Leaf> leaves;  // [max_leaves], first num_leaves valid, quadtree (Morton) order
@@ -38,7 +50,8 @@ struct MeshSelection {
   std::vector<std::uint32_t> node_mark;  // [num_grid_nodes]; == mark: vertex of this mesh
   std::uint32_t mark = 0;
   std::uint64_t signature = 0;  // hash of the leaf set (same leaves ⇒ same mesh)
-  int level = 0;                // finest level of this selection
+  int level = 0;                // nominal level: every cell the tool touches is this fine
+  EndZones zones;               // end grading of this selection
 
   bool IsActive(int node) const { return node_mark[node] == mark; }
 };
@@ -47,9 +60,17 @@ MeshSelection MakeMeshSelection(const TissueModel& model);
 
 // Chooses the leaves (kFine: every cell at `level`; kMultiscale: a level-l cell is refined
 // while l < level and its distance to the tool minus the contact radius is below
-// grading · h_l) and cuts them into triangles. Allocation-free.
+// grading · h_l, or while l < level + end_levels and its distance to an end-zone vertex is
+// below grading · h_l) and cuts them into triangles. Allocation-free. level ≤ def.level.
 void SelectMesh(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool,
                 MeshSelection& mesh);
+
+// The end zones SelectMesh uses for this tool.
+EndZones FindEndZones(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool);
+
+// Level of the leaf containing the point (x, y) of the tool (a point on the tool is always in
+// a cell refined down to the nominal level; beyond it only the end rule refines).
+int LeafLevelOnTool(const TissueModel& model, const EndZones& zones, double x_m, double y_m);
 
 // The triangles of one leaf (2 for a plain cell, 4–8 for a fan); returns their count.
 int LeafTriangles(const TissueModel& model, const Leaf& leaf, std::array<Triangle, 8>& out);

@@ -1,7 +1,10 @@
 #include "common/fem/tissue_def.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace microdex::fem {
 namespace {
@@ -29,6 +32,10 @@ const char* ToString(SolverKind kind) {
   return "?";
 }
 
+const char* ToString(Ordering ordering) {
+  return ordering == Ordering::kAmd ? "amd" : "nested_dissection";
+}
+
 MeshKind ParseMeshKind(const std::string& text) {
   if (text == "fine") return MeshKind::kFine;
   if (text == "multiscale") return MeshKind::kMultiscale;
@@ -43,6 +50,12 @@ SolverKind ParseSolverKind(const std::string& text) {
   throw std::invalid_argument("solver '" + text + "': expected cg, pcg_jacobi, pcg_ic or cholmod");
 }
 
+Ordering ParseOrdering(const std::string& text) {
+  if (text == "nested_dissection") return Ordering::kNestedDissection;
+  if (text == "amd") return Ordering::kAmd;
+  throw std::invalid_argument("ordering '" + text + "': expected nested_dissection or amd");
+}
+
 void TissueDef::Validate() const {
   Require(std::isfinite(length_x_m) && length_x_m > 0, "length_x_m", "a positive length in m");
   Require(std::isfinite(length_y_m) && length_y_m > 0, "length_y_m", "a positive length in m");
@@ -53,6 +66,9 @@ void TissueDef::Validate() const {
   Require(level >= 1 && level <= max_level, "level", "an integer in [1, max_level]");
   Require(std::isfinite(grading) && grading >= 1.5 && grading <= 64, "grading",
           "a value in [1.5, 64] (below 1.5 neighbouring leaves may differ by two levels)");
+  Require(end_levels >= 0 && end_levels <= 4, "end_levels", "an integer in [0, 4]");
+  Require(mesh == MeshKind::kFine || level + end_levels <= max_level, "end_levels",
+          "level + end_levels <= max_level for the multi-scale mesh (raise max_level)");
   Require(std::isfinite(cg_relative_tolerance) && cg_relative_tolerance > 0 &&
               cg_relative_tolerance < 1,
           "cg_relative_tolerance", "a value in (0, 1)");
@@ -60,6 +76,100 @@ void TissueDef::Validate() const {
   Require(max_contact_nodes >= 1, "max_contact_nodes", "a positive count");
   Require(pattern_cache_entries >= 1 && pattern_cache_entries <= 16, "pattern_cache_entries",
           "an integer in [1, 16]");
+}
+
+namespace {
+
+// Reads an optional field; a present field of the wrong type names file, field and line.
+template <typename T>
+void ReadField(const YAML::Node& root, const std::string& path, const char* field, T& out) {
+  const YAML::Node node = root[field];
+  if (!node) return;
+  try {
+    out = node.as<T>();
+  } catch (const YAML::Exception&) {
+    throw std::runtime_error(path + ": field 'tissue." + field + "' (line " +
+                             std::to_string(node.Mark().line + 1) + "): expected " +
+                             (std::is_same_v<T, std::string> ? "a string"
+                              : std::is_same_v<T, int>       ? "an integer"
+                                                             : "a number"));
+  }
+}
+
+// Reads an optional enumerated field through its parser.
+template <typename E>
+void ReadEnum(const YAML::Node& root, const std::string& path, const char* field,
+              E (*parse)(const std::string&), E& out) {
+  std::string text;
+  ReadField(root, path, field, text);
+  if (text.empty()) return;
+  try {
+    out = parse(text);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(path + ": field 'tissue." + field + "': " + e.what());
+  }
+}
+
+}  // namespace
+
+TissueDef LoadTissueDef(const std::string& path) {
+  YAML::Node file;
+  try {
+    file = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw std::runtime_error(path + ": cannot open tissue parameter file");
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ": malformed YAML: " + e.what());
+  }
+  const YAML::Node root = file["tissue"];
+  if (!root || !root.IsMap())
+    throw std::runtime_error(path + ": field 'tissue': expected a map of tissue parameters");
+  static constexpr const char* kKnown[] = {"name",
+                                           "length_x_m",
+                                           "length_y_m",
+                                           "shear_modulus_Pa",
+                                           "thickness_m",
+                                           "max_level",
+                                           "level",
+                                           "mesh",
+                                           "grading",
+                                           "end_levels",
+                                           "solver",
+                                           "ordering",
+                                           "cg_relative_tolerance",
+                                           "cg_max_iterations",
+                                           "max_contact_nodes",
+                                           "pattern_cache_entries"};
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    bool known = false;
+    for (const char* name : kKnown) known = known || key == name;
+    if (!known) throw std::runtime_error(path + ": field 'tissue." + key + "': unknown field");
+  }
+  TissueDef def;
+  std::string name;  // documentation only
+  ReadField(root, path, "name", name);
+  ReadField(root, path, "length_x_m", def.length_x_m);
+  ReadField(root, path, "length_y_m", def.length_y_m);
+  ReadField(root, path, "shear_modulus_Pa", def.shear_modulus_Pa);
+  ReadField(root, path, "thickness_m", def.thickness_m);
+  ReadField(root, path, "max_level", def.max_level);
+  ReadField(root, path, "level", def.level);
+  ReadEnum(root, path, "mesh", &ParseMeshKind, def.mesh);
+  ReadField(root, path, "grading", def.grading);
+  ReadField(root, path, "end_levels", def.end_levels);
+  ReadEnum(root, path, "solver", &ParseSolverKind, def.solver);
+  ReadEnum(root, path, "ordering", &ParseOrdering, def.ordering);
+  ReadField(root, path, "cg_relative_tolerance", def.cg_relative_tolerance);
+  ReadField(root, path, "cg_max_iterations", def.cg_max_iterations);
+  ReadField(root, path, "max_contact_nodes", def.max_contact_nodes);
+  ReadField(root, path, "pattern_cache_entries", def.pattern_cache_entries);
+  try {
+    def.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  return def;
 }
 
 }  // namespace microdex::fem

@@ -21,15 +21,25 @@ enum class SolverKind : std::uint8_t {
   kCg,         // the thesis's conjugate gradient: no preconditioner, cold start
   kPcgJacobi,  // diagonal preconditioner, warm-started from the previous step
   kPcgIc,      // incomplete Cholesky IC(0) preconditioner, warm-started
-  kCholmod,    // sparse direct LLᵀ (SuiteSparse CHOLMOD), symbolic analysis cached
+  kCholmod,    // sparse direct LDLᵀ (SuiteSparse CHOLMOD), symbolic analysis cached
+};
+
+// Fill-reducing ordering of the free unknowns for CHOLMOD.
+enum class Ordering : std::uint8_t {
+  // Geometric nested dissection of the finest grid, ranked once at model build; the step only
+  // sorts its free nodes by rank and CHOLMOD keeps that order (no ordering work per pattern).
+  kNestedDissection,
+  kAmd,  // CHOLMOD's AMD on every new pattern (the reference)
 };
 
 const char* ToString(MeshKind kind);
 const char* ToString(SolverKind kind);
-// Parses "fine"/"multiscale" and "cg"/"pcg_jacobi"/"pcg_ic"/"cholmod"; throws
-// std::invalid_argument naming the text otherwise.
+const char* ToString(Ordering ordering);
+// Parses "fine"/"multiscale", "cg"/"pcg_jacobi"/"pcg_ic"/"cholmod" and
+// "nested_dissection"/"amd"; throws std::invalid_argument naming the text otherwise.
 MeshKind ParseMeshKind(const std::string& text);
 SolverKind ParseSolverKind(const std::string& text);
+Ordering ParseOrdering(const std::string& text);
 
 struct TissueDef {
   double length_x_m = 0.20;  // domain [0, Lx] × [0, Ly] in the tissue frame S
@@ -38,13 +48,22 @@ struct TissueDef {
   // Thickness of the slab. The 2-D problem's stiffness is G·t ∫∇Nᵢ·∇Nⱼ dA, so forces come
   // out in newtons; 1 cm makes the thesis's study (G in N/cm², w in cm) read in newtons.
   double thickness_m = 0.01;
-  int max_level = 8;  // finest level of the hierarchy: level l has 2^l × 2^l cells
-  int level = 7;      // finest level used by a step (1 ≤ level ≤ max_level)
+  int max_level = 9;  // finest level of the hierarchy: level l has 2^l × 2^l cells
+  // Level of the step's mesh: every cell the tool touches is at this level (kFine: every
+  // cell). 1 ≤ level, and level + end_levels ≤ max_level for the multi-scale mesh.
+  int level = 7;
   MeshKind mesh = MeshKind::kMultiscale;
   // A level-l cell is refined when (distance to the tool − contact radius) < grading · h_l.
   // grading ≥ 1.5 keeps neighbouring leaves within one level of each other (see README).
   double grading = 2.0;
+  // Multi-scale mesh only: extra levels beyond `level` around every vertex of a bar or
+  // polyline tool, where the prescribed displacement ends and w ~ r^½ (the force error is
+  // O(h_end) instead of O(h)). A cell at level l ∈ [level, level + end_levels) is refined when
+  // (distance to a vertex − contact radius) < grading · h_l. Not applied to a point tool nor
+  // when contact_radius_m ≥ one level-`level` cell (the end is then rounded and resolved).
+  int end_levels = 2;
   SolverKind solver = SolverKind::kCholmod;
+  Ordering ordering = Ordering::kNestedDissection;
   double cg_relative_tolerance = 1e-8;  // ‖b − K u‖ / ‖b‖ at which CG stops
   int cg_max_iterations = 20000;
   int max_contact_nodes = 4096;   // capacity of the contact list (pre-sized)
@@ -52,5 +71,10 @@ struct TissueDef {
   // Throws std::invalid_argument naming the first bad field and what was expected.
   void Validate() const;
 };
+
+// Reads a tissue parameter file (assets/scenes/tissue_*.yaml: a map `tissue:` whose keys are
+// the TissueDef fields, SI units; absent keys keep their defaults) and validates it. Throws
+// std::runtime_error naming the file, the field and what was expected.
+TissueDef LoadTissueDef(const std::string& path);
 
 }  // namespace microdex::fem

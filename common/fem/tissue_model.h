@@ -3,6 +3,7 @@
 // element matrices of every level's template triangles (precomputed once, thesis §3.2), and
 // the capacities every per-step buffer is sized to.
 
+#include <cstdint>
 #include <vector>
 
 #include "common/fem/element_stiffness.h"
@@ -19,8 +20,15 @@ struct TissueModel {
   double h_y_m = 0;
   // element_matrices[level][shape] for level 0..max_level (kTemplateTriangles order).
   std::vector<std::array<ElementMatrix, kNumShapes>> element_matrices;
+  // Nested-dissection rank of every grid node (interior nodes 0.., boundary −1): the
+  // domain's interior is split at the middle grid line of its longer side, recursively; both
+  // halves are ranked before the line. Cuts are dyadic, so they follow quadtree cell sides and
+  // the active nodes of a cut separate the multi-scale mesh wherever it is at least that fine.
+  std::vector<std::int32_t> nd_rank;  // [num_grid_nodes]
+  // Capacities of a step's mesh (leaves, triangles, vertices), proven bounds (README).
   int max_leaves = 0;
   int max_triangles = 0;
+  int max_mesh_nodes = 0;
 
   double NodeX_m(int id) const { return (id % nodes_per_side) * h_x_m; }
   double NodeY_m(int id) const { return (id / nodes_per_side) * h_y_m; }

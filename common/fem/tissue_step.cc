@@ -63,28 +63,47 @@ class ContactFinder {
   // Fills ws.contact_nodes / contact_w_m and tags them in node_dof. False on overflow.
   bool Run() {
     ws_.num_contacts = 0;
-    const int level = ws_.mesh.level;
+    const MeshSelection& mesh = ws_.mesh;
+    const EndZones& zones = mesh.zones;
+    const int level = mesh.level;
     const double hx = model_.CellSizeX_m(level), hy = model_.CellSizeY_m(level);
     const double lx = model_.def.length_x_m, ly = model_.def.length_y_m;
     const int stride = model_.Stride(level);
     const int cells = 1 << level;
     const double r = tool_.contact_radius_m;
+    // Nearest node of points every half node spacing along each segment: a connected chain of
+    // nodes under the tool whatever its orientation. Near an end-zone vertex the leaves are
+    // finer: there the spacing is that of the finest zone level and the node is the nearest
+    // one of the leaf containing the point (a corner of that leaf, so a mesh vertex).
+    const double step_nominal_m = 0.5 * std::min(hx, hy);
+    const double step_zone_m =
+        0.5 * std::min(model_.CellSizeX_m(zones.finest), model_.CellSizeY_m(zones.finest));
+    const double zone_reach_m = (model_.def.grading + 1.5) * std::max(hx, hy) + step_nominal_m;
     const int num_segments = std::max(1, tool_.num_points - 1);
     for (int k = 0; k < num_segments; ++k) {
       const Eigen::Vector3d& a = tool_.p_SP[k];
       const Eigen::Vector3d& b = tool_.p_SP[std::min(k + 1, tool_.num_points - 1)];
-      // Nearest node of points every half node spacing along the segment: a connected chain
-      // of nodes under the tool whatever its orientation.
       double t0 = 0, t1 = 1;
       if (ClipSegment(a.x(), a.y(), b.x(), b.y(), 0, 0, lx, ly, &t0, &t1)) {
         const double len = (t1 - t0) * std::hypot(b.x() - a.x(), b.y() - a.y());
-        const int n = static_cast<int>(std::ceil(len / (0.5 * std::min(hx, hy))));
-        for (int i = 0; i <= n; ++i) {
-          const double t = n == 0 ? t0 : t0 + (t1 - t0) * i / n;
+        for (double s = 0;;) {
+          const bool last = s >= len;
+          const double t = len > 0 ? t0 + (t1 - t0) * std::min(s, len) / len : t0;
           const double px = a.x() + t * (b.x() - a.x()), py = a.y() + t * (b.y() - a.y());
-          const int ci = std::clamp(static_cast<int>(std::lround(px / hx)), 0, cells);
-          const int cj = std::clamp(static_cast<int>(std::lround(py / hy)), 0, cells);
-          if (!Add(cj * stride * model_.nodes_per_side + ci * stride)) return false;
+          bool near = false;
+          for (int v = 0; v < zones.num_vertices; ++v) {
+            const double dx = px - zones.x_m[v], dy = py - zones.y_m[v];
+            near = near || dx * dx + dy * dy < zone_reach_m * zone_reach_m;
+          }
+          const int l = near ? LeafLevelOnTool(model_, zones, px, py) : level;
+          const int cells_l = 1 << l, stride_l = model_.Stride(l);
+          const int ci =
+              std::clamp(static_cast<int>(std::lround(px / model_.CellSizeX_m(l))), 0, cells_l);
+          const int cj =
+              std::clamp(static_cast<int>(std::lround(py / model_.CellSizeY_m(l))), 0, cells_l);
+          if (!Add(cj * stride_l * model_.nodes_per_side + ci * stride_l)) return false;
+          if (last) break;
+          s += near ? step_zone_m : step_nominal_m;
         }
       }
       if (r > 0) {  // every node within the contact radius of the segment
@@ -261,10 +280,12 @@ TissueState MakeTissueState(const TissueModel& model) {
 }
 
 TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelection(model)) {
-  const int n = model.num_grid_nodes;
-  node_dof.assign(n, -1);
-  contact_stamp.assign(n, 0u);
+  const int num_nodes = model.num_grid_nodes;
+  const int n = model.max_mesh_nodes;  // bound on the free unknowns of a step
+  node_dof.assign(num_nodes, -1);
+  contact_stamp.assign(num_nodes, 0u);
   dof_node.resize(n);
+  order_keys.resize(n);
   contact_nodes.resize(model.def.max_contact_nodes);
   contact_w_m.resize(model.def.max_contact_nodes);
   contact_f_N.resize(model.def.max_contact_nodes);
@@ -282,7 +303,8 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
     entry.scatter.resize(static_cast<size_t>(9) * model.max_triangles);
   }
   cg = MakeCgWorkspace(n, kMaxRowEntries * n);
-  cholmod = std::make_unique<CholmodSolver>(model.def.pattern_cache_entries);
+  cholmod = std::make_unique<CholmodSolver>(model.def.pattern_cache_entries,
+                                            model.def.ordering == Ordering::kNestedDissection);
 }
 
 void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
@@ -310,10 +332,21 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
     if (model.IsBoundaryNode(node)) {
       ws.node_dof[node] = -1;
     } else {
-      ws.node_dof[node] = n;
       ws.dof_node[n++] = node;
     }
   }
+  // CHOLMOD keeps the unknowns in the order given: number them by nested-dissection rank, so
+  // that a new pattern needs no ordering work (a sort of n keys instead of AMD).
+  if (def.solver == SolverKind::kCholmod && def.ordering == Ordering::kNestedDissection) {
+    for (int i = 0; i < n; ++i) {
+      const int node = ws.dof_node[i];
+      ws.order_keys[i] = (static_cast<std::uint64_t>(model.nd_rank[node]) << 32) |
+                         static_cast<std::uint32_t>(node);
+    }
+    std::sort(ws.order_keys.begin(), ws.order_keys.begin() + n);
+    for (int i = 0; i < n; ++i) ws.dof_node[i] = static_cast<int>(ws.order_keys[i] & 0xffffffffu);
+  }
+  for (int i = 0; i < n; ++i) ws.node_dof[ws.dof_node[i]] = i;
   for (int c = 0; c < ws.num_contacts; ++c) key = MixKey(key, ws.contact_nodes[c]);
   stats.unknowns = n;
   stats.contact_nodes = ws.num_contacts;

@@ -75,10 +75,10 @@ struct PatternEntry {
   bool factor_valid = false;  // the CHOLMOD slot holds the numeric factor of vals
   std::uint64_t last_used = 0;
   int num_dofs = 0;
-  std::vector<int> row_ptr;  // [num_grid_nodes + 1]
-  std::vector<int> cols;     // [kMaxRowEntries · num_grid_nodes]
-  std::vector<int> diag;     // [num_grid_nodes]
-  std::vector<double> vals;  // [kMaxRowEntries · num_grid_nodes]
+  std::vector<int> row_ptr;  // [max_mesh_nodes + 1]
+  std::vector<int> cols;     // [kMaxRowEntries · max_mesh_nodes]
+  std::vector<int> diag;     // [max_mesh_nodes]
+  std::vector<double> vals;  // [kMaxRowEntries · max_mesh_nodes]
   std::vector<int> scatter;  // [9 · max_triangles] CSR slot of element entry (a, b), or −1
 };
 
@@ -89,15 +89,16 @@ struct TissueWorkspace {
   explicit TissueWorkspace(const TissueModel& model);
   MeshSelection mesh;
   std::vector<std::int32_t> node_dof;  // [num_grid_nodes] ≥0 free dof, −1 fixed, −2−c contact c
-  std::vector<std::int32_t> dof_node;        // [num_grid_nodes]
+  std::vector<std::int32_t> dof_node;        // [max_mesh_nodes]
+  std::vector<std::uint64_t> order_keys;     // [max_mesh_nodes] (rank, node) sort scratch
   std::vector<std::uint32_t> contact_stamp;  // [num_grid_nodes] == mesh.mark: contact node
   std::vector<std::int32_t> contact_nodes;   // [max_contact_nodes]
   std::vector<double> contact_w_m;           // [max_contact_nodes] prescribed displacement U
   std::vector<double> contact_f_N;           // [max_contact_nodes]
   int num_contacts = 0;
-  std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · num_grid_nodes] pattern scratch
-  std::vector<int> row_count;            // [num_grid_nodes]
-  std::vector<double> rhs, x, residual;  // [num_grid_nodes]
+  std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
+  std::vector<int> row_count;            // [max_mesh_nodes]
+  std::vector<double> rhs, x, residual;  // [max_mesh_nodes]
   std::vector<PatternEntry> patterns;
   std::uint64_t use_clock = 0;
   std::uint64_t ic_key = 0;  // key whose IC(0)/Jacobi factor is in cg

@@ -8,21 +8,24 @@
 namespace microdex::fem {
 namespace {
 
-// Planar distance from (px, py) to the segment a–b; *t gets the closest point's parameter.
-double PointSegmentDistance(double px, double py, const Eigen::Vector3d& a,
-                            const Eigen::Vector3d& b, double* t) {
+// Squared planar distance from (px, py) to the segment a–b; *t gets the closest point's
+// parameter. Squared distances (no hypot) keep the per-cell test of the mesh selection cheap;
+// the lengths involved are far from overflow.
+double PointSegmentDistance2(double px, double py, const Eigen::Vector3d& a,
+                             const Eigen::Vector3d& b, double* t) {
   const double dx = b.x() - a.x(), dy = b.y() - a.y();
   const double len2 = dx * dx + dy * dy;
   double s = 0;
   if (len2 > 0) s = std::clamp(((px - a.x()) * dx + (py - a.y()) * dy) / len2, 0.0, 1.0);
   *t = s;
-  return std::hypot(px - (a.x() + s * dx), py - (a.y() + s * dy));
+  const double ex = px - (a.x() + s * dx), ey = py - (a.y() + s * dy);
+  return ex * ex + ey * ey;
 }
 
-double PointBoxDistance(double px, double py, double x0, double y0, double x1, double y1) {
+double PointBoxDistance2(double px, double py, double x0, double y0, double x1, double y1) {
   const double dx = std::max({x0 - px, 0.0, px - x1});
   const double dy = std::max({y0 - py, 0.0, py - y1});
-  return std::hypot(dx, dy);
+  return dx * dx + dy * dy;
 }
 
 double Cross(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
@@ -82,8 +85,9 @@ double ToolBoxDistance_m(const ToolContact& tool, double x0_m, double y0_m, doub
   if (tool.num_points <= 0) return best;
   for (int k = 0; k < tool.num_points; ++k) {
     best = std::min(best,
-                    PointBoxDistance(tool.p_SP[k].x(), tool.p_SP[k].y(), x0_m, y0_m, x1_m, y1_m));
+                    PointBoxDistance2(tool.p_SP[k].x(), tool.p_SP[k].y(), x0_m, y0_m, x1_m, y1_m));
   }
+  if (best == 0) return 0.0;
   const double cx[4] = {x0_m, x1_m, x1_m, x0_m};
   const double cy[4] = {y0_m, y0_m, y1_m, y1_m};
   for (int k = 0; k + 1 < tool.num_points; ++k) {
@@ -92,13 +96,13 @@ double ToolBoxDistance_m(const ToolContact& tool, double x0_m, double y0_m, doub
     // A segment and a convex polygon that do not meet are closest at a vertex of one of them.
     for (int c = 0; c < 4; ++c) {
       double t = 0;
-      best = std::min(best, PointSegmentDistance(cx[c], cy[c], a, b, &t));
+      best = std::min(best, PointSegmentDistance2(cx[c], cy[c], a, b, &t));
       if (SegmentsIntersect(a.x(), a.y(), b.x(), b.y(), cx[c], cy[c], cx[(c + 1) % 4],
                             cy[(c + 1) % 4]))
         return 0.0;
     }
   }
-  return best;
+  return std::sqrt(best);
 }
 
 double ToolClosestPoint_m(const ToolContact& tool, double x_m, double y_m, double* z_m) {
@@ -110,13 +114,13 @@ double ToolClosestPoint_m(const ToolContact& tool, double x_m, double y_m, doubl
   }
   for (int k = 0; k + 1 < tool.num_points; ++k) {
     double t = 0;
-    const double d = PointSegmentDistance(x_m, y_m, tool.p_SP[k], tool.p_SP[k + 1], &t);
-    if (d < best) {
-      best = d;
+    const double d2 = PointSegmentDistance2(x_m, y_m, tool.p_SP[k], tool.p_SP[k + 1], &t);
+    if (d2 < best) {
+      best = d2;
       *z_m = (1 - t) * tool.p_SP[k].z() + t * tool.p_SP[k + 1].z();
     }
   }
-  return best;
+  return std::sqrt(best);
 }
 
 }  // namespace microdex::fem

@@ -55,7 +55,7 @@ struct Counts {
 
 Counts CountSteps(SolverKind solver, bool moving, bool reuse_values) {
   TissueDef def;
-  def.max_level = 7;
+  def.max_level = 9;
   def.level = 7;
   def.solver = solver;
   const TissueModel model = BuildTissueModel(def);

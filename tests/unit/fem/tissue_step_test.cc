@@ -14,9 +14,10 @@ namespace {
 constexpr double kPress_m = 0.01;
 constexpr double kSolverAgreementTol = 1e-6;  // relative, set by cg_relative_tolerance 1e-8
 
+// The multi-scale mesh gets the default end grading (two levels beyond `level`).
 TissueModel Model(int level, MeshKind mesh, SolverKind solver, double g_Pa = 1e4) {
   TissueDef def;
-  def.max_level = level;
+  def.max_level = mesh == MeshKind::kMultiscale ? level + def.end_levels : level;
   def.level = level;
   def.mesh = mesh;
   def.solver = solver;
@@ -50,6 +51,7 @@ TEST(TissueFem, ManufacturedSolutionConvergesSecondOrder) {
     TissueDef def;
     def.max_level = level;
     def.level = level;
+    def.mesh = MeshKind::kFine;
     def.length_y_m = 0.12;
     const TissueModel model = BuildTissueModel(def);
     MeshSelection mesh = MakeMeshSelection(model);
@@ -139,6 +141,30 @@ TEST(TissueStep, StiffnessAndDisplacementSweepsStayLinearAndFinite) {
   EXPECT_EQ(zero.contacts, 0);
 }
 
+// With end grading the chain of contact nodes follows the leaves: every mesh vertex on a
+// bar that lies on a grid line is a contact node (none is left free under the tool), the
+// finer vertices near the ends included.
+TEST(TissueStep, ContactChainCoversEveryVertexUnderTheBar) {
+  const TissueModel model = Model(5, MeshKind::kMultiscale, SolverKind::kCholmod);
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  StepTissue(model, G1Bar(kPress_m), ws, state);
+  ASSERT_EQ(state.status, TissueStatus::kOk);
+  int on_bar = 0;
+  for (int k = 0; k < ws.mesh.num_active_nodes; ++k) {
+    const int node = ws.mesh.active_nodes[k];
+    const double x = model.NodeX_m(node), y = model.NodeY_m(node);
+    if (std::abs(y - 0.10) > 1e-12 || x < 0.05 - 1e-12 || x > 0.15 + 1e-12) continue;
+    ++on_bar;
+    EXPECT_LE(ws.node_dof[node], -2) << "free vertex under the bar at x = " << x;
+  }
+  // 17 nominal-level nodes, and at least 2 finer ones per end per extra level inside the bar
+  // (the zone reaches two cells of each extra level inwards; cells at exactly that distance
+  // are refined or not by rounding).
+  EXPECT_GE(on_bar, 17 + 2 * 2 * model.def.end_levels);
+  EXPECT_EQ(state.num_contacts, on_bar);
+}
+
 TEST(TissueStep, BarTouchingTheBoundaryAndLeavingTheDomain) {
   const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kCholmod);
   const Result touching = Step(model, MakeBarTool({0.0, 0.10, -kPress_m}, {0.10, 0.10, -kPress_m}));
@@ -207,7 +233,7 @@ TEST(TissueStep, FastMovingToolNeverFails) {
 
 TEST(TissueStep, FailuresKeepTheLastGoodState) {
   TissueDef def;
-  def.max_level = 6;
+  def.max_level = 8;
   def.level = 6;
   def.solver = SolverKind::kCg;
   const TissueModel good_model = BuildTissueModel(def);
@@ -247,11 +273,13 @@ TEST(TissueStep, DisplayFieldInterpolatesTheSolution) {
   TissueWorkspace ws(model);
   TissueState state = MakeTissueState(model);
   StepTissue(model, G1Bar(kPress_m), ws, state);
+  // Displayed on the model's finest grid, whose indices are the node ids.
   std::vector<double> grid;
-  CalcDisplacementGrid(model, state, 6, grid);
-  ASSERT_EQ(grid.size(), 65u * 65u);
-  EXPECT_NEAR(grid[32 * 65 + 32], -kPress_m, 1e-15);  // under the bar
-  EXPECT_EQ(grid[0], 0.0);                            // fixed edge
+  CalcDisplacementGrid(model, state, model.def.max_level, grid);
+  const int side = model.nodes_per_side;
+  ASSERT_EQ(grid.size(), static_cast<size_t>(model.num_grid_nodes));
+  EXPECT_NEAR(grid[(side / 2) * side + side / 2], -kPress_m, 1e-15);  // under the bar
+  EXPECT_EQ(grid[0], 0.0);                                            // fixed edge
   for (int k = 0; k < state.num_contacts; ++k) {
     const int node = state.contact_nodes[k];
     EXPECT_NEAR(grid[node], -kPress_m, 1e-15);
