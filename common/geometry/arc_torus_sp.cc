@@ -50,9 +50,28 @@ struct NeedleInV {
   }
 };
 
+// s ∈ (−4π, 4π) (atan2 and acos sums) to [0, 2π).
 double WrapTo2Pi(double s) {
-  s = std::fmod(s, kTwoPi);
-  return s < 0 ? s + kTwoPi : s;
+  if (s < 0) s += kTwoPi;
+  if (s < 0) s += kTwoPi;
+  if (s >= kTwoPi) s -= kTwoPi;
+  if (s >= kTwoPi) s -= kTwoPi;
+  return s;
+}
+
+// IsAzimuthInSegment without atan2 where the point is clearly off both boundary half-planes
+// (the sign of y and of the cross product with the direction of azimuth Ω decide); on or
+// near a boundary the shared definition answers.
+bool InSegment(const Eigen::Vector3d& p, double omega, double cos_omega, double sin_omega) {
+  const double cross = cos_omega * p.y() - sin_omega * p.x();  // |p_xy| sin(azimuth − Ω)
+  const double tol = 1e-9 * (std::abs(p.x()) + std::abs(p.y()));
+  if (std::abs(p.y()) <= tol || std::abs(cross) <= tol) {
+    return IsAzimuthInSegment(p.x(), p.y(), omega);
+  }
+  // Azimuth ∈ (0, π) iff y > 0; azimuth ≤ Ω iff sin(azimuth − Ω) < 0 within the half turn
+  // that contains both.
+  if (omega <= kPi) return p.y() > 0 && cross < 0;
+  return p.y() > 0 || cross < 0;
 }
 
 // §4.2.4, last paragraph: the pieces of the arc s ∈ [0, S] whose azimuth lies in [0, Ω]. The
@@ -79,8 +98,9 @@ int ClipArcToSegment(const NeedleInV& nv, double sweep, double omega, Interval o
       if (s > 0 && s < sweep) cuts[nc++] = s;
     }
   };
-  add_plane(0, 1);                               // azimuth 0 (and π)
-  add_plane(std::sin(omega), -std::cos(omega));  // azimuth Ω (and Ω + π)
+  const double cos_omega = std::cos(omega), sin_omega = std::sin(omega);
+  add_plane(0, 1);                   // azimuth 0 (and π)
+  add_plane(sin_omega, -cos_omega);  // azimuth Ω (and Ω + π)
   cuts[nc++] = sweep;
   for (int a = 1; a < nc; ++a) {  // insertion sort, nc ≤ 6
     for (int b = a; b > 0 && cuts[b] < cuts[b - 1]; --b) std::swap(cuts[b], cuts[b - 1]);
@@ -89,8 +109,7 @@ int ClipArcToSegment(const NeedleInV& nv, double sweep, double omega, Interval o
   for (int i = 0; i + 1 < nc; ++i) {
     const double lo = cuts[i], hi = cuts[i + 1];
     if (!(hi > lo)) continue;
-    const Eigen::Vector3d mid = nv.PointAt(0.5 * (lo + hi));
-    if (!IsAzimuthInSegment(mid.x(), mid.y(), omega)) continue;
+    if (!InSegment(nv.PointAt(0.5 * (lo + hi)), omega, cos_omega, sin_omega)) continue;
     if (n > 0 && out[n - 1].hi == lo) {
       out[n - 1].hi = hi;
     } else {
@@ -226,31 +245,38 @@ LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e
   // intersection is the plane π of (4.7); its point nearest the origin is the centre c (4.8).
   // This replaces the triple cross products of (4.7) by Gram–Schmidt on two normals: the
   // same c, without subtracting nearly equal lifted points.
-  const Eigen::Vector3d n = e1.cross(e2).normalized();
+  const Eigen::Vector3d n = e1.cross(e2);  // unit: e1, e2 are orthonormal
   const double h1 = n.dot(o);
   const double k = o.squaredNorm() - rho * rho;
   const Eigen::Vector4d n1(n.x(), n.y(), n.z(), h1);
   const Eigen::Vector4d n2(-2 * o.x(), -2 * o.y(), -2 * o.z(), 1 - k);
   const double h2 = -(1 + k);
-  const double len1 = n1.norm();
-  const Eigen::Vector4d u1 = n1 / len1;
-  const double c1 = h1 / len1;  // component of c along u1
-  const Eigen::Vector4d n2p = n2 - n2.dot(u1) * u1;
-  const double len2 = n2p.norm();
-  const Eigen::Vector4d u2 = n2p / len2;
-  const double c2 = (h2 - n2.dot(u1) * c1) / len2;
+  const double inv1 = 1 / std::sqrt(1 + h1 * h1);  // |n1| = √(1 + h1²)
+  const Eigen::Vector4d u1 = n1 * inv1;
+  const double c1 = h1 * inv1;  // component of c along u1
+  const double n2u1 = n2.dot(u1);
+  const Eigen::Vector4d n2p = n2 - n2u1 * u1;
+  const double inv2 = 1 / n2p.norm();
+  const double c2 = (h2 - n2u1 * c1) * inv2;
   LiftedCircle lc;
-  lc.center = c1 * u1 + c2 * u2;
+  lc.center = c1 * u1 + (c2 * inv2) * n2p;
   // (4.9)–(4.10): radius and first axis through the lift of the needle's s = 0 point.
   const Eigen::Vector3d x0 = o + rho * e1;
-  const Eigen::Vector4d r0 = LiftToS3(x0) - lc.center;
+  const double rho2 = x0.squaredNorm();
+  const double inv = 1 / (rho2 + 1);
+  const Eigen::Vector4d lifted0(2 * x0.x() * inv, 2 * x0.y() * inv, 2 * x0.z() * inv,
+                                (rho2 - 1) * inv);  // (4.3)
+  const Eigen::Vector4d r0 = lifted0 - lc.center;
   lc.radius = r0.norm();
-  lc.bx = r0 / lc.radius;
+  lc.bx = r0 * (1 / lc.radius);
   // (4.11)–(4.12): the second axis, here the lifted tangent at s = 0 (in π and ⊥ b_x), which
   // also orients θ with s.
-  Eigen::Vector4d t = LiftTangentToS3(x0, rho * e2);
+  const Eigen::Vector3d v = rho * e2;
+  const double xv = x0.dot(v);
+  const Eigen::Vector3d t3 = 2 * inv * v - 4 * inv * inv * xv * x0;
+  Eigen::Vector4d t(t3.x(), t3.y(), t3.z(), 4 * inv * inv * xv);
   t -= t.dot(lc.bx) * lc.bx;
-  lc.by = t.normalized();
+  lc.by = t * (1 / t.norm());
   return lc;
 }
 
@@ -582,7 +608,22 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     AddUniformCandidates(iv, n_iv, cand, &n_cand);
   }
   Best best;
-  for (int j = 0; j < n_cand; ++j) TryCandidate(nv, core_r, iv, cand[j], opt, &best);
+  if (opt.max_certify_rounds > 0 && pass.ok) {
+    // The certificate below finds any farther point, so only the most promising candidate
+    // (largest distance before the ascent) is refined here.
+    int j_best = 0;
+    double f_best = -1;
+    for (int j = 0; j < n_cand; ++j) {
+      const double f = EvalCoreDistSq(nv, core_r, cand[j].cos_s, cand[j].sin_s).f;
+      if (f > f_best) {
+        f_best = f;
+        j_best = j;
+      }
+    }
+    TryCandidate(nv, core_r, iv, cand[j_best], opt, &best);
+  } else {
+    for (int j = 0; j < n_cand; ++j) TryCandidate(nv, core_r, iv, cand[j], opt, &best);
+  }
 
   // Certificate: the extrema of G are not those of the distance, so the ascent may have
   // stopped at a local maximum. The level set {distance = t} with t = the best distance so

@@ -185,7 +185,8 @@ int SolveQuarticInInterval(const double k[5], double lo, double hi, int newton_p
     *used_fallback = true;
     return FindPolyRootsInInterval(k, lo, hi, fallback, roots);
   }
-  const double a3 = k[3] / k[4], a2 = k[2] / k[4], a1 = k[1] / k[4], a0 = k[0] / k[4];
+  const double inv4 = 1 / k[4];
+  const double a3 = k[3] * inv4, a2 = k[2] * inv4, a1 = k[1] * inv4, a0 = k[0] * inv4;
   // u = y − a3/4: y⁴ + p y² + q y + r.
   const double sh = 0.25 * a3;
   const double sh2 = sh * sh;
