@@ -51,6 +51,13 @@ double SolveBracketed(const double k[5], double a, double b, double fa, double f
 // change that rounding would let the bracketing see.
 int RootsOnMonotonePieces(const double k[5], double lo, double hi, const double* crit, int nc,
                           double touch_tol, const PolyRootOptions& opt, double* roots) {
+  // Piece ends and the values of p there.
+  double x[6], f[6];
+  const int m = nc + 2;
+  x[0] = lo;
+  for (int i = 0; i < nc; ++i) x[i + 1] = crit[i];
+  x[m - 1] = hi;
+  for (int i = 0; i < m; ++i) f[i] = EvalPoly4(k, x[i]);
   // Roots closer than this are one (a double root splits by ~√eps under rounding).
   const double merge = kMergeRel * (hi - lo);
   int n = 0;
@@ -58,20 +65,17 @@ int RootsOnMonotonePieces(const double k[5], double lo, double hi, const double*
     if (n > 0 && t - roots[n - 1] <= merge) return;
     if (n < 4) roots[n++] = t;
   };
-  double a = lo;
-  double fa = EvalPoly4(k, a);
-  if (fa == 0) push(a);
-  for (int i = 0; i <= nc; ++i) {
-    const double b = i < nc ? crit[i] : hi;
-    const double fb = EvalPoly4(k, b);
-    if (fb == 0) {
-      push(b);
-    } else {
-      if (fa != 0 && (fa < 0) != (fb < 0)) push(SolveBracketed(k, a, b, fa, fb, opt));
-      if (i < nc && std::abs(fb) <= touch_tol) push(b);
+  const auto sign_change = [&](int i) {  // across piece i = [x[i], x[i + 1]]
+    return f[i] != 0 && f[i + 1] != 0 && (f[i] < 0) != (f[i + 1] < 0);
+  };
+  for (int i = 0; i < m; ++i) {
+    if (f[i] == 0) {
+      push(x[i]);
+    } else if (i > 0 && i < m - 1 && std::abs(f[i]) <= touch_tol && !sign_change(i - 1) &&
+               !sign_change(i)) {
+      push(x[i]);  // p touches 0 at this extremum: a double root
     }
-    a = b;
-    fa = fb;
+    if (i + 1 < m && sign_change(i)) push(SolveBracketed(k, x[i], x[i + 1], f[i], f[i + 1], opt));
   }
   return n;
 }

@@ -65,6 +65,14 @@ TEST(QuarticTest, DoubleRootIsReported) {
   EXPECT_NEAR(roots[n - 1], 0.9, 1e-14);
 }
 
+// Two roots 1e-6 apart must not crowd out the other two (the local maximum between them is
+// within the double-root tolerance of 0, yet it is no extra root).
+TEST(QuarticTest, NearDoublePairKeepsTheOtherRoots) {
+  double k[5];
+  FromRoots(1.0, {-0.95, 0.3, 0.3 + 1e-6, 0.95}, k);
+  ExpectRoots(k, {-0.95, 0.3, 0.3 + 1e-6, 0.95}, 1e-9);
+}
+
 TEST(QuarticTest, QuadrupleRootIsReported) {
   for (const double a : {0.0, 0.37}) {
     double k[5];

@@ -262,6 +262,36 @@ TEST(SpAgreementTest, AdversarialSet) {
   stats.Print("adversarial");
 }
 
+// Touch / no-touch is exact for every setting, including the thesis's single pass (no
+// distance refinement, no certificate) with a loose Newton tolerance on (4.26).
+TEST(SpAgreementTest, EverySettingClassifiesLikeTheExactMethod) {
+  SpOptions thesis_loose;
+  thesis_loose.quartic_method = SpQuarticMethod::kNewton;
+  thesis_loose.quartic_tol = 1e-6;
+  thesis_loose.polish_max_iters = 0;
+  thesis_loose.max_certify_rounds = 0;
+  SpOptions closed_single = thesis_loose;
+  closed_single.quartic_method = SpQuarticMethod::kClosedForm;
+  SpOptions refined_single;
+  refined_single.max_certify_rounds = 0;
+  std::mt19937_64 rng(5150);
+  long checked = 0;
+  for (int i = 0; i < 60000; ++i) {
+    const RandomArcTorus c = i % 2 == 0 ? MakeNearIdeal(rng) : MakeCrossing(rng);
+    const ArcTorusClearance exact = CalcArcTorusClearanceExact(c.arc, c.torus);
+    if (exact.status != ClearanceStatus::kOk ||
+        std::abs(exact.clearance_m) <= kContactBandRel * c.torus.core_radius_m) {
+      continue;
+    }
+    ++checked;
+    for (const SpOptions& o : {thesis_loose, closed_single, refined_single}) {
+      const ArcTorusClearance sp = CalcArcTorusClearanceSP(c.arc, c.torus, o);
+      ASSERT_EQ(sp.contact, exact.contact) << i << " " << Stats::Describe(c);
+    }
+  }
+  EXPECT_GT(checked, 50000);
+}
+
 TEST(SpAgreementTest, InvariantUnderRigidMotionAndUniformScaling) {
   std::mt19937_64 rng(99);
   double max_rigid = 0, max_scale = 0;
