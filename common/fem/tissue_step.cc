@@ -151,52 +151,66 @@ class ContactFinder {
   TissueWorkspace& ws_;
 };
 
+// The CSR pattern of K_ff and the slot of every element entry, in three linear passes (no
+// searches in sorted rows): gather each row's columns unsorted, remembering where each
+// element entry landed; sort each short row and record the sorted position of every
+// unsorted one; translate the remembered places into slots.
 void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
   const MeshSelection& mesh = ws.mesh;
   std::fill_n(ws.row_count.begin(), n, 0);
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const Triangle& t = mesh.triangles[e];
+    const int d[3] = {ws.node_dof[t.node[0]], ws.node_dof[t.node[1]], ws.node_dof[t.node[2]]};
+    int* place = &entry.scatter[9 * e];
     for (int a = 0; a < 3; ++a) {
-      const int da = ws.node_dof[t.node[a]];
-      if (da < 0) continue;
-      int* row = &ws.row_fill[static_cast<size_t>(da) * kMaxRowEntries];
+      if (d[a] < 0) {
+        place[3 * a] = place[3 * a + 1] = place[3 * a + 2] = -1;
+        continue;
+      }
+      int* row = &ws.row_fill[static_cast<size_t>(d[a]) * kMaxRowEntries];
+      int& count = ws.row_count[d[a]];
       for (int b = 0; b < 3; ++b) {
-        const int db = ws.node_dof[t.node[b]];
-        if (db < 0) continue;
-        int& count = ws.row_count[da];
-        if (std::find(row, row + count, db) == row + count) {
-          MICRODEX_CHECK(count < kMaxRowEntries);
-          row[count++] = db;
+        if (d[b] < 0) {
+          place[3 * a + b] = -1;
+          continue;
         }
+        int k = 0;
+        while (k < count && row[k] != d[b]) ++k;
+        if (k == count) {
+          MICRODEX_CHECK(count < kMaxRowEntries);
+          row[count++] = d[b];
+        }
+        place[3 * a + b] = d[a] * kMaxRowEntries + k;
       }
     }
   }
   int nnz = 0;
   for (int i = 0; i < n; ++i) {
-    int* row = &ws.row_fill[static_cast<size_t>(i) * kMaxRowEntries];
-    std::sort(row, row + ws.row_count[i]);
-    entry.row_ptr[i] = nnz;
-    for (int k = 0; k < ws.row_count[i]; ++k) {
-      if (row[k] == i) entry.diag[i] = nnz;
-      entry.cols[nnz++] = row[k];
+    const int* row = &ws.row_fill[static_cast<size_t>(i) * kMaxRowEntries];
+    const int count = ws.row_count[i];
+    int order[kMaxRowEntries];
+    for (int k = 0; k < count; ++k) {  // insertion sort of at most kMaxRowEntries indices
+      int m = k;
+      while (m > 0 && row[order[m - 1]] > row[k]) {
+        order[m] = order[m - 1];
+        --m;
+      }
+      order[m] = k;
     }
+    entry.row_ptr[i] = nnz;
+    int* rank = &ws.row_rank[static_cast<size_t>(i) * kMaxRowEntries];
+    for (int p = 0; p < count; ++p) {
+      const int col = row[order[p]];
+      rank[order[p]] = p;
+      if (col == i) entry.diag[i] = nnz + p;
+      entry.cols[nnz + p] = col;
+    }
+    nnz += count;
   }
   entry.row_ptr[n] = nnz;
-  for (int e = 0; e < mesh.num_triangles; ++e) {
-    const Triangle& t = mesh.triangles[e];
-    for (int a = 0; a < 3; ++a) {
-      const int da = ws.node_dof[t.node[a]];
-      for (int b = 0; b < 3; ++b) {
-        const int db = ws.node_dof[t.node[b]];
-        int slot = -1;
-        if (da >= 0 && db >= 0) {
-          const int* begin = &entry.cols[entry.row_ptr[da]];
-          const int* end = &entry.cols[entry.row_ptr[da + 1]];
-          slot = static_cast<int>(std::lower_bound(begin, end, db) - entry.cols.data());
-        }
-        entry.scatter[9 * e + 3 * a + b] = slot;
-      }
-    }
+  for (int j = 0; j < 9 * mesh.num_triangles; ++j) {
+    const int place = entry.scatter[j];
+    if (place >= 0) entry.scatter[j] = entry.row_ptr[place / kMaxRowEntries] + ws.row_rank[place];
   }
   entry.num_dofs = n;
   entry.valid = true;
@@ -290,6 +304,7 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   contact_w_m.resize(model.def.max_contact_nodes);
   contact_f_N.resize(model.def.max_contact_nodes);
   row_fill.resize(static_cast<size_t>(kMaxRowEntries) * n);
+  row_rank.resize(static_cast<size_t>(kMaxRowEntries) * n);
   row_count.resize(n);
   rhs.resize(n);
   x.resize(n);

@@ -97,6 +97,7 @@ struct TissueWorkspace {
   std::vector<double> contact_f_N;           // [max_contact_nodes]
   int num_contacts = 0;
   std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
+  std::vector<std::int32_t> row_rank;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
   std::vector<int> row_count;            // [max_mesh_nodes]
   std::vector<double> rhs, x, residual;  // [max_mesh_nodes]
   std::vector<PatternEntry> patterns;

@@ -101,10 +101,12 @@ struct Distribution {
 
 struct Moving {
   int level;
-  std::string solver;
+  std::string solver, ordering;
   double median_us, p99_us, max_us, reuse_fraction;
   int failed, steps;
   double mean_unknowns;
+  double select_us, assemble_us, solve_us;  // medians of the moving steps' stages
+  double static_median_us;                  // same model, tool held still, same run
 };
 
 struct Options {
@@ -292,35 +294,70 @@ int RunFem(int argc, char** argv) {
     }
   }
 
-  // The tool sweeping across the tissue at 1 m/s (1 mm per 1 kHz step, more than a level-7
-  // or level-8 cell) while turning, so the contact nodes change every step.
+  // The tool sweeping across the tissue at about 1 m/s (1 mm per 1 kHz step, the order of a
+  // level-7 cell) while turning, so the mesh and the contact nodes change every step. Against
+  // it, in the same run and interleaved in blocks so both see the same machine load, the same
+  // model with the tool held still (its depth oscillating: the right-hand side changes, the
+  // pattern stays; values re-assembled and re-factorised every step as in step_us).
   std::vector<Moving> moving;
+  struct Variant {
+    SolverKind solver;
+    Ordering ordering;
+  };
+  const Variant variants[] = {{SolverKind::kCg, Ordering::kNestedDissection},
+                              {SolverKind::kPcgJacobi, Ordering::kNestedDissection},
+                              {SolverKind::kPcgIc, Ordering::kNestedDissection},
+                              {SolverKind::kCholmod, Ordering::kAmd},
+                              {SolverKind::kCholmod, Ordering::kNestedDissection}};
   for (int level = std::max(1, opt.max_level - 1); level <= opt.max_level; ++level) {
-    for (SolverKind solver : solvers) {
-      const TissueModel model = BuildTissueModel(
-          StudyDef(level, MeshKind::kMultiscale, solver, opt.grading, opt.end_levels));
-      TissueWorkspace ws(model);
-      TissueState state = MakeTissueState(model);
-      std::vector<double> us;
+    for (const Variant& v : variants) {
+      TissueDef def = StudyDef(level, MeshKind::kMultiscale, v.solver, opt.grading, opt.end_levels);
+      def.ordering = v.ordering;
+      const TissueModel model = BuildTissueModel(def);
+      TissueWorkspace ws(model), ws_static(model);
+      ws_static.reuse_values = false;
+      TissueState state = MakeTissueState(model), state_static = MakeTissueState(model);
+      std::vector<double> us, us_static, select, assemble, solve;
       int reused = 0, failed = 0;
       double unknowns = 0;
-      const int steps = opt.min_steps * 20;
-      for (int k = 0; k < steps + 5; ++k) {
+      auto pose = [](int k) {
         const double t = 1e-3 * k;
         const double cx = 0.06 + 0.08 * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * t / 0.16));
-        Case c{"moving", cx, 0.10 + 0.03 * std::sin(2 * std::numbers::pi * t / 0.2), 0.5 * t,
-               false};
-        StepTissue(model, BarTool(c, kPress_m), ws, state);
+        return Case{"moving", cx, 0.10 + 0.03 * std::sin(2 * std::numbers::pi * t / 0.2), 0.5 * t,
+                    false};
+      };
+      constexpr int kBlock = 20;
+      const int steps = opt.min_steps * 20;
+      for (int k = 0; k < steps + 5; ++k) {
+        if (k >= 5 && k % kBlock == 0) {  // a block of static steps
+          for (int j = 0; j < kBlock; ++j) {
+            const double depth = kPress_m * (1 + 0.1 * std::sin(2 * std::numbers::pi * j / 16));
+            StepTissue(model, BarTool(pose(0), depth), ws_static, state_static);
+            if (state_static.step > 2) us_static.push_back(state_static.stats.total_us);
+          }
+        }
+        StepTissue(model, BarTool(pose(k), kPress_m), ws, state);
         if (k < 5) continue;
         us.push_back(state.stats.total_us);
+        select.push_back(state.stats.select_us);
+        assemble.push_back(state.stats.assemble_us);
+        solve.push_back(state.stats.solve_us);
         reused += state.stats.pattern_reused;
         failed += !IsGood(state.status);
         unknowns += state.stats.unknowns;
       }
-      moving.push_back({level, ToString(solver), Median(us), Percentile(us, 0.99),
-                        *std::max_element(us.begin(), us.end()),
+      moving.push_back({level, ToString(v.solver), ToString(v.ordering), Median(us),
+                        Percentile(us, 0.99), *std::max_element(us.begin(), us.end()),
                         static_cast<double>(reused) / us.size(), failed,
-                        static_cast<int>(us.size()), unknowns / us.size()});
+                        static_cast<int>(us.size()), unknowns / us.size(), Median(select),
+                        Median(assemble), Median(solve), Median(us_static)});
+      std::fprintf(stderr,
+                   "moving L%d %-10s %-17s median %7.1f us (select %6.1f assemble %6.1f solve "
+                   "%6.1f) p99 %7.1f  static %7.1f us  n=%.0f\n",
+                   level, ToString(v.solver), ToString(v.ordering), moving.back().median_us,
+                   moving.back().select_us, moving.back().assemble_us, moving.back().solve_us,
+                   moving.back().p99_us, moving.back().static_median_us,
+                   moving.back().mean_unknowns);
     }
   }
 
@@ -378,16 +415,28 @@ int RunFem(int argc, char** argv) {
       const Run* m = find("G1", level, "multiscale", "cholmod");
       if (level <= 6 && f && m && std::isfinite(f->rms) && !(m->rms <= 1.5 * f->rms))
         rms_ok = false;
-      for (const char* cs : {"G1", "G2"}) {
-        for (const char* mk : {"fine", "multiscale"}) {
-          const Run* r = find(cs, level, mk, "cholmod");
-          if (level >= 5 && r && !(r->force_error <= 0.02)) force_ok = false;
-        }
+      for (const char* cs : {"G1", "G2"}) {  // the multi-scale mesh (end-graded)
+        const Run* r = find(cs, level, "multiscale", "cholmod");
+        if (level >= 5 && r && !(r->force_error <= 0.02)) force_ok = false;
       }
     }
     goals += std::string(", \"goal_g1_rms_within_1p5x_fine_met\": ") + (rms_ok ? "true" : "false");
-    goals += std::string(", \"goal_force_within_2pct_from_level5_met\": ") +
+    goals += std::string(", \"goal_multiscale_force_within_2pct_from_level5_met\": ") +
              (force_ok ? "true" : "false");
+    double best_moving = kNaN, static_of_best = kNaN;
+    std::string best_moving_solver;
+    for (const Moving& m : moving) {
+      if (m.level != l7) continue;
+      if (std::isnan(best_moving) || m.median_us < best_moving) {
+        best_moving = m.median_us;
+        static_of_best = m.static_median_us;
+        best_moving_solver = m.solver + "/" + m.ordering;
+      }
+    }
+    goals += ", \"best_moving_step_us\": " + Num(best_moving) +
+             ", \"static_step_us_same_solver\": " + Num(static_of_best) +
+             ", \"best_moving_solver\": \"" + best_moving_solver +
+             "\", \"goal_moving_500us_met\": " + (best_moving <= 500 ? "true" : "false");
   }
   goals += "}";
 
@@ -427,12 +476,16 @@ int RunFem(int argc, char** argv) {
   for (size_t i = 0; i < moving.size(); ++i) {
     const Moving& m = moving[i];
     std::fprintf(out,
-                 "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", \"steps\": %d, "
-                 "\"median_us\": %s, \"p99_us\": %s, \"max_us\": %s, \"pattern_reuse_fraction\": "
-                 "%s, \"failed_steps\": %d, \"mean_unknowns\": %s}%s\n",
-                 m.level, m.solver.c_str(), m.steps, Num(m.median_us).c_str(),
-                 Num(m.p99_us).c_str(), Num(m.max_us).c_str(), Num(m.reuse_fraction).c_str(),
-                 m.failed, Num(m.mean_unknowns).c_str(), i + 1 < moving.size() ? "," : "");
+                 "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", "
+                 "\"ordering\": \"%s\", \"steps\": %d, \"median_us\": %s, \"p99_us\": %s, "
+                 "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
+                 "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
+                 "\"failed_steps\": %d, \"mean_unknowns\": %s}%s\n",
+                 m.level, m.solver.c_str(), m.ordering.c_str(), m.steps, Num(m.median_us).c_str(),
+                 Num(m.p99_us).c_str(), Num(m.max_us).c_str(), Num(m.select_us).c_str(),
+                 Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
+                 Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(), m.failed,
+                 Num(m.mean_unknowns).c_str(), i + 1 < moving.size() ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"force_distribution\": [\n");
   for (size_t i = 0; i < distributions.size(); ++i) {
