@@ -1,6 +1,7 @@
 #include "common/fem/multiscale_mesh.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "common/base/check.h"
 
@@ -120,16 +121,28 @@ EndZones FindEndZones(const TissueModel& model, int level, MeshKind kind, const 
   EndZones zones;
   zones.level = level;
   zones.finest = level;
-  if (kind != MeshKind::kMultiscale || model.def.end_levels == 0 || tool.num_points < 2 ||
+  if (kind != MeshKind::kMultiscale || model.def.end_resolution == 0 || tool.num_points < 2 ||
       tool.contact_radius_m > 0)
     return zones;
+  double length_m = 0;
+  for (int k = 0; k + 1 < tool.num_points; ++k)
+    length_m += std::hypot(tool.p_SP[k + 1].x() - tool.p_SP[k].x(),
+                           tool.p_SP[k + 1].y() - tool.p_SP[k].y());
+  // A cell size equal to the target up to rounding counts as reaching it.
+  constexpr double kRelTol = 1e-9;
+  const double cell_m = length_m / model.def.end_resolution * (1 + kRelTol);
+  int end_level = level;
+  while (end_level < model.def.max_level &&
+         std::max(model.CellSizeX_m(end_level), model.CellSizeY_m(end_level)) > cell_m)
+    ++end_level;
+  if (end_level == level) return zones;
   for (int k = 0; k < tool.num_points; ++k) {
     if (!(tool.p_SP[k].z() < 0)) continue;  // not pressed: the contact does not end here
     zones.x_m[zones.num_vertices] = tool.p_SP[k].x();
     zones.y_m[zones.num_vertices] = tool.p_SP[k].y();
     ++zones.num_vertices;
   }
-  if (zones.num_vertices > 0) zones.finest = level + model.def.end_levels;
+  if (zones.num_vertices > 0) zones.finest = end_level;
   MICRODEX_CHECK(zones.finest <= model.def.max_level);
   return zones;
 }

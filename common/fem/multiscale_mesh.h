@@ -5,7 +5,8 @@
 // neighbour across a side is one level finer is cut as a fan around its centre with that
 // side's midpoint as a vertex, so the mesh is conforming: no hanging nodes, no constraints.
 // Around the ends of a bar or polyline (where the prescribed displacement stops and the
-// solution behaves like r^½) the tree goes TissueDef::end_levels further ("end grading").
+// solution behaves like r^½) the tree goes on to a finer end level ("end grading",
+// TissueDef::end_resolution).
 
 #include <array>
 #include <cstdint>
@@ -36,7 +37,7 @@ struct EndZones {
   std::array<double, kMaxToolPoints> x_m{};
   std::array<double, kMaxToolPoints> y_m{};
   int level = 0;   // nominal level of the selection
-  int finest = 0;  // level + end_levels, or level when there is no zone
+  int finest = 0;  // the end level, or level when there is no zone
 };
 
 // Per-step mesh buffers, sized once to the model's capacities.
@@ -60,7 +61,7 @@ MeshSelection MakeMeshSelection(const TissueModel& model);
 
 // Chooses the leaves (kFine: every cell at `level`; kMultiscale: a level-l cell is refined
 // while l < level and its distance to the tool minus the contact radius is below
-// grading · h_l, or while l < level + end_levels and its distance to an end-zone vertex is
+// grading · h_l, or while l < the end level and its distance to an end-zone vertex is
 // below grading · h_l) and cuts them into triangles. Allocation-free. level ≤ def.level.
 void SelectMesh(const TissueModel& model, int level, MeshKind kind, const ToolContact& tool,
                 MeshSelection& mesh);

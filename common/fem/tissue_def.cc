@@ -66,9 +66,8 @@ void TissueDef::Validate() const {
   Require(level >= 1 && level <= max_level, "level", "an integer in [1, max_level]");
   Require(std::isfinite(grading) && grading >= 1.5 && grading <= 64, "grading",
           "a value in [1.5, 64] (below 1.5 neighbouring leaves may differ by two levels)");
-  Require(end_levels >= 0 && end_levels <= 4, "end_levels", "an integer in [0, 4]");
-  Require(mesh == MeshKind::kFine || level + end_levels <= max_level, "end_levels",
-          "level + end_levels <= max_level for the multi-scale mesh (raise max_level)");
+  Require(std::isfinite(end_resolution) && end_resolution >= 0 && end_resolution <= 1e4,
+          "end_resolution", "0 (off) or end-zone cells per tool length in (0, 1e4]");
   Require(std::isfinite(cg_relative_tolerance) && cg_relative_tolerance > 0 &&
               cg_relative_tolerance < 1,
           "cg_relative_tolerance", "a value in (0, 1)");
@@ -133,7 +132,7 @@ TissueDef LoadTissueDef(const std::string& path) {
                                            "level",
                                            "mesh",
                                            "grading",
-                                           "end_levels",
+                                           "end_resolution",
                                            "solver",
                                            "ordering",
                                            "cg_relative_tolerance",
@@ -157,7 +156,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   ReadField(root, path, "level", def.level);
   ReadEnum(root, path, "mesh", &ParseMeshKind, def.mesh);
   ReadField(root, path, "grading", def.grading);
-  ReadField(root, path, "end_levels", def.end_levels);
+  ReadField(root, path, "end_resolution", def.end_resolution);
   ReadEnum(root, path, "solver", &ParseSolverKind, def.solver);
   ReadEnum(root, path, "ordering", &ParseOrdering, def.ordering);
   ReadField(root, path, "cg_relative_tolerance", def.cg_relative_tolerance);

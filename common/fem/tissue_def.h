@@ -50,18 +50,21 @@ struct TissueDef {
   double thickness_m = 0.01;
   int max_level = 9;  // finest level of the hierarchy: level l has 2^l × 2^l cells
   // Level of the step's mesh: every cell the tool touches is at this level (kFine: every
-  // cell). 1 ≤ level, and level + end_levels ≤ max_level for the multi-scale mesh.
+  // cell; the multi-scale mesh goes finer only in the end zones, see end_resolution).
   int level = 7;
   MeshKind mesh = MeshKind::kMultiscale;
   // A level-l cell is refined when (distance to the tool − contact radius) < grading · h_l.
   // grading ≥ 1.5 keeps neighbouring leaves within one level of each other (see README).
   double grading = 2.0;
-  // Multi-scale mesh only: extra levels beyond `level` around every vertex of a bar or
-  // polyline tool, where the prescribed displacement ends and w ~ r^½ (the force error is
-  // O(h_end) instead of O(h)). A cell at level l ∈ [level, level + end_levels) is refined when
-  // (distance to a vertex − contact radius) < grading · h_l. Not applied to a point tool nor
-  // when contact_radius_m ≥ one level-`level` cell (the end is then rounded and resolved).
-  int end_levels = 2;
+  // Multi-scale mesh only, "end grading": around every pressed vertex of a bar or polyline
+  // tool, where the prescribed displacement ends and w ~ r^½, the mesh goes on to the end
+  // level: the first level whose cells are no larger than (tool length) / end_resolution
+  // (capped at max_level; no effect when it is not finer than `level`). The force error of
+  // the end singularity is O(h_end / length), so this fixes it relative to the tool. A cell
+  // at level l ∈ [level, end level) is refined when its distance to such a vertex is below
+  // grading · h_l. Not applied to a point tool nor to a tool with contact_radius_m > 0 (its
+  // ends are rounded). 0 disables.
+  double end_resolution = 64;
   SolverKind solver = SolverKind::kCholmod;
   Ordering ordering = Ordering::kNestedDissection;
   double cg_relative_tolerance = 1e-8;  // ‖b − K u‖ / ‖b‖ at which CG stops

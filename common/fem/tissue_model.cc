@@ -74,13 +74,15 @@ TissueModel BuildTissueModel(const TissueDef& def) {
   // End zones (multi-scale, vertices of a tool with zero contact radius): the children of a
   // level-(level + j) cell refined by the end rule, box distance to the vertex below
   // grading·max(hx, hy). Such cells fit in a square of side 2·grading·aspect + 2 cells around
-  // the vertex, 4 children each, for j < end_levels, at most kMaxToolPoints vertices.
+  // the vertex, 4 children each, for j < max_level − level (the end level is capped at
+  // max_level), at most kMaxToolPoints vertices.
   std::int64_t extra = 0;
-  if (def.mesh == MeshKind::kMultiscale && def.end_levels > 0) {
+  const int end_levels = def.max_level - def.level;
+  if (def.mesh == MeshKind::kMultiscale && def.end_resolution > 0 && end_levels > 0) {
     const double aspect =
         std::max(def.length_x_m, def.length_y_m) / std::min(def.length_x_m, def.length_y_m);
     const std::int64_t span = 2 * static_cast<std::int64_t>(std::ceil(def.grading * aspect)) + 2;
-    extra = std::int64_t{kMaxToolPoints} * def.end_levels * 4 * span * span;
+    extra = std::int64_t{kMaxToolPoints} * end_levels * 4 * span * span;
   }
   // A zone leaf gives at most 8 triangles; a level-`level` leaf next to a zone becomes a fan
   // (up to 6 more triangles and a centre node), and there are fewer such leaves than zone

@@ -46,16 +46,17 @@ ToolContact BarTool(const Case& c, double depth_m, double shift_x_m = 0, double 
                      {c.cx_m + shift_x_m + dx, c.cy_m + shift_y_m + dy, -depth_m});
 }
 
-// The multi-scale mesh of level l: cells touching the bar at level l, end zones at
-// l + end_levels; its grid must reach that level.
-TissueDef StudyDef(int level, MeshKind mesh, SolverKind solver, double grading, int end_levels) {
+// The multi-scale mesh of level l: cells touching the bar at level l, end zones down to
+// cells of bar length / end_resolution (level 7 for the 10 cm bar); its grid reaches that.
+TissueDef StudyDef(int level, MeshKind mesh, SolverKind solver, double grading,
+                   double end_resolution) {
   TissueDef def;
   def.length_x_m = kDomain_m;
   def.length_y_m = kDomain_m;
   def.shear_modulus_Pa = 1 * kPascalPerNewtonPerCm2;
   def.thickness_m = 1 * kMetrePerCm;
-  def.end_levels = end_levels;
-  def.max_level = mesh == MeshKind::kMultiscale ? level + end_levels : level;
+  def.end_resolution = end_resolution;
+  def.max_level = mesh == MeshKind::kMultiscale ? std::max(level, 8) : level;
   def.level = level;
   def.mesh = mesh;
   def.solver = solver;
@@ -115,7 +116,7 @@ struct Options {
   int min_steps = 15;
   double budget_s = 0.4;
   double grading = 2.0;
-  int end_levels = TissueDef{}.end_levels;
+  double end_resolution = TissueDef{}.end_resolution;
 };
 
 // Times steps of a bar whose depth oscillates ±10 % around 1 cm (the selection and the
@@ -178,14 +179,15 @@ int RunFem(int argc, char** argv) {
         throw std::invalid_argument("--max-level: expected 1..8");
     } else if (a == "--grading") {
       opt.grading = std::stod(value());
-    } else if (a == "--end-levels") {
-      opt.end_levels = std::stoi(value());
-      if (opt.end_levels < 0 || opt.end_levels > 2)
-        throw std::invalid_argument("--end-levels: expected 0..2");
+    } else if (a == "--end-resolution") {
+      opt.end_resolution = std::stod(value());
+      if (!(opt.end_resolution >= 0 && opt.end_resolution <= 1e4))
+        throw std::invalid_argument("--end-resolution: expected 0 (off) to 1e4");
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "microdex-bench fem [--json FILE] [--plot DIR] [--quick] [--max-level N] "
-          "[--grading G] [--end-levels E]\n  the thesis §3.3 study: force along the bar, RMS error "
+          "[--grading G] [--end-resolution R]\n  the thesis §3.3 study: force along the bar, RMS "
+          "error "
           "and CPU time by "
           "level,\n  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n");
       return 0;
@@ -231,7 +233,7 @@ int RunFem(int argc, char** argv) {
       for (MeshKind mesh : {MeshKind::kFine, MeshKind::kMultiscale}) {
         for (SolverKind solver : solvers) {
           const TissueModel model =
-              BuildTissueModel(StudyDef(level, mesh, solver, opt.grading, opt.end_levels));
+              BuildTissueModel(StudyDef(level, mesh, solver, opt.grading, opt.end_resolution));
           Run run;
           run.case_name = c.name;
           run.mesh = ToString(mesh);
@@ -311,7 +313,8 @@ int RunFem(int argc, char** argv) {
                               {SolverKind::kCholmod, Ordering::kNestedDissection}};
   for (int level = std::max(1, opt.max_level - 1); level <= opt.max_level; ++level) {
     for (const Variant& v : variants) {
-      TissueDef def = StudyDef(level, MeshKind::kMultiscale, v.solver, opt.grading, opt.end_levels);
+      TissueDef def =
+          StudyDef(level, MeshKind::kMultiscale, v.solver, opt.grading, opt.end_resolution);
       def.ordering = v.ordering;
       const TissueModel model = BuildTissueModel(def);
       TissueWorkspace ws(model), ws_static(model);

@@ -87,14 +87,16 @@ TEST(MultiscaleMesh, ConformingForManyToolsAndGradings) {
 }
 
 // Leaves touching the bar are at the nominal level, except near its two ends where the end
-// grading goes end_levels further: the leaves at the end points are at level + end_levels,
+// grading goes on to the end level (cells ≤ bar length / 64: level 7 for the 10 cm bar): the
+// leaves at the end points are at that level,
 // and no leaf finer than the nominal level is far from an end.
 TEST(MultiscaleMesh, FinestCellsUnderTheToolAndFewerUnknowns) {
   const TissueModel model = Model(6);
-  const int level = 6, finest = 6 + model.def.end_levels;
+  const int level = 6, finest = 7;
   MeshSelection mesh = MakeMeshSelection(model);
   const ToolContact bar = MakeBarTool({0.05, 0.1, -0.01}, {0.15, 0.1, -0.01});
   SelectMesh(model, level, MeshKind::kMultiscale, bar, mesh);
+  EXPECT_EQ(mesh.zones.finest, finest);
   int finest_touching = 0, at_ends = 0;
   const double h = model.CellSizeX_m(level) * 1.5;  // zone radius + a finer cell diagonal
   for (int k = 0; k < mesh.num_leaves; ++k) {
@@ -142,7 +144,7 @@ int FinestLeafLevel(const MeshSelection& mesh) {
 }
 
 // End grading applies to the pressed vertices of a bar or polyline of zero contact radius; a
-// point tool, a rounded tool (contact radius > 0), an unpressed bar and end_levels = 0 keep
+// point tool, a rounded tool (contact radius > 0), an unpressed bar and end_resolution 0 keep
 // the nominal level.
 TEST(MultiscaleMesh, EndGradingOnlyWhereTheContactEndsSharply) {
   const TissueModel model = Model(5);
@@ -165,7 +167,7 @@ TEST(MultiscaleMesh, EndGradingOnlyWhereTheContactEndsSharply) {
   EXPECT_EQ(FinestLeafLevel(mesh), 5);
 
   TissueDef def = model.def;
-  def.end_levels = 0;
+  def.end_resolution = 0;
   const TissueModel plain = BuildTissueModel(def);
   MeshSelection plain_mesh = MakeMeshSelection(plain);
   SelectMesh(plain, 5, MeshKind::kMultiscale, MakeBarTool(a, b), plain_mesh);
@@ -183,7 +185,7 @@ TEST(MultiscaleMesh, SixteenVertexPolylineFitsTheCapacities) {
   def.length_y_m = 0.1;
   def.level = 4;
   def.max_level = 8;
-  def.end_levels = 4;
+  def.end_resolution = 1e4;  // capped at max_level
   def.grading = 4.0;
   const TissueModel model = BuildTissueModel(def);
   MeshSelection mesh = MakeMeshSelection(model);

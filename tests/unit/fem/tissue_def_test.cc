@@ -41,7 +41,7 @@ TEST(TissueDefFile, SceneFilesLoadInSiUnits) {
   EXPECT_DOUBLE_EQ(study.shear_modulus_Pa, 1 * kPascalPerNewtonPerCm2);
   EXPECT_DOUBLE_EQ(study.thickness_m, 1 * kMetrePerCm);
   EXPECT_EQ(study.level, 7);
-  EXPECT_EQ(study.end_levels, 2);
+  EXPECT_DOUBLE_EQ(study.end_resolution, 64);
   EXPECT_EQ(study.mesh, MeshKind::kMultiscale);
   EXPECT_EQ(study.solver, SolverKind::kCholmod);
   EXPECT_EQ(study.ordering, Ordering::kNestedDissection);
@@ -82,8 +82,7 @@ TEST(TissueDefFile, BadFilesNameFileAndField) {
       {"tissue_bad_ordering.yaml", "tissue:\n  ordering: metis\n", "tissue.ordering"},
       {"tissue_negative_g.yaml", "tissue:\n  shear_modulus_Pa: -1\n", "shear_modulus_Pa"},
       {"tissue_level_high.yaml", "tissue:\n  max_level: 6\n  level: 7\n", "level"},
-      {"tissue_end_levels.yaml", "tissue:\n  max_level: 8\n  level: 7\n  end_levels: 2\n",
-       "end_levels"},
+      {"tissue_end_resolution.yaml", "tissue:\n  end_resolution: -64\n", "end_resolution"},
       {"tissue_malformed.yaml", "tissue: [1, 2\n", "malformed"},
   };
   for (const Bad& bad : cases) {
