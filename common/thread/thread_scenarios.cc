@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "common/base/check.h"
 #include "common/thread/grasp.h"
@@ -118,139 +120,191 @@ SwingPullReport RunSwingPull(const ThreadDef& def, const SwingPullOptions& optio
 ThreadDef KnotTyingDef(int num_nodes) {
   ThreadDef def = StiffNylon10_0();
   def.name = "knot-tying-nylon";
-  const double link_m = def.length_m / (def.num_nodes - 1);
+  constexpr double kMinLength_m = 12.8e-3;
+  const double link_m = std::max(2.0 * def.diameter_m, kMinLength_m / (num_nodes - 1));
   def.num_nodes = num_nodes;
   def.length_m = link_m * (num_nodes - 1);
   def.gravity_m_per_s2.setZero();
   return def;
 }
 
+KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state) {
+  for (Grasp& g : state.grasps) {
+    if (g.node >= 0) ReleaseGrasp(state, static_cast<int>(&g - state.grasps.data()));
+  }
+  double s_m = 0.0;
+  for (int i = 0; i < model.num_nodes; ++i) {
+    state.x_W.col(i) = Eigen::Vector3d(s_m, 0.0, 0.0);
+    if (i < model.num_links) s_m += model.rest_length_m[i];
+  }
+  state.v_W.setZero();
+  state.q_rad.setZero();
+  state.qdot_rad_per_s.setZero();
+  KnotTyingHands hands;
+  hands.standing_slot = GraspNode(model, 0, state);
+  hands.driver_slot = GraspNode(model, model.num_nodes - 1, state);
+  MICRODEX_CHECK(hands.standing_slot >= 0 && hands.driver_slot >= 0);
+  return hands;
+}
+
+void KnotThrowOptions::Validate() const {
+  auto require = [](bool ok, const char* field, const char* expected) {
+    if (!ok) {
+      throw std::invalid_argument(std::string("KnotThrowOptions.") + field + ": expected " +
+                                  expected);
+    }
+  };
+  require(passes >= 1 && passes <= 3, "passes", "1, 2 or 3");
+  require(std::isfinite(knot_x_m), "knot_x_m", "a finite position in m");
+  require(speed_m_per_s > 0.0 && speed_m_per_s <= 0.1, "speed_m_per_s", "a speed in (0, 0.1] m/s");
+  require(pull_speed_m_per_s > 0.0 && pull_speed_m_per_s <= 0.1, "pull_speed_m_per_s",
+          "a speed in (0, 0.1] m/s");
+  require(hold_tension_N > 0.0 && hold_tension_N < 1.0, "hold_tension_N", "a tension in (0, 1) N");
+  require(pull_tension_N > 0.0 && pull_tension_N < 1.0, "pull_tension_N", "a tension in (0, 1) N");
+  require(max_pull_m > 0.0 && max_pull_m < 1.0, "max_pull_m", "a distance in (0, 1) m");
+}
+
 namespace {
 
-// Jig geometry, m. The loop is held by four pegs around (x_c, kJigY); the working end passes
-// kOver above or below the table plane to cross over or under a strand.
-constexpr double kJigHalf = 1.5e-3;
-constexpr double kJigY = 4e-3;
-constexpr double kAround = 2e-3;  // the end's path runs this far outside the pegs
-constexpr double kPegRadius = 0.25e-3;
-constexpr double kPegHeight = 5e-3;
-constexpr double kOver = 0.6e-3;
+// Jig geometry, m: half the distance between the two pegs, peg radius and half height, the
+// clearance of the driver's path around a peg, the helix radius around the standing part and
+// the height of the second peg above the standing part.
+constexpr double kJigHalf_m = 1.0e-3;
+constexpr double kPegRadius_m = 0.1e-3;
+constexpr double kPegHalfHeight_m = 1.5e-3;
+constexpr double kAround_m = 0.3e-3;
+constexpr double kHelixRadius_m = 0.15e-3;
+constexpr double kSecondPegHeight_m = 0.6e-3;
+// Standing hand: speed per newton of tension error, and its speed limit.
+constexpr double kTensionGain_m_per_s_N = 3.0;
+constexpr double kMaxHandSpeed_m_per_s = 0.02;
 
 }  // namespace
 
-KnotTyingScript::KnotTyingScript(const ThreadModel& model, ThreadState& state,
-                                 const KnotTieOptions& options)
-    : options_(options) {
-  const double length = model.def.length_m;
-  const double a = kJigHalf;
-  const double out = a + kAround;
-  const double z = options.mirror ? -kOver : kOver;
-  // The thread is laid unknotted: along +x to the jig, up its right side, across its top and
-  // down its left side, so that the end starts above the standing part.
-  const double tail = (kJigY + out) + 2.0 * out + (out - 0.3e-3);
-  const double x_c = std::min(options.jig_x_fraction * length, length - tail - out);
-  const Eigen::Vector3d v[5] = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(x_c + out, 0, 0),
-                                Eigen::Vector3d(x_c + out, kJigY + out, 0),
-                                Eigen::Vector3d(x_c - out, kJigY + out, 0),
-                                Eigen::Vector3d(x_c - out, 0.3e-3, 0)};
-  // Place nodes at rest spacing along the polyline, starting so that it ends at v[4].
-  double poly = 0.0;
-  for (int k = 0; k < 4; ++k) poly += (v[k + 1] - v[k]).norm();
-  const double start = poly - length;  // may be negative: extend the first segment backwards
+KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& state,
+                                 KnotTyingHands hands, const KnotThrowOptions& options)
+    : options_(options), hands_(hands) {
+  options.Validate();
+  MICRODEX_CHECK(hands.standing_slot >= 0 && hands.driver_slot >= 0);
+  const int driver_node = state.grasps[hands.driver_slot].node;
+  MICRODEX_CHECK(driver_node >= 0 && state.grasps[hands.standing_slot].node >= 0);
+  const double x0 = options.knot_x_m;
+  const double a = kJigHalf_m;
+  // The standing part's line at the jig: mean y, z of the nodes under it (it lies along x).
+  double y_s = 0.0, z_s = 0.0;
+  int count = 0;
   for (int i = 0; i < model.num_nodes; ++i) {
-    double s = start + i * model.rest_length_m[0];
-    Eigen::Vector3d p;
-    if (s <= 0.0) {
-      p = v[0] + s * Eigen::Vector3d::UnitX();
-    } else {
-      int k = 0;
-      while (k < 3 && s > (v[k + 1] - v[k]).norm()) {
-        s -= (v[k + 1] - v[k]).norm();
-        ++k;
-      }
-      p = v[k] + s * (v[k + 1] - v[k]).normalized();
-    }
-    state.x_W.col(i) = p;
-  }
-  state.v_W.setZero();
-  slot_b_ = GraspNode(model, 0, state);
-  slot_a_ = GraspNode(model, model.num_nodes - 1, state);
-  MICRODEX_CHECK(slot_a_ >= 0 && slot_b_ >= 0);
-  for (double sx : {-1.0, 1.0}) {
-    for (double sy : {-1.0, 1.0}) {
-      const Eigen::Vector3d c(x_c + sx * a, kJigY + sy * a, 0.0);
-      colliders_.push_back(Collider::Capsule(c - kPegHeight * Eigen::Vector3d::UnitZ(),
-                                             c + kPegHeight * Eigen::Vector3d::UnitZ(),
-                                             kPegRadius));
+    const Eigen::Vector3d p = state.x_W.col(i);
+    if (std::abs(p.x() - x0) <= 1.5 * a) {
+      y_s += p.y();
+      z_s += p.z();
+      ++count;
     }
   }
-  // The working end's path: over the standing part, over the loop's near edge, down through
-  // the loop, out under its far edge; once more for a double overhand; then away.
-  std::vector<Eigen::Vector3d> path = {
-      state.x_W.col(model.num_nodes - 1), Eigen::Vector3d(x_c - out, -1.2e-3, z),
-      Eigen::Vector3d(x_c, -1.2e-3, z),   Eigen::Vector3d(x_c, kJigY, z),
-      Eigen::Vector3d(x_c, kJigY, -z),    Eigen::Vector3d(x_c + out + 1e-3, kJigY, -z),
+  if (count > 0) {
+    y_s /= count;
+    z_s /= count;
+  }
+  // Peg 1 just above the standing part (the thread presses on its underside as soon as the
+  // driver lifts the working end); peg 2 higher, so the loop between them is open.
+  const double y_p1 = y_s + model.radius_m + kPegRadius_m + 0.5 * model.def.diameter_m;
+  const double y_p2 = y_s + kSecondPegHeight_m;
+  const double sx = state.grasps[hands.driver_slot].p_WT.x() >= x0 ? 1.0 : -1.0;
+  for (const Eigen::Vector3d& c :
+       {Eigen::Vector3d(x0 + sx * a, y_p1, z_s), Eigen::Vector3d(x0 - sx * a, y_p2, z_s)}) {
+    colliders_.push_back(Collider::Capsule(c - kPegHalfHeight_m * Eigen::Vector3d::UnitZ(),
+                                           c + kPegHalfHeight_m * Eigen::Vector3d::UnitZ(),
+                                           kPegRadius_m));
+  }
+  // The standard jig has the driver's end to the right (+x) of the knot; with the driver on
+  // the left the whole jig is turned by pi about the y axis (x -> -x, z -> -z around the
+  // standing line), a rotation, so the knot keeps its handedness.
+  sx_ = state.grasps[hands.driver_slot].p_WT.x() >= x0 ? 1.0 : -1.0;
+  auto at = [&](double dx, double y, double dz) {
+    return Eigen::Vector3d(x0 + sx_ * dx, y, z_s + sx_ * dz);
   };
-  for (int pass = 1; pass < options.passes; ++pass) {
-    const double dy = 0.6e-3 * pass;
-    path.push_back(Eigen::Vector3d(x_c + out + 1e-3, kJigY + dy, z));
-    path.push_back(Eigen::Vector3d(x_c, kJigY + dy, z));
-    path.push_back(Eigen::Vector3d(x_c, kJigY + dy, -z));
-    path.push_back(Eigen::Vector3d(x_c + out + 1e-3, kJigY + dy, -z));
+  path_.push_back({state.x_W.col(driver_node), Phase::kLoop});
+  // The loop: up past peg 1's outer side, over both pegs, down past peg 2's outer side.
+  path_.push_back({at(a + kAround_m, y_p1 + kAround_m, 0.0), Phase::kLoop});
+  path_.push_back({at(-a - kAround_m, y_p2 + kAround_m, 0.0), Phase::kLoop});
+  path_.push_back({at(-a - kAround_m, y_p2 - kPegRadius_m - 0.1e-3, 0.0), Phase::kLoop});
+  // The helix around the standing part, starting inside the loop (y > 0): over it (the loop's
+  // crossing), then `passes` times under and over, ending on the near side (y < 0).
+  const double rho = kHelixRadius_m;
+  const double dx_h0 = -a + kPegRadius_m + 0.2e-3;
+  const double dx_h1 = 0.3 * a;
+  const double handed = options.right ? 1.0 : -1.0;
+  const double theta0 = -std::numbers::pi;
+  const double theta1 = 2.0 * std::numbers::pi * options.passes;
+  const int samples = 36 * options.passes + 18;
+  for (int k = 0; k <= samples; ++k) {
+    const double u = static_cast<double>(k) / samples;
+    const double theta = theta0 + u * (theta1 - theta0);
+    path_.push_back({at(dx_h0 + u * (dx_h1 - dx_h0), y_s - rho * std::cos(theta),
+                        -handed * rho * std::sin(theta)),
+                     Phase::kHelix});
   }
-  path.push_back(Eigen::Vector3d(x_c + out + 4e-3, kJigY, 0.0));
-  // The standing end feeds thread as the working end uses it.
-  const Eigen::Vector3d b0 = state.x_W.col(0);
-  double so_far = 0.0;
-  for (size_t k = 0; k < path.size(); ++k) {
-    if (k > 0) so_far += (path[k] - path[k - 1]).norm();
-    const double feed = std::min(0.8 * so_far, std::max(0.0, x_c - out - b0.x() - 2e-3));
-    waypoints_.push_back({path[k], b0 + feed * Eigen::Vector3d::UnitX(), true, false});
+  // Away from the knot, passing below peg 1.
+  path_.push_back({at(a + 0.6e-3, y_s - 0.4e-3, 0.0), Phase::kExit});
+  path_.push_back({at(a + 2.5e-3, y_s - 0.2e-3, 0.0), Phase::kExit});
+  for (size_t k = 1; k < path_.size(); ++k) {
+    path_total_m_ += (path_[k].p_W - path_[k - 1].p_W).norm();
   }
-  // Pull: pegs out, the grasps move apart along x.
-  Waypoint pull = waypoints_.back();
-  pull.pegs_enabled = false;
-  pull.pull = true;
-  waypoints_.push_back(pull);
 }
 
-bool KnotTyingScript::Step(const ThreadModel& model, ThreadState& state) {
-  if (done_) return false;
+bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
+  if (phase_ == Phase::kDone) return false;
   const double h = model.def.time_step_s;
-  const Waypoint& from = waypoints_[segment_];
-  if (segment_ + 1 >= static_cast<int>(waypoints_.size())) {
-    done_ = true;
-    return false;
-  }
-  const Waypoint& to = waypoints_[segment_ + 1];
-  for (Collider& c : colliders_) c.enabled = to.pegs_enabled;
-  if (to.pull) {
-    const double dx = options_.pull_speed_m_per_s * h;
-    pulled_m_ += dx;
-    const Eigen::Vector3d pa = state.grasps[slot_a_].p_WT + dx * Eigen::Vector3d::UnitX();
-    const Eigen::Vector3d pb = state.grasps[slot_b_].p_WT - dx * Eigen::Vector3d::UnitX();
-    SetGraspTarget(state, slot_a_, pa, 0.0);
-    SetGraspTarget(state, slot_b_, pb, 0.0);
-    StepThread(model, colliders_, state);
-    const double fa = state.grasps[slot_a_].f_T_W.norm();
-    const double fb = state.grasps[slot_b_].f_T_W.norm();
-    if ((fa > options_.pull_tension_N && fb > options_.pull_tension_N) ||
-        pulled_m_ >= options_.max_pull_m) {
-      done_ = true;
+  Grasp& standing = state.grasps[hands_.standing_slot];
+  Grasp& driver = state.grasps[hands_.driver_slot];
+  if (phase_ != Phase::kPull) {
+    // The driver follows its path at constant speed.
+    double advance = options_.speed_m_per_s * h;
+    Eigen::Vector3d p = driver.p_WT;
+    while (advance > 0.0 && segment_ + 1 < static_cast<int>(path_.size())) {
+      const Eigen::Vector3d& from = path_[segment_].p_W;
+      const Eigen::Vector3d& to = path_[segment_ + 1].p_W;
+      const double len = (to - from).norm();
+      const double step = std::min(advance, len - segment_s_m_);
+      segment_s_m_ += step;
+      path_s_m_ += step;
+      advance -= step;
+      p = len > 0.0 ? Eigen::Vector3d(from + (segment_s_m_ / len) * (to - from)) : to;
+      phase_ = path_[segment_ + 1].phase;
+      if (segment_s_m_ >= len) {
+        ++segment_;
+        segment_s_m_ = 0.0;
+      }
     }
-    return !done_;
+    SetGraspTarget(state, hands_.driver_slot, p, driver.roll_rad);
+    // The standing hand keeps the thread taut: it gives thread when the pull exceeds the hold
+    // tension and takes it in when the thread goes slack.
+    const double tension = sx_ * standing.f_T_W.x();
+    const double v = std::clamp(kTensionGain_m_per_s_N * (tension - options_.hold_tension_N),
+                                -kMaxHandSpeed_m_per_s, kMaxHandSpeed_m_per_s);
+    SetGraspTarget(state, hands_.standing_slot,
+                   standing.p_WT + (sx_ * v * h) * Eigen::Vector3d::UnitX(), standing.roll_rad);
+    if (segment_ + 1 >= static_cast<int>(path_.size())) {
+      phase_ = Phase::kPull;
+      for (Collider& c : colliders_) c.enabled = false;
+    }
+    StepThread(model, colliders_, state);
+    return true;
   }
-  const double seg_len = std::max((to.p_a_W - from.p_a_W).norm(), 1e-12);
-  segment_s_ += options_.speed_m_per_s * h;
-  const double u = std::min(segment_s_ / seg_len, 1.0);
-  SetGraspTarget(state, slot_a_, from.p_a_W + u * (to.p_a_W - from.p_a_W), 0.0);
-  SetGraspTarget(state, slot_b_, from.p_b_W + u * (to.p_b_W - from.p_b_W), 0.0);
+  // Pull: both hands apart along x until each feels the pull tension.
+  const double dx = options_.pull_speed_m_per_s * h;
+  pulled_m_ += dx;
+  SetGraspTarget(state, hands_.driver_slot, driver.p_WT + (sx_ * dx) * Eigen::Vector3d::UnitX(),
+                 driver.roll_rad);
+  SetGraspTarget(state, hands_.standing_slot, standing.p_WT - (sx_ * dx) * Eigen::Vector3d::UnitX(),
+                 standing.roll_rad);
   StepThread(model, colliders_, state);
-  if (u >= 1.0) {
-    ++segment_;
-    segment_s_ = 0.0;
+  if ((driver.f_T_W.norm() >= options_.pull_tension_N &&
+       standing.f_T_W.norm() >= options_.pull_tension_N) ||
+      pulled_m_ >= options_.max_pull_m) {
+    phase_ = Phase::kDone;
   }
-  return true;
+  return phase_ != Phase::kDone;
 }
 
 }  // namespace microdex::thread

@@ -40,56 +40,79 @@ struct SwingPullReport {
 SwingPullReport RunSwingPull(const ThreadDef& def, const SwingPullOptions& options);
 
 // ---- Knot tying ----------------------------------------------------------------------------
-// A knot-tying jig: four vertical pegs hold a loop open while the working end (grasp A) winds
-// around them, crosses the standing part, passes through the loop `passes` times (1: overhand,
-// 2: double overhand), then the pegs are removed and both grasps pull the knot tight. The
-// standing end (grasp B) stays put until the pull. mirror flips the handedness (z -> -z).
-struct KnotTieOptions {
-  int passes = 1;
-  bool mirror = false;
-  // Where along x the jig sits, as a fraction of the thread length (a second knot on the
-  // same thread uses another place).
-  double jig_x_fraction = 0.3;
-  double speed_m_per_s = 0.01;
-  double pull_speed_m_per_s = 0.005;
-  double pull_tension_N = 0.02;  // the pull stops when both grasps feel this much
-  double max_pull_m = 0.02;      // or after moving this far
-};
-
 // The thread for the knot tests and benchmarks: stiff nylon 10-0 without gravity (the suture
-// floats in fluid), num_nodes nodes at the preset's link length.
+// floats in fluid), num_nodes nodes, links of two diameters (fine enough to resolve a knot
+// pulled tight) but never shorter than needed for a 12.8 mm thread, so that every size of the
+// benchmark carries the same knot-tying trajectory.
 ThreadDef KnotTyingDef(int num_nodes);
 
-class KnotTyingScript {
- public:
-  // Builds the jig and the waypoint list for `state` (a straight thread along +x, grasped at
-  // node 0 by slot b and at node num_nodes - 1 by slot a, which this constructor sets up).
-  KnotTyingScript(const ThreadModel& model, ThreadState& state, const KnotTieOptions& options);
+// The two hands of a bimanual tie: the standing hand holds the standing end (node 0), the
+// driver (the needle holder) holds the working end (last node).
+struct KnotTyingHands {
+  int standing_slot = -1;
+  int driver_slot = -1;
+};
 
-  // Advances the script by one step of model.def.time_step_s (moves the grasps, steps the
-  // thread). Returns false when the script is over.
+// Lays the thread straight along +x from the origin and grasps both ends.
+KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state);
+
+// One throw, tied as by hand on a jig (thesis §5.5, Fig. 5.7): the driver carries the working
+// end under a first peg, over it and a second peg (the loop), back across the standing part
+// and `passes` times around the standing part inside the loop (a helix), then away to +x.
+// Meanwhile the standing hand keeps the thread taut at hold_tension_N by feeding or taking in
+// thread along x. Then the pegs are withdrawn and both hands pull apart until each feels
+// pull_tension_N. passes = 1 ties an overhand knot (trefoil), 2 a double overhand; right picks
+// the handedness (all crossings positive seen from +z). A second throw on the same thread,
+// next to the first, makes a square (opposite handedness) or granny knot; it is tied with the
+// other end (the hands swap roles), whose tail is the long one after the first throw. With
+// the driver's end towards -x of the knot the jig is turned by pi about the y axis.
+struct KnotThrowOptions {
+  int passes = 1;
+  bool right = true;
+  double knot_x_m = 4e-3;  // the jig's centre along the standing part
+  double speed_m_per_s = 4e-3;
+  double pull_speed_m_per_s = 2e-3;
+  double hold_tension_N = 2e-3;
+  double pull_tension_N = 10e-3;
+  double max_pull_m = 8e-3;
+  // Throws std::invalid_argument naming the bad field.
+  void Validate() const;
+};
+
+class KnotThrowScript {
+ public:
+  enum class Phase { kLoop, kHelix, kExit, kPull, kDone };
+
+  // The jig is placed on the standing part as it lies in `state` (it need not be straight
+  // after an earlier throw). Precomputes the driver's path; allocates only here.
+  KnotThrowScript(const ThreadModel& model, const ThreadState& state, KnotTyingHands hands,
+                  const KnotThrowOptions& options);
+
+  // Moves the hands by one time step of model.def.time_step_s and steps the thread. Returns
+  // false when the throw is over.
   bool Step(const ThreadModel& model, ThreadState& state);
-  bool done() const { return done_; }
+  Phase phase() const { return phase_; }
+  bool done() const { return phase_ == Phase::kDone; }
   const std::vector<Collider>& colliders() const { return colliders_; }
-  int slot_a() const { return slot_a_; }
-  int slot_b() const { return slot_b_; }
+  // Driver path length left before the pull, m.
+  double path_left_m() const { return path_total_m_ - path_s_m_; }
 
  private:
   struct Waypoint {
-    Eigen::Vector3d p_a_W;
-    Eigen::Vector3d p_b_W;
-    bool pegs_enabled = true;
-    bool pull = false;  // move until tension or distance is reached
+    Eigen::Vector3d p_W;
+    Phase phase;
   };
-  KnotTieOptions options_;
+  KnotThrowOptions options_;
+  KnotTyingHands hands_;
   std::vector<Collider> colliders_;
-  std::vector<Waypoint> waypoints_;
-  int slot_a_ = -1;
-  int slot_b_ = -1;
+  std::vector<Waypoint> path_;
   int segment_ = 0;
-  double segment_s_ = 0.0;  // distance travelled along the current segment
+  double path_s_m_ = 0.0;
+  double path_total_m_ = 0.0;
+  double segment_s_m_ = 0.0;
   double pulled_m_ = 0.0;
-  bool done_ = false;
+  double sx_ = 1.0;  // +1: the driver's end lies towards +x of the knot, -1: towards -x
+  Phase phase_ = Phase::kLoop;
 };
 
 }  // namespace microdex::thread

@@ -4,7 +4,7 @@
 //   microdex-bench thread [--json FILE]                  speed during knot tying (default)
 //   microdex-bench thread --stability --json FILE [--plot FILE.png]
 //   microdex-bench thread --accuracy --json FILE
-//   microdex-bench thread --tie PASSES [--mirror]        tie a knot, print its trace
+//   microdex-bench thread --tie 2 | 1r,1l [--nodes N] [--obj FILE]   tie throws, trace them
 //   --quick                                              reduced sizes (CTest)
 #include <algorithm>
 #include <chrono>
@@ -21,6 +21,7 @@
 
 #include "bench_registry.h"
 #include "common/thread/knot_recognition.h"
+#include "common/thread/segment_distance.h"
 #include "common/thread/sphere_bvh.h"
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
@@ -270,10 +271,11 @@ int RunSpeed(bool quick, const std::string& json) {
       const ThreadModel model = MakeThreadModel(def);
       ThreadState state =
           MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-      KnotTieOptions tie;
+      const KnotTyingHands hands = SetUpKnotTying(model, state);
+      KnotThrowOptions tie;
       tie.passes = 2;
-      tie.speed_m_per_s = 0.03;  // a faster hand, to reach the knot within the timed steps
-      KnotTyingScript script(model, state, tie);
+      tie.speed_m_per_s = 0.01;  // a faster hand, to reach the knot within the timed steps
+      KnotThrowScript script(model, state, hands, tie);
       std::vector<double> step_s, collision_s;
       for (int k = 0; k < max_steps && !script.done(); ++k) {
         const auto t0 = Clock::now();
@@ -344,53 +346,173 @@ int RunSpeed(bool quick, const std::string& json) {
 }
 
 // ---- tie -----------------------------------------------------------------------------------
-int RunTie(int passes, bool mirror, int nodes) {
+const char* PhaseName(KnotThrowScript::Phase phase) {
+  switch (phase) {
+    case KnotThrowScript::Phase::kLoop:
+      return "loop";
+    case KnotThrowScript::Phase::kHelix:
+      return "helix";
+    case KnotThrowScript::Phase::kExit:
+      return "exit";
+    case KnotThrowScript::Phase::kPull:
+      return "pull";
+    case KnotThrowScript::Phase::kDone:
+      return "done";
+  }
+  return "?";
+}
+
+std::string KnotOf(const ThreadModel& model, const ThreadState& state, int* crossings) {
+  std::vector<Eigen::Vector3d> poly(model.num_nodes);
+  for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
+  KnotOptions options;
+  options.thread_diameter_m = model.def.diameter_m;
+  options.locate = false;
+  const KnotAnalysis a = AnalyzeKnot(poly, options);
+  if (crossings != nullptr) *crossings = a.crossings;
+  return std::string(KnotName(a.type));
+}
+
+// Ties the throws of `spec` ("2": double overhand; "1r,1l": square; "1r,1r": granny; a pass
+// count and r/l handedness per throw) and prints the topology at each phase change.
+int RunTie(const std::string& spec, int nodes, const std::string& obj) {
+  std::vector<KnotThrowOptions> throws;
+  std::stringstream in(spec);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    KnotThrowOptions t;
+    t.passes = std::atoi(item.c_str());
+    t.right = item.find('l') == std::string::npos;
+    t.Validate();
+    throws.push_back(t);
+  }
+  if (throws.empty()) throw std::invalid_argument("--tie: expected throws such as 2 or 1r,1l");
   const ThreadModel model = MakeThreadModel(KnotTyingDef(nodes));
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-  KnotTieOptions tie;
-  tie.passes = passes;
-  tie.mirror = mirror;
-  KnotTyingScript script(model, state, tie);
+  KnotTyingHands hands = SetUpKnotTying(model, state);
   double min_d = std::numeric_limits<double>::infinity();
+  const char* dump = std::getenv("MICRODEX_TIE_DUMP");
+  const int dump_every = std::getenv("MICRODEX_TIE_DUMP_EVERY") != nullptr
+                             ? std::max(1, std::atoi(std::getenv("MICRODEX_TIE_DUMP_EVERY")))
+                             : 200;
   int k = 0;
-  while (script.Step(model, state)) {
-    min_d = std::min(min_d, CalcMinNonAdjacentDistance(model, state.x_W));
-    if (std::getenv("MICRODEX_TIE_DUMP") != nullptr && k % 250 == 0) {
-      std::FILE* f = std::fopen(std::getenv("MICRODEX_TIE_DUMP"), "a");
-      for (int i = 0; i < model.num_nodes; ++i) {
-        std::fprintf(f, "%g %g %g\n", state.x_W(0, i) * 1e3, state.x_W(1, i) * 1e3,
-                     state.x_W(2, i) * 1e3);
+  double knot_x = 4e-3;
+  for (size_t t = 0; t < throws.size(); ++t) {
+    throws[t].knot_x_m = knot_x;
+    KnotThrowScript script(model, state, hands, throws[t]);
+    KnotThrowScript::Phase last = script.phase();
+    if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr) {
+      for (const Collider& c : script.colliders()) {
+        const Eigen::Vector3d m = 0.5 * (c.a_W + c.b_W) * 1e3;
+        std::printf("  peg at (%.4f %.4f %.4f) mm radius %.3f mm\n", m.x(), m.y(), m.z(),
+                    c.radius_m * 1e3);
       }
-      std::fprintf(f, "\n\n");
-      std::fclose(f);
     }
-    if (++k % 500 == 0) {
-      std::printf("t=%.2f s min_dist/d=%.2f strain=%.3f fA=%.3g fB=%.3g contacts=%d\n",
-                  state.time_s, min_d / model.def.diameter_m, state.status.max_strain,
-                  state.grasps[script.slot_a()].f_T_W.norm(),
-                  state.grasps[script.slot_b()].f_T_W.norm(), state.status.num_self_contacts);
+    while (script.Step(model, state)) {
+      const double d_now = CalcMinNonAdjacentDistance(model, state.x_W);
+      if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr && d_now < 0.5 * model.def.diameter_m &&
+          min_d >= 0.5 * model.def.diameter_m) {
+        for (int a = 0; a < model.num_links; ++a) {
+          for (int b = a + 2; b < model.num_links; ++b) {
+            const SegmentClosest c = ClosestSegmentSegment(state.x_W.col(a), state.x_W.col(a + 1),
+                                                           state.x_W.col(b), state.x_W.col(b + 1));
+            if (c.distance_m < 0.5 * model.def.diameter_m) {
+              std::printf("  t=%.4f pair %d %d dist/d=%.3f s=%.2f t=%.2f at (%.4f %.4f %.4f) mm\n",
+                          state.time_s, a, b, c.distance_m / model.def.diameter_m, c.s, c.t,
+                          c.p.x() * 1e3, c.p.y() * 1e3, c.p.z() * 1e3);
+            }
+          }
+        }
+      }
+      min_d = std::min(min_d, d_now);
+      if (dump != nullptr && k % dump_every == 0) {
+        std::FILE* f = std::fopen(dump, "a");
+        for (int i = 0; i < model.num_nodes; ++i) {
+          std::fprintf(f, "%g %g %g\n", state.x_W(0, i) * 1e3, state.x_W(1, i) * 1e3,
+                       state.x_W(2, i) * 1e3);
+        }
+        std::fprintf(f, "\n\n");
+        std::fclose(f);
+      }
+      ++k;
+      if (script.phase() != last) {
+        int crossings = 0;
+        const std::string knot = KnotOf(model, state, &crossings);
+        std::printf(
+            "throw %zu %s -> %s at t=%.3f s: knot=%s (%d crossings) min_dist/d=%.3f "
+            "strain=%.4f f_standing=%.3g N f_driver=%.3g N self_contacts=%d resets=%lld "
+            "guard=%lld\n",
+            t + 1, PhaseName(last), PhaseName(script.phase()), state.time_s, knot.c_str(),
+            crossings, min_d / model.def.diameter_m, state.status.max_strain,
+            state.grasps[hands.standing_slot].f_T_W.norm(),
+            state.grasps[hands.driver_slot].f_T_W.norm(), state.status.num_self_contacts,
+            static_cast<long long>(state.status.nonfinite_resets +
+                                   state.status.factorization_failures),
+            static_cast<long long>(state.status.guard_corrections));
+        last = script.phase();
+        if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr) {
+          int worst = 0;
+          double worst_strain = 0.0;
+          for (int j = 0; j < model.num_links; ++j) {
+            const double e =
+                (state.x_W.col(j + 1) - state.x_W.col(j)).norm() / model.rest_length_m[j] - 1.0;
+            if (std::abs(e) > std::abs(worst_strain)) {
+              worst = j;
+              worst_strain = e;
+            }
+          }
+          std::printf("    link %d strain %.4f at (%.3f %.3f %.3f)\n", j, e, state.x_W(0, j) * 1e3,
+                      state.x_W(1, j) * 1e3, state.x_W(2, j) * 1e3);
+        }
+      }
     }
+    std::printf(
+        "  worst link %d strain %.4f at x=%.3f y=%.3f mm; standing at %.3f, driver at %.3f "
+        "%.3f mm\n",
+        worst, worst_strain, state.x_W(0, worst) * 1e3, state.x_W(1, worst) * 1e3,
+        state.grasps[hands.standing_slot].p_WT.x() * 1e3,
+        state.grasps[hands.driver_slot].p_WT.x() * 1e3,
+        state.grasps[hands.driver_slot].p_WT.y() * 1e3);
   }
-  std::vector<Eigen::Vector3d> poly(model.num_nodes);
-  for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
-  std::printf(
-      "done t=%.2f s, min_dist/d=%.3f, resets=%lld, knot=%s\n", state.time_s,
-      min_d / model.def.diameter_m,
-      static_cast<long long>(state.status.nonfinite_resets + state.status.factorization_failures),
-      std::string(KnotName(RecognizeKnot(poly))).c_str());
-  std::printf("o thread\n");
-  for (const auto& p : poly) std::printf("v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
-  std::printf("l");
-  for (int i = 1; i <= model.num_nodes; ++i) std::printf(" %d", i);
-  std::printf("\n");
-  return 0;
+}
+}
+int crossings = 0;
+const std::string knot = KnotOf(model, state, &crossings);
+std::printf("throw %zu done at t=%.3f s: knot=%s (%d crossings) min_dist/d=%.3f f=%.3g/%.3g N\n",
+            t + 1, state.time_s, knot.c_str(), crossings, min_d / model.def.diameter_m,
+            state.grasps[hands.standing_slot].f_T_W.norm(),
+            state.grasps[hands.driver_slot].f_T_W.norm());
+// The next throw goes on the working part, right of this knot's centre.
+std::vector<Eigen::Vector3d> poly(model.num_nodes);
+for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
+KnotOptions options;
+options.thread_diameter_m = model.def.diameter_m;
+const KnotAnalysis a = AnalyzeKnot(poly, options);
+// The next throw is tied by the other hand, next to this knot on the other side.
+std::swap(hands.standing_slot, hands.driver_slot);
+const double side = state.grasps[hands.driver_slot].p_WT.x() >= knot_x ? 1.0 : -1.0;
+knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * 3.0e-3;
+}
+if (!obj.empty()) {
+  std::ostringstream out;
+  out << "o thread\n";
+  for (int i = 0; i < model.num_nodes; ++i) {
+    out << "v " << Num(state.x_W(0, i)) << " " << Num(state.x_W(1, i)) << " "
+        << Num(state.x_W(2, i)) << "\n";
+  }
+  out << "l";
+  for (int i = 1; i <= model.num_nodes; ++i) out << " " << i;
+  out << "\n";
+  WriteFile(obj, out.str());
+}
+return 0;
 }
 
 int Main(int argc, char** argv) {
-  bool stability = false, accuracy = false, quick = false, mirror = false;
-  int tie = 0, nodes = 65;
-  std::string json, plot;
+  bool stability = false, accuracy = false, quick = false;
+  int nodes = 257;
+  std::string json, plot, tie, obj;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&](const char* name) -> std::string {
@@ -403,28 +525,27 @@ int Main(int argc, char** argv) {
       accuracy = true;
     } else if (arg == "--quick") {
       quick = true;
-    } else if (arg == "--mirror") {
-      mirror = true;
+    } else if (arg == "--obj") {
+      obj = value("--obj");
     } else if (arg == "--json") {
       json = value("--json");
     } else if (arg == "--plot") {
       plot = value("--plot");
     } else if (arg == "--tie") {
-      tie = std::atoi(value("--tie").c_str());
-      if (tie < 1 || tie > 3) throw std::invalid_argument("--tie: expected 1, 2 or 3 passes");
+      tie = value("--tie");
     } else if (arg == "--nodes") {
       nodes = std::atoi(value("--nodes").c_str());
       if (nodes < 33) throw std::invalid_argument("--nodes: expected at least 33");
     } else if (arg == "--help" || arg == "-h") {
       std::printf(
-          "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --tie N "
-          "[--mirror] [--nodes N]] [--json FILE] [--quick]\n");
+          "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --tie THROWS "
+          "[--nodes N] [--obj FILE]] [--json FILE] [--quick]\n");
       return 0;
     } else {
       throw std::invalid_argument("unknown option '" + arg + "'");
     }
   }
-  if (tie > 0) return RunTie(tie, mirror, nodes);
+  if (!tie.empty()) return RunTie(tie, nodes, obj);
   if (stability) return RunStability(quick, json, plot);
   if (accuracy) return RunAccuracy(quick, json);
   return RunSpeed(quick, json);
