@@ -114,6 +114,27 @@ Instructor::~Instructor() {
   d.context.reset();
 }
 
+const char* LossSignalName(LossSignal s) {
+  switch (s) {
+    case LossSignal::kNone:
+      return "none";
+    case LossSignal::kLiveliness:
+      return "liveliness";
+    case LossSignal::kNoWriters:
+      return "no-writers";
+    case LossSignal::kSilence:
+      return "silence";
+  }
+  return "?";
+}
+
+void Instructor::MarkLost(StationView& v, LossSignal signal, std::int64_t now_ns) {
+  if (v.presence != Presence::kAlive) return;
+  v.presence = Presence::kLost;
+  v.presence_changed_ns = now_ns;
+  v.lost_by = signal;
+}
+
 StationView& Instructor::ViewFor(const std::string& station_id) {
   auto it = stations_.find(station_id);
   if (it == stations_.end()) {
@@ -131,8 +152,10 @@ void Instructor::Run() {
     if (stop_.load()) break;
     dds_->guard.set_trigger_value(false);
     SendQueuedCues();
-    HandleStationInfo();
+    // Liveliness first: when a station's participant is dropped, its liveliness change and
+    // its instance's NOT_ALIVE_NO_WRITERS arrive together, and the former names the signal.
     HandleLiveliness();
+    HandleStationInfo();
     HandleInputs();
     TakeAll<msg::ToolState, net::ToolState>(dds_->tool, &StationView::tool);
     TakeAll<msg::NeedleState, net::NeedleState>(dds_->needle, &StationView::needle);
@@ -148,10 +171,7 @@ void Instructor::CheckSilence() {
   std::lock_guard<std::mutex> lock(mutex_);
   for (auto& [id, v] : stations_) {
     if (v.presence != Presence::kAlive || v.last_heard_ns == 0) continue;
-    if (now - v.last_heard_ns > kSilenceLimit_ns) {
-      v.presence = Presence::kLost;
-      v.presence_changed_ns = now;
-    }
+    if (now - v.last_heard_ns > kSilenceLimit_ns) MarkLost(v, LossSignal::kSilence, now);
   }
 }
 
@@ -181,10 +201,8 @@ void Instructor::HandleStationInfo() {
     if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
       if (v.presence != Presence::kDeparted) v.presence_changed_ns = now;
       v.presence = Presence::kDeparted;
-    } else if (si.instance_state == dds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE &&
-               v.presence == Presence::kAlive) {
-      v.presence = Presence::kLost;
-      v.presence_changed_ns = now;
+    } else if (si.instance_state == dds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE) {
+      MarkLost(v, LossSignal::kNoWriters, now);
     }
   }
 }
@@ -193,18 +211,15 @@ void Instructor::HandleLiveliness() {
   dds::LivelinessChangedStatus status;
   dds_->info->get_liveliness_changed_status(status);
   // A StationInfo writer missed its lease (not_alive grows) or vanished with its participant
-  // (alive shrinks: Fast DDS 2.9 reports a SIGKILLed station this way). The status names the
-  // last writer that changed; the instance state (NOT_ALIVE_NO_WRITERS, HandleStationInfo)
-  // and the silence watchdog (CheckSilence) cover stations that fail together.
+  // (alive shrinks: Fast DDS 2.9 reports a SIGKILLed station this way, when the participant
+  // lease of 1 s expires). The status names the last writer that changed; the instance state
+  // (NOT_ALIVE_NO_WRITERS, HandleStationInfo) covers stations that fail together, and the
+  // silence watchdog (CheckSilence) is the last resort.
   if (status.not_alive_count_change <= 0 && status.alive_count_change >= 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = writer_to_station_.find(HandleKey(status.last_publication_handle));
   if (it == writer_to_station_.end()) return;
-  StationView& v = ViewFor(it->second);
-  if (v.presence == Presence::kAlive) {
-    v.presence = Presence::kLost;
-    v.presence_changed_ns = MonotonicNowNs();
-  }
+  MarkLost(ViewFor(it->second), LossSignal::kLiveliness, MonotonicNowNs());
 }
 
 template <class Msg, class Plain>

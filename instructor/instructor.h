@@ -38,6 +38,16 @@ enum class Presence {
 };
 const char* PresenceName(Presence p);
 
+// Which signal reported a station lost (the first that fired).
+enum class LossSignal {
+  kNone,
+  kLiveliness,  // liveliness-changed status of the StationInfo reader (writer lease or
+                // participant lease expired)
+  kNoWriters,   // StationInfo instance became NOT_ALIVE_NO_WRITERS (its writer was removed)
+  kSilence,     // nothing received from it for kSilenceLimit_ns (second signal)
+};
+const char* LossSignalName(LossSignal s);
+
 template <class T>
 struct Mirror {
   std::optional<T> latest;
@@ -48,9 +58,10 @@ struct Mirror {
 struct StationView {
   net::StationInfo info;
   Presence presence = Presence::kAlive;
-  std::int64_t presence_changed_ns = 0;  // monotonic
-  int comebacks = 0;                     // times it became alive again after lost/departed
-  std::int64_t last_heard_ns = 0;        // monotonic, last sample of any topic from it
+  std::int64_t presence_changed_ns = 0;    // monotonic
+  int comebacks = 0;                       // times it became alive again after lost/departed
+  LossSignal lost_by = LossSignal::kNone;  // of the latest loss (kNone while never lost)
+  std::int64_t last_heard_ns = 0;          // monotonic, last sample of any topic from it
   Mirror<net::ToolState> tool;
   Mirror<net::NeedleState> needle;
   Mirror<net::Telemetry> telemetry;
@@ -71,8 +82,10 @@ class Instructor {
  public:
   static constexpr std::size_t kMaxEventsPerStation = 256;
   // A live station publishes DeviceInput at 1 kHz and Telemetry at 10 Hz: silence for this
-  // long marks it lost even if no liveliness change named it.
-  static constexpr std::int64_t kSilenceLimit_ns = 1'000'000'000;
+  // long marks it lost even if no liveliness change named it. A second signal only: the
+  // participant lease (1 s, deploy/dds) makes the liveliness path report a killed station
+  // first (0.75-1 s after the kill), so this is set longer than that.
+  static constexpr std::int64_t kSilenceLimit_ns = 1'500'000'000;
 
   // Creates the participant (throws std::runtime_error naming the profile) and starts the
   // DDS thread.
@@ -111,6 +124,8 @@ class Instructor {
   void SendQueuedCues();
   void CheckSilence();
   StationView& ViewFor(const std::string& station_id);
+  // Marks v lost by `signal` if it is alive (mutex_ held).
+  static void MarkLost(StationView& v, LossSignal signal, std::int64_t now_ns);
 
   InstructorOptions options_;
   std::string session_id_;
