@@ -462,51 +462,46 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
               worst_strain = e;
             }
           }
-          std::printf("    link %d strain %.4f at (%.3f %.3f %.3f)\n", j, e, state.x_W(0, j) * 1e3,
-                      state.x_W(1, j) * 1e3, state.x_W(2, j) * 1e3);
+          std::printf(
+              "  worst link %d strain %.4f at x=%.3f y=%.3f mm; standing at %.3f, driver at %.3f "
+              "%.3f mm\n",
+              worst, worst_strain, state.x_W(0, worst) * 1e3, state.x_W(1, worst) * 1e3,
+              state.grasps[hands.standing_slot].p_WT.x() * 1e3,
+              state.grasps[hands.driver_slot].p_WT.x() * 1e3,
+              state.grasps[hands.driver_slot].p_WT.y() * 1e3);
         }
       }
     }
+    int crossings = 0;
+    const std::string knot = KnotOf(model, state, &crossings);
     std::printf(
-        "  worst link %d strain %.4f at x=%.3f y=%.3f mm; standing at %.3f, driver at %.3f "
-        "%.3f mm\n",
-        worst, worst_strain, state.x_W(0, worst) * 1e3, state.x_W(1, worst) * 1e3,
-        state.grasps[hands.standing_slot].p_WT.x() * 1e3,
-        state.grasps[hands.driver_slot].p_WT.x() * 1e3,
-        state.grasps[hands.driver_slot].p_WT.y() * 1e3);
+        "throw %zu done at t=%.3f s: knot=%s (%d crossings) min_dist/d=%.3f f=%.3g/%.3g N\n", t + 1,
+        state.time_s, knot.c_str(), crossings, min_d / model.def.diameter_m,
+        state.grasps[hands.standing_slot].f_T_W.norm(),
+        state.grasps[hands.driver_slot].f_T_W.norm());
+    std::vector<Eigen::Vector3d> poly(model.num_nodes);
+    for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
+    KnotOptions options;
+    options.thread_diameter_m = model.def.diameter_m;
+    const KnotAnalysis a = AnalyzeKnot(poly, options);
+    // The next throw is tied by the other hand, next to this knot on the other side.
+    std::swap(hands.standing_slot, hands.driver_slot);
+    const double side = state.grasps[hands.driver_slot].p_WT.x() >= knot_x ? 1.0 : -1.0;
+    knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * 3.0e-3;
   }
-}
-}
-int crossings = 0;
-const std::string knot = KnotOf(model, state, &crossings);
-std::printf("throw %zu done at t=%.3f s: knot=%s (%d crossings) min_dist/d=%.3f f=%.3g/%.3g N\n",
-            t + 1, state.time_s, knot.c_str(), crossings, min_d / model.def.diameter_m,
-            state.grasps[hands.standing_slot].f_T_W.norm(),
-            state.grasps[hands.driver_slot].f_T_W.norm());
-// The next throw goes on the working part, right of this knot's centre.
-std::vector<Eigen::Vector3d> poly(model.num_nodes);
-for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
-KnotOptions options;
-options.thread_diameter_m = model.def.diameter_m;
-const KnotAnalysis a = AnalyzeKnot(poly, options);
-// The next throw is tied by the other hand, next to this knot on the other side.
-std::swap(hands.standing_slot, hands.driver_slot);
-const double side = state.grasps[hands.driver_slot].p_WT.x() >= knot_x ? 1.0 : -1.0;
-knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * 3.0e-3;
-}
-if (!obj.empty()) {
-  std::ostringstream out;
-  out << "o thread\n";
-  for (int i = 0; i < model.num_nodes; ++i) {
-    out << "v " << Num(state.x_W(0, i)) << " " << Num(state.x_W(1, i)) << " "
-        << Num(state.x_W(2, i)) << "\n";
+  if (!obj.empty()) {
+    std::ostringstream out;
+    out << "o thread\n";
+    for (int i = 0; i < model.num_nodes; ++i) {
+      out << "v " << Num(state.x_W(0, i)) << " " << Num(state.x_W(1, i)) << " "
+          << Num(state.x_W(2, i)) << "\n";
+    }
+    out << "l";
+    for (int i = 1; i <= model.num_nodes; ++i) out << " " << i;
+    out << "\n";
+    WriteFile(obj, out.str());
   }
-  out << "l";
-  for (int i = 1; i <= model.num_nodes; ++i) out << " " << i;
-  out << "\n";
-  WriteFile(obj, out.str());
-}
-return 0;
+  return 0;
 }
 
 int Main(int argc, char** argv) {
