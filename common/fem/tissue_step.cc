@@ -50,6 +50,24 @@ bool ClipSegment(double ax, double ay, double bx, double by, double x0, double y
   return true;
 }
 
+// LSD radix sort of (rank << 32 | node) keys on the rank bits, 11 bits per pass (ranks are
+// below 2^22 for max_level ≤ 10): a few µs for the ~10³ free nodes of a step, where
+// std::sort took several times that.
+void RadixSortKeys(std::uint64_t* keys, std::uint64_t* scratch, int n) {
+  constexpr int kBits = 11;
+  constexpr int kBuckets = 1 << kBits;
+  std::uint64_t* from = keys;
+  std::uint64_t* to = scratch;
+  for (int shift = 32; shift < 32 + 2 * kBits; shift += kBits) {
+    int count[kBuckets + 1] = {};
+    for (int i = 0; i < n; ++i) ++count[((from[i] >> shift) & (kBuckets - 1)) + 1];
+    for (int b = 0; b < kBuckets; ++b) count[b + 1] += count[b];
+    for (int i = 0; i < n; ++i) to[count[(from[i] >> shift) & (kBuckets - 1)]++] = from[i];
+    std::swap(from, to);
+  }
+  // Two passes: the sorted keys are back in `keys`.
+}
+
 std::uint64_t MixKey(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
   return h * 1099511628211ull;
@@ -159,8 +177,7 @@ void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
   const MeshSelection& mesh = ws.mesh;
   std::fill_n(ws.row_count.begin(), n, 0);
   for (int e = 0; e < mesh.num_triangles; ++e) {
-    const Triangle& t = mesh.triangles[e];
-    const int d[3] = {ws.node_dof[t.node[0]], ws.node_dof[t.node[1]], ws.node_dof[t.node[2]]};
+    const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
     int* place = &entry.scatter[9 * e];
     for (int a = 0; a < 3; ++a) {
       if (d[a] < 0) {
@@ -238,7 +255,7 @@ void AssembleRhs(const TissueModel& model, TissueWorkspace& ws, int n) {
   const MeshSelection& mesh = ws.mesh;
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const Triangle& t = mesh.triangles[e];
-    const int d[3] = {ws.node_dof[t.node[0]], ws.node_dof[t.node[1]], ws.node_dof[t.node[2]]};
+    const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
     if (d[0] > -2 && d[1] > -2 && d[2] > -2) continue;  // no contact node in this element
     const ElementMatrix& k = model.element_matrices[t.level][t.shape];
     for (int a = 0; a < 3; ++a) {
@@ -300,6 +317,8 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   contact_stamp.assign(num_nodes, 0u);
   dof_node.resize(n);
   order_keys.resize(n);
+  order_scratch.resize(n);
+  tri_dof.resize(3 * static_cast<size_t>(model.max_triangles));
   contact_nodes.resize(model.def.max_contact_nodes);
   contact_w_m.resize(model.def.max_contact_nodes);
   contact_f_N.resize(model.def.max_contact_nodes);
@@ -358,10 +377,16 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
       ws.order_keys[i] = (static_cast<std::uint64_t>(model.nd_rank[node]) << 32) |
                          static_cast<std::uint32_t>(node);
     }
-    std::sort(ws.order_keys.begin(), ws.order_keys.begin() + n);
+    RadixSortKeys(ws.order_keys.data(), ws.order_scratch.data(), n);
     for (int i = 0; i < n; ++i) ws.dof_node[i] = static_cast<int>(ws.order_keys[i] & 0xffffffffu);
   }
   for (int i = 0; i < n; ++i) ws.node_dof[ws.dof_node[i]] = i;
+  // The dof codes of every triangle's vertices, read once here (node_dof is a grid-sized
+  // array: scattered reads) for the pattern, the right-hand side and the reactions.
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    for (int k = 0; k < 3; ++k) ws.tri_dof[3 * static_cast<size_t>(e) + k] = ws.node_dof[t.node[k]];
+  }
   for (int c = 0; c < ws.num_contacts; ++c) key = MixKey(key, ws.contact_nodes[c]);
   stats.unknowns = n;
   stats.contact_nodes = ws.num_contacts;
@@ -473,7 +498,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   std::fill_n(ws.contact_f_N.begin(), ws.num_contacts, 0.0);
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const Triangle& t = mesh.triangles[e];
-    const int d[3] = {ws.node_dof[t.node[0]], ws.node_dof[t.node[1]], ws.node_dof[t.node[2]]};
+    const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
     if (d[0] > -2 && d[1] > -2 && d[2] > -2) continue;
     const ElementMatrix& k = model.element_matrices[t.level][t.shape];
     for (int a_local = 0; a_local < 3; ++a_local) {

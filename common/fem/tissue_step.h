@@ -90,7 +90,9 @@ struct TissueWorkspace {
   MeshSelection mesh;
   std::vector<std::int32_t> node_dof;  // [num_grid_nodes] ≥0 free dof, −1 fixed, −2−c contact c
   std::vector<std::int32_t> dof_node;        // [max_mesh_nodes]
-  std::vector<std::uint64_t> order_keys;     // [max_mesh_nodes] (rank, node) sort scratch
+  std::vector<std::uint64_t> order_keys;     // [max_mesh_nodes] (rank, node) sort keys
+  std::vector<std::uint64_t> order_scratch;  // [max_mesh_nodes]
+  std::vector<std::int32_t> tri_dof;         // [3 · max_triangles] node_dof of each vertex
   std::vector<std::uint32_t> contact_stamp;  // [num_grid_nodes] == mesh.mark: contact node
   std::vector<std::int32_t> contact_nodes;   // [max_contact_nodes]
   std::vector<double> contact_w_m;           // [max_contact_nodes] prescribed displacement U
