@@ -608,7 +608,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     AddUniformCandidates(iv, n_iv, cand, &n_cand);
   }
   Best best;
-  if (opt.max_certify_rounds > 0 && pass.ok) {
+  if (opt.max_certify_rounds > 0 && opt.polish_max_iters > 0 && pass.ok) {
     // The certificate below finds any farther point, so only the most promising candidate
     // (largest distance before the ascent) is refined here.
     int j_best = 0;
@@ -635,7 +635,9 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
-  for (int round = 0; round < opt.max_certify_rounds; ++round) {
+  // The certificate needs the ascent (its starting points are not maxima themselves).
+  const int rounds = opt.polish_max_iters > 0 ? opt.max_certify_rounds : 0;
+  for (int round = 0; round < rounds; ++round) {
     ++diag.certify_passes;
     const double t = std::max(std::sqrt(best.f), kMinCertifyRel * core_r);
     SpPass cert;

@@ -36,7 +36,7 @@ struct SpOptions {
   int polish_max_iters = 12;
   double polish_tol_rad = 1e-8;
   // Certificate passes against the level torus through the deepest point found (README_sp.md);
-  // 0 keeps the thesis's single pass.
+  // 0 keeps the thesis's single pass. Needs the ascent: ignored when polish_max_iters = 0.
   int max_certify_rounds = 4;  // stop at a Newton step below this: f is then off by O(step²)
 };
 
