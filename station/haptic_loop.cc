@@ -25,17 +25,22 @@ const char* CheckCue(net::CueKind kind, double param) {
 
 HapticLoop::HapticLoop(const scene::SceneModel& scene, Device& device,
                        std::vector<std::unique_ptr<Module>> modules, StationRings& rings,
-                       rt::Clock& clock)
+                       rt::Clock& clock, int frame_period_steps)
     : scene_(scene),
       device_(device),
       modules_(std::move(modules)),
       rings_(rings),
       clock_(clock),
       dt_s_(1.0 / scene.haptic.rate_hz),
-      period_ns_(static_cast<std::int64_t>(std::llround(1e9 / scene.haptic.rate_hz))) {
+      period_ns_(static_cast<std::int64_t>(std::llround(1e9 / scene.haptic.rate_hz))),
+      frame_period_steps_(frame_period_steps) {
   MICRODEX_CHECK(modules_.size() <= static_cast<std::size_t>(kMaxStationModules));
-  path_.X_WC = scene.vessel.X_WV;
-  path_.radius_m = scene.needle.radius_m;
+  MICRODEX_CHECK(frame_period_steps_ >= 1);
+  path_.is_segment = scene.task.path == scene::PathKind::kLine;
+  path_.circle.X_WC = scene.vessel.X_WV;
+  path_.circle.radius_m = scene.needle.radius_m;
+  path_.segment.a_W = scene.task.line_start_m;
+  path_.segment.b_W = scene.task.line_end_m;
   cues::TremorFilterDef tf;
   tf.sample_rate_hz = scene.haptic.rate_hz;
   tremor_filter_ = cues::MakeTremorFilter(tf);
@@ -85,8 +90,7 @@ void HapticLoop::UpdateScore(const Eigen::Vector3d& p_device, TickSnapshot& s) {
   ScoreTotals& t = s.score;
   t.time_s += dt_s_;
   const Eigen::Vector3d p_ideal =
-      scene_.CalcIdealX_WT(scene_.CalcIdealAzimuth(static_cast<double>(step_) * dt_s_))
-          .translation();
+      scene_.CalcIdealToolPose(static_cast<double>(step_) * dt_s_).translation();
   if (have_prev_) {
     t.path_length_m += (p_device - p_device_prev_).norm();
     t.ideal_path_length_m += (p_ideal - p_ideal_prev_).norm();
@@ -100,19 +104,18 @@ void HapticLoop::UpdateScore(const Eigen::Vector3d& p_device, TickSnapshot& s) {
     t.clearance_sum_m += c;
     ++t.clearance_samples;
     t.min_clearance_m = std::min(t.min_clearance_m, c);
-    const bool contact = s.needle.contact != 0;
-    if (contact) {
-      t.time_in_contact_s += dt_s_;
-      steps_free_ = 0;
-      if (!in_episode_) {
-        in_episode_ = true;
-        ++t.contacts;
-        s.contact_event = 1;
-      }
-    } else if (in_episode_ && ++steps_free_ >= kContactReleaseSteps) {
-      in_episode_ = false;
-      s.contact_event = -1;
+  }
+  if (s.fault) {
+    t.time_in_contact_s += dt_s_;
+    steps_free_ = 0;
+    if (!in_episode_) {
+      in_episode_ = true;
+      ++t.contacts;
+      s.contact_event = 1;
     }
+  } else if (in_episode_ && ++steps_free_ >= kContactReleaseSteps) {
+    in_episode_ = false;
+    s.contact_event = -1;
   }
   if (s.has_tremor) {
     t.tremor_sq_sum_m2 += s.tremor_band_m * s.tremor_band_m;
@@ -150,14 +153,22 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
                                   scene_.haptic.max_force_N);
   }
 
-  // 3. Modules.
+  // 3. Modules; every frame period also their large frames (timed with the step).
+  const bool frame_step = step_ % static_cast<std::uint64_t>(frame_period_steps_) == 0;
   s.module_count = static_cast<int>(modules_.size());
+  s.fault = 0;
+  s.fault_value = 0;
   for (std::size_t i = 0; i < modules_.size(); ++i) {
+    Module& m = *modules_[i];
     const std::int64_t t0 = clock_.NowNs();
-    modules_[i]->Step(in, f);
+    m.Step(in, f);
+    if (frame_step) m.WriteFrame(step_, stamp_ns, rings_.frames);
     const std::int64_t t1 = clock_.NowNs();
-    s.modules[i] = {static_cast<double>(t1 - t0) * 1e-9, modules_[i]->error_estimate(),
-                    modules_[i]->warnings()};
+    s.modules[i] = {static_cast<double>(t1 - t0) * 1e-9, m.error_estimate(), m.warnings()};
+    if (!s.fault && m.fault()) {
+      s.fault = 1;
+      s.fault_value = m.fault_value();
+    }
   }
 
   // 4. Force out: finite and saturated, always.

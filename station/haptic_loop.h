@@ -27,6 +27,7 @@ struct StationRings {
       : snapshots(snapshot_capacity), cues(cue_capacity) {}
   rt::SpscRing<TickSnapshot> snapshots;  // producer: haptic thread; consumer: publisher thread
   rt::SpscRing<CueRequest> cues;         // producer: publisher thread; consumer: haptic thread
+  LargeFrames frames;                    // producer: haptic thread; consumer: publisher thread
 };
 
 // Cue limits: a request outside them is rejected before it reaches the haptic thread.
@@ -39,8 +40,11 @@ class HapticLoop {
  public:
   static constexpr int kMaxPendingCues = 32;
 
+  // frame_period_steps: the modules write their large frames (thread nodes, tissue field)
+  // every that many steps (the mirror period), starting at step 0.
   HapticLoop(const scene::SceneModel& scene, Device& device,
-             std::vector<std::unique_ptr<Module>> modules, StationRings& rings, rt::Clock& clock);
+             std::vector<std::unique_ptr<Module>> modules, StationRings& rings, rt::Clock& clock,
+             int frame_period_steps = 16);
 
   // One step, started at tick_start_ns (monotonic) with the given period since the previous
   // start; stamp_ns is the CLOCK_REALTIME source stamp.
@@ -58,6 +62,11 @@ class HapticLoop {
   std::uint64_t overruns() const { return overruns_; }
   const TickSnapshot& last_snapshot() const { return snap_; }
   double dt_s() const { return dt_s_; }
+  // What module i's error estimate measures (a constant string; any thread may ask).
+  const char* module_error_kind(std::size_t i) const { return modules_[i]->error_kind(); }
+  // Module i, for tests and tools on the haptic thread's side (or after Run returned).
+  const Module& module(std::size_t i) const { return *modules_[i]; }
+  std::size_t module_count() const { return modules_.size(); }
 
  private:
   void TakeDueCues();
@@ -71,6 +80,7 @@ class HapticLoop {
   rt::Clock& clock_;
   double dt_s_;
   std::int64_t period_ns_;
+  int frame_period_steps_;
   std::uint64_t step_ = 0;
   std::uint64_t overruns_ = 0;
   std::atomic<std::uint64_t> ring_dropped_{0};
@@ -81,12 +91,13 @@ class HapticLoop {
   int pending_count_ = 0;
   double field_stiffness_N_per_m_ = 0;  // > 0 convergent, < 0 divergent, 0 none
   double tremor_gain_ = 1;
-  cues::PathCircle path_;
+  cues::IdealPath path_;
   cues::TremorFilterModel tremor_filter_;
   cues::TremorFilterState tremor_state_;
 
-  // Score and events. A contact episode ends after kContactReleaseSteps steps without contact,
-  // so tremor at the wall does not count as hundreds of touches.
+  // Score and events. A fault episode (needle contact, overstretched thread, tissue pressed too
+  // hard) ends after kContactReleaseSteps steps without fault, so tremor at the limit does not
+  // count as hundreds of episodes.
   static constexpr int kContactReleaseSteps = 50;
   bool in_episode_ = false;
   int steps_free_ = 0;

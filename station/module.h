@@ -1,8 +1,7 @@
 #pragma once
 // The station's physics module interface (DESIGN.md principle 2): init from the scene
 // (constructor/factory), step, telemetry (step time, error estimate), snapshot. A scene
-// names its modules; MakeModules builds exactly those. Needle–vessel and tremor exist;
-// thread and tissue plug in here when their libraries land.
+// names its modules; MakeModules builds exactly those: needle–vessel, tremor, thread, tissue.
 
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -32,6 +31,14 @@ class Module {
   virtual void Step(const ToolInput& in, Eigen::Vector3d& f_T_W) = 0;
   // Copies its state into the snapshot section it owns.
   virtual void WriteSnapshot(TickSnapshot& snapshot) const = 0;
+  // Every mirror period: fills and publishes its large frame (thread nodes, tissue field),
+  // if it has one. Same rules as Step.
+  virtual void WriteFrame(std::uint64_t /*step*/, std::int64_t /*stamp_ns*/,
+                          LargeFrames& /*frames*/) {}
+  // True while the trainee is at fault in this module's task (needle touching the wall,
+  // thread overstretched, tissue pressed too hard); fault_value() says how much.
+  virtual bool fault() const { return false; }
+  virtual double fault_value() const { return 0; }
   // Telemetry: the latest error estimate (NaN when none) and what it measures.
   virtual double error_estimate() const { return std::numeric_limits<double>::quiet_NaN(); }
   virtual const char* error_kind() const { return "none"; }

@@ -2,6 +2,8 @@
 
 #include "station/module.h"
 #include "station/needle_module.h"
+#include "station/thread_module.h"
+#include "station/tissue_module.h"
 #include "station/tremor_module.h"
 
 namespace microdex::station {
@@ -13,6 +15,10 @@ std::vector<std::unique_ptr<Module>> MakeModules(const scene::SceneModel& scene)
       modules.push_back(std::make_unique<NeedleModule>(scene));
     } else if (name == "tremor") {
       modules.push_back(std::make_unique<TremorModule>(scene));
+    } else if (name == "thread") {
+      modules.push_back(std::make_unique<ThreadModule>(scene));
+    } else if (name == "tissue") {
+      modules.push_back(std::make_unique<TissueModule>(scene));
     } else {
       throw std::runtime_error(scene.path + ": modules: '" + name +
                                "' has no station module in this build yet");

@@ -24,6 +24,10 @@ class NeedleModule final : public Module {
   double error_estimate() const override { return error_estimate_m_; }
   const char* error_kind() const override { return "sp_vs_sampled_m"; }
   std::uint32_t warnings() const override { return warnings_; }
+  bool fault() const override {
+    return clearance_.status == geometry::ClearanceStatus::kOk && clearance_.contact;
+  }
+  double fault_value() const override { return clearance_.clearance_m; }
 
   const geometry::ArcTorusClearance& clearance() const { return clearance_; }
 

@@ -20,11 +20,20 @@ net::Score CalcScore(const scene::SceneModel& scene, const ScoreTotals& t) {
   s.tremor_rms_m = t.tremor_samples > 0
                        ? std::sqrt(t.tremor_sq_sum_m2 / static_cast<double>(t.tremor_samples))
                        : 0.0;
-  if (t.time_s <= 0 || t.clearance_samples == 0) {
+  if (t.time_s <= 0) {
     s.score = 0;
     return s;
   }
   const double contact_fraction = std::clamp(t.time_in_contact_s / t.time_s, 0.0, 1.0);
+  if (!scene.HasModule("needle")) {
+    // Thread and tissue tasks: the share of the time without fault.
+    s.score = 100.0 * (1.0 - contact_fraction);
+    return s;
+  }
+  if (t.clearance_samples == 0) {
+    s.score = 0;
+    return s;
+  }
   const double g = std::clamp(s.mean_clearance_m / scene.vessel.tube_radius_m, 0.0, 1.0);
   s.score = 100.0 * (1.0 - contact_fraction) * (1.0 + g) / 2.0;
   return s;

@@ -83,7 +83,7 @@ DeviceSample SimTrainee::Read(std::uint64_t step) {
       drift_rad[axis - 3] = drift_std_rad_ * drift_scale * sum;
     }
   }
-  const Eigen::Isometry3d X_ideal = scene_.CalcIdealX_WT(scene_.CalcIdealAzimuth(t));
+  const Eigen::Isometry3d X_ideal = scene_.CalcIdealToolPose(t);
   DeviceSample sample;
   sample.X_WT = X_ideal;
   const double angle = drift_rad.norm();

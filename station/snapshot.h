@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "common/net/messages.h"
+#include "station/rt/triple_buffer.h"
 
 namespace microdex::station {
 
@@ -48,12 +49,43 @@ struct NeedleSnapshot {
   Vec3 p_WW{};
 };
 
+// The thread module's mirrored state, written by the haptic thread every mirror period.
+struct ThreadFrame {
+  std::uint64_t step = 0;
+  std::int64_t stamp_ns = 0;
+  int num_nodes = 0;
+  std::array<Vec3, net::kMaxThreadNodes> p_W{};  // node positions, world, m
+  double max_strain = 0;
+  int grasped_node = -1;
+  Vec3 f_grasp_W{};  // thread on the tool, N
+};
+
+// The tissue module's mirrored state: the displacement field on the display grid.
+struct TissueFrame {
+  std::uint64_t step = 0;
+  std::int64_t stamp_ns = 0;
+  std::uint32_t nodes_x = 0;
+  std::uint32_t nodes_y = 0;
+  std::uint32_t mesh_revision = 0;
+  std::uint32_t unknowns = 0;
+  double max_displacement_m = 0;
+  std::uint8_t status = 0;
+  std::array<float, net::kMaxTissueNodes> w_m{};  // x fastest
+};
+
+// Large states go through latest-value handoffs rather than the per-step snapshot ring (a
+// ring of 4096 tissue fields would need 256 MiB); only the module that owns one writes it.
+struct LargeFrames {
+  rt::TripleBuffer<ThreadFrame> thread;  // producer: haptic thread; consumer: publisher thread
+  rt::TripleBuffer<TissueFrame> tissue;  // producer: haptic thread; consumer: publisher thread
+};
+
 // Running totals of the task score (station/score.h), updated every step.
 struct ScoreTotals {
   double time_s = 0;
   double time_in_contact_s = 0;
   std::uint32_t contacts = 0;
-  double clearance_sum_m = 0;
+  double clearance_sum_m = 0;  // needle module only
   std::uint64_t clearance_samples = 0;
   double min_clearance_m = 0;
   double path_length_m = 0;
@@ -89,7 +121,11 @@ struct TickSnapshot {
   // Events of this step.
   std::array<CueAck, kMaxAcksPerTick> acks{};
   int ack_count = 0;
-  std::int8_t contact_event = 0;     // +1 contact began, -1 ended
+  // A fault this step: needle contact with the wall, thread overstretched, tissue pressed too
+  // hard. Fault episodes are the score's "contacts".
+  std::uint8_t fault = 0;
+  double fault_value = 0;            // of the first module at fault (clearance, strain, force)
+  std::int8_t contact_event = 0;     // +1 fault episode began, -1 ended
   std::uint32_t force_warnings = 0;  // running count of non-finite forces replaced by zero
   ScoreTotals score;
 };

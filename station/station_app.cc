@@ -79,6 +79,18 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
     << ", \"input_published\": " << t.input_published
     << ", \"input_write_failed\": " << t.input_write_failed
     << ", \"realtime\": " << (realtime ? "true" : "false") << "},\n";
+  f << "  \"modules\": [";
+  for (std::size_t i = 0; i < scene.modules.size(); ++i) {
+    const PeriodStats& m = pub.run_step_times(i);
+    f << (i ? ", " : "") << "{\"name\": " << JsonString(scene.modules[i])
+      << ", \"step_mean_us\": " << JsonNumber(m.mean_s() * 1e6)
+      << ", \"step_p99_us\": " << JsonNumber(m.Quantile_s(0.99) * 1e6)
+      << ", \"step_max_us\": " << JsonNumber(m.max_s() * 1e6)
+      << ", \"error_kind\": " << JsonString(loop.module_error_kind(i))
+      << ", \"error_estimate\": " << JsonNumber(loop.module(i).error_estimate())
+      << ", \"warnings\": " << loop.module(i).warnings() << "}";
+  }
+  f << "],\n";
   f << "  \"cues_applied\": [";
   for (std::size_t i = 0; i < t.cues_applied.size(); ++i) {
     const AppliedCue& c = t.cues_applied[i];
@@ -129,7 +141,10 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
 
   StationRings rings;
   rt::MonotonicClock clock;
-  HapticLoop loop(scene, device, std::move(modules), rings, clock);
+  // The modules write their large frames once per mirror period.
+  const int frame_period_steps =
+      static_cast<int>(std::max(1L, std::lround(scene.haptic.rate_hz / o.mirror_rate_hz)));
+  HapticLoop loop(scene, device, std::move(modules), rings, clock, frame_period_steps);
 
   PublisherConfig pc;
   pc.station_id = o.station_id;

@@ -8,6 +8,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include "common/net/convert.h"
+#include "common/thread/knot_recognition.h"
 #include "cue_commandPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
@@ -17,6 +18,8 @@
 #include "station_infoPubSubTypes.h"
 #include "task_eventPubSubTypes.h"
 #include "telemetryPubSubTypes.h"
+#include "thread_statePubSubTypes.h"
+#include "tissue_statePubSubTypes.h"
 #include "tool_statePubSubTypes.h"
 
 namespace microdex::station {
@@ -29,6 +32,8 @@ struct StationPublisher::Writers {
   dds::DataWriter* input = nullptr;
   dds::DataWriter* tool = nullptr;
   dds::DataWriter* needle = nullptr;  // only with the needle module
+  dds::DataWriter* thread = nullptr;  // only with the thread module
+  dds::DataWriter* tissue = nullptr;  // only with the tissue module
   dds::DataWriter* telemetry = nullptr;
   dds::DataWriter* events = nullptr;
   dds::DataWriter* score = nullptr;
@@ -39,6 +44,8 @@ struct StationPublisher::Writers {
   msg::DeviceInput input_msg;
   msg::ToolState tool_msg;
   msg::NeedleState needle_msg;
+  msg::ThreadState thread_msg;
+  msg::TissueState tissue_msg;
   msg::Telemetry telemetry_msg;
   msg::TaskEvent event_msg;
   msg::Score score_msg;
@@ -46,6 +53,8 @@ struct StationPublisher::Writers {
   net::DeviceInput input_plain;
   net::ToolState tool_plain;
   net::NeedleState needle_plain;
+  net::ThreadState thread_plain;
+  net::TissueState tissue_plain;
 };
 
 namespace {
@@ -73,8 +82,22 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   w_->info = dds_->CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
   w_->input = dds_->CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
   w_->tool = dds_->CreateWriter<msg::ToolStatePubSubType>(net::kToolStateTopic);
+  // Only the scene's modules' topics.
   if (scene.HasModule("needle")) {
     w_->needle = dds_->CreateWriter<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
+  }
+  if (scene.HasModule("thread")) {
+    w_->thread = dds_->CreateWriter<msg::ThreadStatePubSubType>(net::kThreadStateTopic);
+    w_->thread_plain.nodes.reserve(net::kMaxThreadNodes);
+  }
+  if (scene.HasModule("tissue")) {
+    w_->tissue = dds_->CreateWriter<msg::TissueStatePubSubType>(net::kTissueStateTopic);
+    w_->tissue_plain.displacement_m.reserve(net::kMaxTissueNodes);
+    const scene::TissueSceneDef& t = *scene.tissue;
+    w_->tissue_plain.p_WS = t.X_WS.translation();
+    w_->tissue_plain.q_WS = Eigen::Quaterniond(t.X_WS.linear());
+    w_->tissue_plain.length_x_m = t.def.length_x_m;
+    w_->tissue_plain.length_y_m = t.def.length_y_m;
   }
   w_->telemetry = dds_->CreateWriter<msg::TelemetryPubSubType>(net::kTelemetryTopic);
   w_->events = dds_->CreateWriter<msg::TaskEventPubSubType>(net::kTaskEventTopic);
@@ -85,6 +108,7 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   w_->waitset.attach_condition(*stop_guard_);
   window_step_time_sum_s_.assign(scene.modules.size(), 0.0);
   window_step_time_max_s_.assign(scene.modules.size(), 0.0);
+  run_step_times_.resize(scene.modules.size());
   final_score_.header.station_id = config_.station_id;
 
   net::StationInfo info;
@@ -183,6 +207,7 @@ void StationPublisher::Drain() {
          ++i) {
       window_step_time_sum_s_[i] += s.modules[i].step_time_s;
       window_step_time_max_s_[i] = std::max(window_step_time_max_s_[i], s.modules[i].step_time_s);
+      run_step_times_[i].Add(std::llround(s.modules[i].step_time_s * 1e9));
     }
     // DeviceInput: every step, the replay source.
     w_->input_plain.header = MakeHeader(s.step, s.stamp_ns);
@@ -202,10 +227,12 @@ void StationPublisher::Drain() {
       PublishEvent(net::TaskEventKind::kCueApplied, s.step, a.cue_id, a.param,
                    net::CueKindName(a.kind));
     }
+    // Value: the needle's clearance, else the faulting module's strain or force.
+    const double event_value = s.has_needle ? s.needle.clearance_m : s.fault_value;
     if (s.contact_event > 0) {
-      PublishEvent(net::TaskEventKind::kContactBegin, s.step, 0, s.needle.clearance_m, "");
+      PublishEvent(net::TaskEventKind::kContactBegin, s.step, 0, event_value, "");
     } else if (s.contact_event < 0) {
-      PublishEvent(net::TaskEventKind::kContactEnd, s.step, 0, s.needle.clearance_m, "");
+      PublishEvent(net::TaskEventKind::kContactEnd, s.step, 0, event_value, "");
     }
     last_ = s;
     have_last_ = true;
@@ -237,6 +264,45 @@ void StationPublisher::PublishMirror() {
     net::ToMsg(n, w_->needle_msg);
     w_->needle->write(&w_->needle_msg);
   }
+  if (w_->thread != nullptr && (rings_.frames.thread.Update() || have_thread_frame_)) {
+    have_thread_frame_ = true;
+    const ThreadFrame& f = rings_.frames.thread.front();
+    auto& t = w_->thread_plain;
+    t.header = MakeHeader(f.step, f.stamp_ns);
+    t.nodes.resize(static_cast<std::size_t>(f.num_nodes));
+    for (int i = 0; i < f.num_nodes; ++i) t.nodes[i] = E(f.p_W[i]);
+    t.max_strain = f.max_strain;
+    t.grasped_node = f.grasped_node;
+    t.f_grasp_W = E(f.f_grasp_W);
+    t.knot = knot_;
+    net::ToMsg(t, w_->thread_msg);
+    w_->thread->write(&w_->thread_msg);
+  }
+  if (w_->tissue != nullptr && (rings_.frames.tissue.Update() || have_tissue_frame_)) {
+    have_tissue_frame_ = true;
+    const TissueFrame& f = rings_.frames.tissue.front();
+    auto& t = w_->tissue_plain;
+    t.header = MakeHeader(f.step, f.stamp_ns);
+    t.nodes_x = f.nodes_x;
+    t.nodes_y = f.nodes_y;
+    t.mesh_revision = f.mesh_revision;
+    t.unknowns = f.unknowns;
+    t.max_displacement_m = f.max_displacement_m;
+    t.status = f.status;
+    t.displacement_m.assign(f.w_m.begin(), f.w_m.begin() + std::size_t{f.nodes_x} * f.nodes_y);
+    net::ToMsg(t, w_->tissue_msg);
+    w_->tissue->write(&w_->tissue_msg);
+  }
+}
+
+void StationPublisher::RecognizeKnot() {
+  const auto& nodes = w_->thread_plain.nodes;
+  if (nodes.size() < 2) return;
+  try {
+    knot_ = std::string(thread::KnotName(thread::RecognizeKnot(nodes)));
+  } catch (const std::exception&) {
+    knot_ = "unknown";  // degenerate polyline (e.g. coincident nodes)
+  }
 }
 
 void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
@@ -258,7 +324,7 @@ void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
     m.step_time_max_s = window_step_time_max_s_[i];
     m.error_estimate = last_.modules[i].error_estimate;
     m.warnings = last_.modules[i].warnings;
-    m.error_kind = scene_.modules[i] == "needle" ? "sp_vs_sampled_m" : "none";
+    m.error_kind = loop_.module_error_kind(i);
     t.modules.push_back(m);
   }
   net::ToMsg(t, w_->telemetry_msg);
@@ -286,6 +352,8 @@ void StationPublisher::Run() {
   const auto mirror_ns = static_cast<std::int64_t>(1e9 / config_.mirror_rate_hz);
   const auto telemetry_ns = static_cast<std::int64_t>(1e9 / config_.telemetry_rate_hz);
   const auto score_ns = static_cast<std::int64_t>(1e9 * config_.score_period_s);
+  const auto knot_ns = static_cast<std::int64_t>(1e9 / config_.knot_rate_hz);
+  std::int64_t next_knot_ns = 0;
   std::int64_t now = SystemClock().NowNs();
   next_mirror_ns_ = now;
   next_telemetry_ns_ = now + telemetry_ns;
@@ -313,6 +381,10 @@ void StationPublisher::Run() {
     if (now >= next_score_ns_) {
       PublishScore(false);
       next_score_ns_ = std::max(next_score_ns_ + score_ns, now);
+    }
+    if (w_->thread != nullptr && now >= next_knot_ns) {
+      RecognizeKnot();  // on the latest published nodes; ~0.1 ms for 65 nodes
+      next_knot_ns = now + knot_ns;
     }
   }
   Goodbye();

@@ -6,8 +6,9 @@
 //     the haptic thread through the cue ring (rejections become TaskEvents);
 //   - drains the snapshot ring: one DeviceInput per step (1 kHz, reliable keep-all), one
 //     TaskEvent per cue applied (with the step it was applied at) and per contact change;
-//   - publishes the mirrored states (ToolState, and NeedleState when the scene has the needle
-//     module) at the mirror rate, Telemetry at 10 Hz and a running Score every second.
+//   - publishes the mirrored states (ToolState, and NeedleState/ThreadState/TissueState when the
+//     scene has that module: their writers exist only then) at the mirror rate, Telemetry at
+//     10 Hz and a running Score every second; recognises the thread's knot at knot_rate_hz.
 // Stop() publishes the last states, the final Score and a TaskEnd event, waits briefly for
 // their acknowledgement, and disposes the station's StationInfo instance (its departure).
 
@@ -39,6 +40,7 @@ struct PublisherConfig {
   double mirror_rate_hz = 60;
   double telemetry_rate_hz = 10;
   double score_period_s = 1;
+  double knot_rate_hz = 2;  // knot recognition of the mirrored thread (allocates: not per tick)
   bool realtime = false;
   // Wake-up this long after each tick start, to pick up its snapshot with little delay.
   std::int64_t wake_offset_ns = 60'000;
@@ -74,6 +76,8 @@ class StationPublisher {
   void RequestStop();
 
   const PeriodStats& run_periods() const { return run_periods_; }
+  // Step time of module i over the whole run (the "period" is the step's wall time).
+  const PeriodStats& run_step_times(std::size_t i) const { return run_step_times_[i]; }
   const PublisherTotals& totals() const { return totals_; }
   const TickSnapshot& last() const { return last_; }
   net::Score final_score() const { return final_score_; }
@@ -82,6 +86,7 @@ class StationPublisher {
   void HandleCues();
   void Drain();
   void PublishMirror();
+  void RecognizeKnot();
   void PublishTelemetry(std::int64_t now_ns);
   void PublishScore(bool is_final);
   void PublishEvent(net::TaskEventKind kind, std::uint64_t step, std::uint64_t cue_id, double value,
@@ -102,12 +107,16 @@ class StationPublisher {
 
   PeriodStats run_periods_;
   PeriodStats window_periods_;
+  std::vector<PeriodStats> run_step_times_;
   std::uint64_t window_overruns_ = 0;
   std::vector<double> window_step_time_sum_s_, window_step_time_max_s_;
   std::uint64_t window_ticks_ = 0;
   PublisherTotals totals_;
   TickSnapshot last_;
   bool have_last_ = false;
+  bool have_thread_frame_ = false;
+  bool have_tissue_frame_ = false;
+  std::string knot_;  // "" until the first recognition
   std::vector<std::pair<std::string, std::uint64_t>> seen_cues_;
   net::Score final_score_;
   std::int64_t next_mirror_ns_ = 0, next_telemetry_ns_ = 0, next_score_ns_ = 0;

@@ -1,6 +1,27 @@
 #include "common/cues/path_force_field.h"
 
+#include <algorithm>
+
 namespace microdex::cues {
+namespace {
+
+Eigen::Vector3d Spring(const Eigen::Vector3d& p_WT, const Eigen::Vector3d& q_W,
+                       double signed_stiffness_N_per_m, double max_force_N) {
+  Eigen::Vector3d f = -signed_stiffness_N_per_m * (p_WT - q_W);
+  const double n = f.norm();
+  if (n > max_force_N) f *= max_force_N / n;
+  return f;
+}
+
+}  // namespace
+
+Eigen::Vector3d CalcNearestOnSegment(const PathSegment& segment, const Eigen::Vector3d& p_W) {
+  const Eigen::Vector3d d = segment.b_W - segment.a_W;
+  const double dd = d.squaredNorm();
+  if (!(dd > 0)) return segment.a_W;
+  const double u = std::clamp((p_W - segment.a_W).dot(d) / dd, 0.0, 1.0);
+  return segment.a_W + u * d;
+}
 
 bool CalcNearestOnCircle(const PathCircle& circle, const Eigen::Vector3d& p_W,
                          Eigen::Vector3d* q_W) {
@@ -17,10 +38,16 @@ Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector
                                    double signed_stiffness_N_per_m, double max_force_N) {
   Eigen::Vector3d q_W;
   if (!CalcNearestOnCircle(circle, p_WT, &q_W)) return Eigen::Vector3d::Zero();
-  Eigen::Vector3d f = -signed_stiffness_N_per_m * (p_WT - q_W);
-  const double n = f.norm();
-  if (n > max_force_N) f *= max_force_N / n;
-  return f;
+  return Spring(p_WT, q_W, signed_stiffness_N_per_m, max_force_N);
+}
+
+Eigen::Vector3d CalcPathFieldForce(const IdealPath& path, const Eigen::Vector3d& p_WT,
+                                   double signed_stiffness_N_per_m, double max_force_N) {
+  if (!path.is_segment) {
+    return CalcPathFieldForce(path.circle, p_WT, signed_stiffness_N_per_m, max_force_N);
+  }
+  return Spring(p_WT, CalcNearestOnSegment(path.segment, p_WT), signed_stiffness_N_per_m,
+                max_force_N);
 }
 
 }  // namespace microdex::cues

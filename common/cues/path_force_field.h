@@ -15,6 +15,21 @@ struct PathCircle {
   double radius_m = 5e-3;
 };
 
+struct PathSegment {
+  Eigen::Vector3d a_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d b_W = Eigen::Vector3d::UnitX();
+};
+
+// The ideal path of a task: a circle or a segment.
+struct IdealPath {
+  bool is_segment = false;
+  PathCircle circle;
+  PathSegment segment;
+};
+
+// Nearest point of the segment to p_W (the end point beyond either end).
+Eigen::Vector3d CalcNearestOnSegment(const PathSegment& segment, const Eigen::Vector3d& p_W);
+
 // Nearest point of the circle to p_W; false (and q_W untouched) on the axis, where every
 // circle point is nearest.
 bool CalcNearestOnCircle(const PathCircle& circle, const Eigen::Vector3d& p_W,
@@ -23,6 +38,9 @@ bool CalcNearestOnCircle(const PathCircle& circle, const Eigen::Vector3d& p_W,
 // The spring force of the field; zero on the circle's axis. signed_stiffness_N_per_m > 0
 // converges, < 0 diverges.
 Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector3d& p_WT,
+                                   double signed_stiffness_N_per_m, double max_force_N);
+// The same towards (away from) either kind of path.
+Eigen::Vector3d CalcPathFieldForce(const IdealPath& path, const Eigen::Vector3d& p_WT,
                                    double signed_stiffness_N_per_m, double max_force_N);
 
 }  // namespace microdex::cues

@@ -261,6 +261,9 @@ void ToMsg(const ThreadState& in, msg::ThreadState& out) {
     out.nodes()[i].z(in.nodes[i].z());
   }
   out.knot(in.knot);
+  out.max_strain(in.max_strain);
+  out.grasped_node(in.grasped_node);
+  out.f_grasp_W(V(in.f_grasp_W));
 }
 
 bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
@@ -268,6 +271,11 @@ bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
   HeaderFromMsg(in, out.header, c);
   if (in.nodes().size() > kMaxThreadNodes) c.Fail("nodes: more than kMaxThreadNodes");
   c.String(S(in.knot()), kMaxModuleNameLength, "knot");
+  c.Finite(in.max_strain(), "max_strain");
+  c.Finite(in.f_grasp_W(), "f_grasp_W");
+  if (in.grasped_node() < -1 || in.grasped_node() >= static_cast<std::int32_t>(in.nodes().size())) {
+    c.Fail("grasped_node: expected -1 or a node index");
+  }
   if (!c.ok()) return false;
   out.nodes.resize(in.nodes().size());
   for (std::size_t i = 0; i < in.nodes().size(); ++i) {
@@ -278,14 +286,28 @@ bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
     out.nodes[i] = {n.x(), n.y(), n.z()};
   }
   out.knot = S(in.knot());
+  out.max_strain = in.max_strain();
+  out.grasped_node = in.grasped_node();
+  out.f_grasp_W = V(in.f_grasp_W());
   return c.ok();
 }
 
 // ---- TissueState ----
 void ToMsg(const TissueState& in, msg::TissueState& out) {
   HeaderToMsg(in.header, out);
-  MICRODEX_CHECK(in.displacement_m.size() <= kMaxTissueNodes);
+  MICRODEX_CHECK(in.displacement_m.size() <= kMaxTissueNodes &&
+                 in.displacement_m.size() ==
+                     static_cast<std::size_t>(in.nodes_x) * static_cast<std::size_t>(in.nodes_y));
+  out.p_WS(V(in.p_WS));
+  out.q_WS(Q(in.q_WS));
+  out.length_x_m(in.length_x_m);
+  out.length_y_m(in.length_y_m);
+  out.nodes_x(in.nodes_x);
+  out.nodes_y(in.nodes_y);
   out.mesh_revision(in.mesh_revision);
+  out.unknowns(in.unknowns);
+  out.max_displacement_m(in.max_displacement_m);
+  out.status(in.status);
   out.displacement_m(in.displacement_m);
 }
 
@@ -293,9 +315,27 @@ bool FromMsg(const msg::TissueState& in, TissueState& out, std::string* why) {
   Checker c(why);
   HeaderFromMsg(in, out.header, c);
   if (in.displacement_m().size() > kMaxTissueNodes) c.Fail("displacement_m: too many nodes");
+  if (static_cast<std::uint64_t>(in.nodes_x()) * in.nodes_y() != in.displacement_m().size()) {
+    c.Fail("nodes_x * nodes_y: expected the length of displacement_m");
+  }
+  c.Finite(in.p_WS(), "p_WS");
+  c.Unit(in.q_WS(), "q_WS");
+  if (!(in.length_x_m() > 0 && std::isfinite(in.length_x_m()))) c.Fail("length_x_m: expected > 0");
+  if (!(in.length_y_m() > 0 && std::isfinite(in.length_y_m()))) c.Fail("length_y_m: expected > 0");
+  c.Finite(in.max_displacement_m(), "max_displacement_m");
+  if (in.status() > kMaxTissueStatus) c.Fail("status: out of range");
   if (!c.ok()) return false;
   for (float w : in.displacement_m()) c.Finite(w, "displacement_m[]");
+  out.p_WS = V(in.p_WS());
+  out.q_WS = Q(in.q_WS());
+  out.length_x_m = in.length_x_m();
+  out.length_y_m = in.length_y_m();
+  out.nodes_x = in.nodes_x();
+  out.nodes_y = in.nodes_y();
   out.mesh_revision = in.mesh_revision();
+  out.unknowns = in.unknowns();
+  out.max_displacement_m = in.max_displacement_m();
+  out.status = in.status();
   out.displacement_m = in.displacement_m();
   return c.ok();
 }

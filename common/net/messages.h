@@ -71,14 +71,28 @@ struct NeedleState {
 
 struct ThreadState {
   Header header;
-  std::vector<Eigen::Vector3d> nodes;  // world, m; at most kMaxThreadNodes
-  std::string knot;
+  std::vector<Eigen::Vector3d> nodes;                   // world, m; at most kMaxThreadNodes
+  std::string knot;                                     // "" while not recognised yet
+  double max_strain = 0;                                // max |l − r| / r over the links
+  std::int32_t grasped_node = -1;                       // -1: none
+  Eigen::Vector3d f_grasp_W = Eigen::Vector3d::Zero();  // thread on the tool, N
 };
+
+inline constexpr std::uint8_t kMaxTissueStatus = 6;  // fem::TissueStatus::kNonFinite
 
 struct TissueState {
   Header header;
+  Eigen::Vector3d p_WS = Eigen::Vector3d::Zero();  // patch corner in world
+  Eigen::Quaterniond q_WS = Eigen::Quaterniond::Identity();
+  double length_x_m = 0;
+  double length_y_m = 0;
+  std::uint32_t nodes_x = 0;  // display grid; displacement_m.size() == nodes_x * nodes_y
+  std::uint32_t nodes_y = 0;
   std::uint32_t mesh_revision = 0;
-  std::vector<float> displacement_m;  // at most kMaxTissueNodes
+  std::uint32_t unknowns = 0;
+  double max_displacement_m = 0;
+  std::uint8_t status = 0;            // fem::TissueStatus, <= kMaxTissueStatus
+  std::vector<float> displacement_m;  // x fastest; at most kMaxTissueNodes
 };
 
 struct ModuleTelemetry {

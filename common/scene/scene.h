@@ -3,14 +3,22 @@
 // once from YAML and validated. It names the modules a station builds; a station builds only
 // those and publishes only their topics.
 //
-// Minimal for now: the needle-in-tube primitive (thesis §2.2, Fig. 2.2c: "needle maneuvering
-// along a curved tube"): a curved needle held at its tail must slide along a tube, the
-// segment of a torus, without touching its wall.
+// Modules: the needle-in-tube primitive (thesis §2.2, Fig. 2.2c: "needle maneuvering along a
+// curved tube": a curved needle held at its tail slides along a tube, the segment of a torus,
+// without touching its wall), the tremor estimate, the suture thread (chapter 5: one end held
+// by the tool, the other anchored at the stitch) and the tissue patch (chapter 3: pressed by
+// the tool tip). The thread and tissue take their material from the parameter files
+// assets/scenes/thread_*.yaml and tissue_*.yaml, named relative to the scene file.
 
 #include <Eigen/Geometry>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "common/fem/tissue_def.h"
+#include "common/thread/thread_def.h"
 
 namespace microdex::scene {
 
@@ -20,8 +28,7 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Modules a scene may name. "thread" and "tissue" are known names whose station modules are
-// not built yet; a station refuses them clearly.
+// Modules a scene may name; "thread" and "tissue" need their scene sections.
 inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue"};
 
 // The tube: a torus segment (same conventions as geometry::TorusSegmentDef).
@@ -38,12 +45,57 @@ struct NeedleDef {
   double sweep_rad = 1.0471975511965976;  // 60°
 };
 
-// The task: passes of the needle tail along its path circle, from start to end azimuth and
-// back, each pass lasting pass_duration_s (minimum-jerk timing).
+// The ideal tool path the simulated trainee follows and the guidance fields pull towards.
+enum class PathKind {
+  kArc,   // the needle tail on its path circle around the vessel axis (start/end azimuth)
+  kLine,  // a straight segment from line_start_m to line_end_m, fixed tool orientation
+};
+
+// The task: passes along the path from start to end and back, each pass lasting
+// pass_duration_s (minimum-jerk timing).
 struct TaskDef {
   double pass_duration_s = 4.0;
-  double start_azimuth_rad = 0.2;
+  PathKind path = PathKind::kArc;
+  double start_azimuth_rad = 0.2;  // kArc
   double end_azimuth_rad = 3.3;
+  Eigen::Vector3d line_start_m = Eigen::Vector3d::Zero();  // kLine, world
+  Eigen::Vector3d line_end_m = Eigen::Vector3d(0.01, 0, 0);
+  Eigen::Matrix3d R_WT_line = Eigen::Matrix3d::Identity();  // kLine tool orientation
+};
+
+// The suture thread (station "thread" module): a ThreadDef from a parameter file, node 0
+// held fixed at the anchor (the stitch), the last node grasped by the tool tip.
+struct ThreadSceneDef {
+  std::string params_path;  // the parameter file, resolved against the scene's folder
+  thread::ThreadDef def;    // loaded from params_path; time step set to the haptic period
+  Eigen::Vector3d p_W_anchor = Eigen::Vector3d::Zero();
+  // The thread starts straight from the anchor along this unit direction.
+  Eigen::Vector3d direction_W = Eigen::Vector3d::UnitX();
+  // A floor the thread rests on (plane z = floor_height_m, normal +z); NaN: none.
+  double floor_height_m = std::numeric_limits<double>::quiet_NaN();
+  // A step whose largest link strain exceeds this is a fault (an overstretched suture).
+  double max_strain = 0.05;
+};
+
+// The tool tip pressing the tissue: a point (with a contact radius) or a short bar along the
+// tool's x axis centred at the tip.
+enum class TissueToolKind { kPoint, kBar };
+
+// The tissue patch (station "tissue" module): a TissueDef from a parameter file, with the
+// scene's overrides of the mesh level and solver, placed at X_WS (the patch corner; the
+// patch is [0, Lx] × [0, Ly] in S's xy plane, surface at z = 0, z out of the tissue).
+struct TissueSceneDef {
+  std::string params_path;
+  fem::TissueDef def;
+  Eigen::Isometry3d X_WS = Eigen::Isometry3d::Identity();
+  TissueToolKind tool = TissueToolKind::kPoint;
+  double contact_radius_m = 0.5e-3;  // point tool
+  double bar_length_m = 4e-3;        // bar tool
+  // Level of the uniform grid the displacement field is published on: (2^l + 1)² values,
+  // l <= 6 keeps it within TissueState's bound of 16384.
+  int display_level = 6;
+  // A step whose reaction force exceeds this is a fault (pressing too hard).
+  double max_force_N = 0.5;
 };
 
 // Haptic rendering limits.
@@ -61,6 +113,8 @@ struct SceneModel {
   NeedleDef needle;
   TaskDef task;
   HapticDef haptic;
+  std::optional<ThreadSceneDef> thread;  // present exactly when modules has "thread"
+  std::optional<TissueSceneDef> tissue;  // present exactly when modules has "tissue"
 
   bool HasModule(const std::string& module) const;
   // The scripted ideal tool pose at azimuth theta: the needle tail on its path circle (radius
@@ -69,6 +123,10 @@ struct SceneModel {
   // The scripted azimuth of the tool at time t: passes from start to end and back, each with
   // minimum-jerk timing θ = a + (b − a)(10τ³ − 15τ⁴ + 6τ⁵), τ the fraction of the pass.
   double CalcIdealAzimuth(double t_s) const;
+  // The fraction of the path at time t (0 at the start, 1 at the end), same timing.
+  double CalcIdealPathFraction(double t_s) const;
+  // The scripted ideal tool pose at time t along the task's path (either kind).
+  Eigen::Isometry3d CalcIdealToolPose(double t_s) const;
   // The needle frame N from the tool frame T (the tail point, s = 0): X_WN = X_WT * X_TN.
   Eigen::Isometry3d X_TN() const;
 };

@@ -101,13 +101,29 @@ TEST(NetConvert, ThreadStateBoundIsEnforcedOnReceipt) {
   ThreadState in;
   in.header = MakeHeader();
   in.nodes.assign(kMaxThreadNodes, Eigen::Vector3d(1e-3, 2e-3, 3e-3));
+  in.knot = "square";
+  in.max_strain = 0.012;
+  in.grasped_node = static_cast<std::int32_t>(kMaxThreadNodes) - 1;
+  in.f_grasp_W = Eigen::Vector3d(0.1, -0.2, 0.3);
   msg::ThreadState m;
   ToMsg(in, m);
   ThreadState out;
   ASSERT_TRUE(FromMsg(m, out));
   EXPECT_EQ(out.nodes.size(), kMaxThreadNodes);
-  m.nodes().push_back(m.nodes().back());  // one over the bound
+  EXPECT_EQ(out.knot, "square");
+  EXPECT_EQ(out.max_strain, in.max_strain);
+  EXPECT_EQ(out.grasped_node, in.grasped_node);
+  EXPECT_EQ(out.f_grasp_W, in.f_grasp_W);
   std::string why;
+  m.grasped_node(static_cast<std::int32_t>(kMaxThreadNodes));  // not a node
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("grasped_node"), std::string::npos) << why;
+  m.grasped_node(-1);
+  m.f_grasp_W({0, std::nan(""), 0});
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("f_grasp_W"), std::string::npos) << why;
+  m.f_grasp_W({0, 0, 0});
+  m.nodes().push_back(m.nodes().back());  // one over the bound
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("nodes"), std::string::npos) << why;
 }
@@ -115,15 +131,47 @@ TEST(NetConvert, ThreadStateBoundIsEnforcedOnReceipt) {
 TEST(NetConvert, TissueStateRoundTripAndBound) {
   TissueState in;
   in.header = MakeHeader();
+  in.p_WS = Eigen::Vector3d(-0.01, -0.01, 0);
+  in.q_WS = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  in.length_x_m = 0.02;
+  in.length_y_m = 0.03;
+  in.nodes_x = 3;
+  in.nodes_y = 2;
   in.mesh_revision = 3;
-  in.displacement_m = {1e-6f, -2e-6f, 0.0f};
+  in.unknowns = 900;
+  in.max_displacement_m = 2e-6;
+  in.status = 0;
+  in.displacement_m = {1e-6f, -2e-6f, 0.0f, 0.5e-6f, 0.0f, 0.0f};
   msg::TissueState m;
   ToMsg(in, m);
   TissueState out;
   ASSERT_TRUE(FromMsg(m, out));
   EXPECT_EQ(out.displacement_m, in.displacement_m);
+  EXPECT_EQ(out.p_WS, in.p_WS);
+  EXPECT_TRUE(out.q_WS.isApprox(in.q_WS, 0));
+  EXPECT_EQ(out.length_y_m, in.length_y_m);
+  EXPECT_EQ(out.nodes_x, 3u);
+  EXPECT_EQ(out.nodes_y, 2u);
+  EXPECT_EQ(out.mesh_revision, 3u);
+  EXPECT_EQ(out.unknowns, 900u);
+  std::string why;
+  m.nodes_x(4);  // grid size no longer matches the values
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("nodes_x"), std::string::npos) << why;
+  m.nodes_x(3);
+  m.status(kMaxTissueStatus + 1);
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("status"), std::string::npos) << why;
+  m.status(0);
+  m.length_x_m(0);
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("length_x_m"), std::string::npos) << why;
+  m.length_x_m(0.02);
   m.displacement_m().resize(kMaxTissueNodes + 1);
-  EXPECT_FALSE(FromMsg(m, out));
+  m.nodes_x(static_cast<std::uint32_t>(kMaxTissueNodes + 1));
+  m.nodes_y(1);
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("displacement_m"), std::string::npos) << why;
 }
 
 TEST(NetConvert, CueCommandKindsAndRejection) {

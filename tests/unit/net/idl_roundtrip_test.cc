@@ -105,13 +105,25 @@ ThreadState MakeThreadState() {
     m.nodes().push_back(n);
   }
   m.knot("square");
+  m.max_strain(0.01);
+  m.grasped_node(99);
+  m.f_grasp_W({0.1, 0.2, -0.3});
   return m;
 }
 
 TissueState MakeTissueState() {
   TissueState m;
   FillHeader(m);
+  m.p_WS({-0.01, -0.01, 0});
+  m.q_WS({1, 0, 0, 0});
+  m.length_x_m(0.02);
+  m.length_y_m(0.02);
+  m.nodes_x(60);
+  m.nodes_y(50);
   m.mesh_revision(7);
+  m.unknowns(829);
+  m.max_displacement_m(1e-3);
+  m.status(0);
   for (int i = 0; i < 3000; ++i) m.displacement_m().push_back(static_cast<float>(i) * 1e-7f);
   return m;
 }

@@ -45,6 +45,7 @@ TEST(PeriodStats, QuantilesMatchSortedSamples) {
 
 TEST(Score, Corners) {
   scene::SceneModel scene;
+  scene.modules = {"needle", "tremor"};
   scene.vessel.tube_radius_m = 0.5e-3;
   ScoreTotals t;
   t.time_s = 10;
@@ -59,6 +60,13 @@ TEST(Score, Corners) {
   t.clearance_samples = 0;
   EXPECT_EQ(CalcScore(scene, t).score, 0);
   EXPECT_TRUE(std::isnan(CalcScore(scene, t).mean_clearance_m));
+  // Without the needle, the share of the time without fault (no clearance needed).
+  scene.modules = {"thread", "tissue"};
+  EXPECT_NEAR(CalcScore(scene, t).score, 50, 1e-9);
+  t.time_in_contact_s = 0;
+  EXPECT_NEAR(CalcScore(scene, t).score, 100, 1e-9);
+  t.time_in_contact_s = 10;
+  EXPECT_NEAR(CalcScore(scene, t).score, 0, 1e-9);
 }
 
 }  // namespace
