@@ -132,7 +132,8 @@ EndZones FindEndZones(const TissueModel& model, int level, MeshKind kind, const 
   constexpr double kRelTol = 1e-9;
   const double cell_m = length_m / model.def.end_resolution * (1 + kRelTol);
   int end_level = level;
-  while (end_level < model.def.max_level &&
+  const int last = std::min(model.def.max_level, level + model.def.end_levels);
+  while (end_level < last &&
          std::max(model.CellSizeX_m(end_level), model.CellSizeY_m(end_level)) > cell_m)
     ++end_level;
   if (end_level == level) return zones;

@@ -68,6 +68,7 @@ void TissueDef::Validate() const {
           "a value in [1.5, 64] (below 1.5 neighbouring leaves may differ by two levels)");
   Require(std::isfinite(end_resolution) && end_resolution >= 0 && end_resolution <= 1e4,
           "end_resolution", "0 (off) or end-zone cells per tool length in (0, 1e4]");
+  Require(end_levels >= 0 && end_levels <= 6, "end_levels", "an integer in [0, 6]");
   Require(std::isfinite(cg_relative_tolerance) && cg_relative_tolerance > 0 &&
               cg_relative_tolerance < 1,
           "cg_relative_tolerance", "a value in (0, 1)");
@@ -133,6 +134,7 @@ TissueDef LoadTissueDef(const std::string& path) {
                                            "mesh",
                                            "grading",
                                            "end_resolution",
+                                           "end_levels",
                                            "solver",
                                            "ordering",
                                            "cg_relative_tolerance",
@@ -157,6 +159,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   ReadEnum(root, path, "mesh", &ParseMeshKind, def.mesh);
   ReadField(root, path, "grading", def.grading);
   ReadField(root, path, "end_resolution", def.end_resolution);
+  ReadField(root, path, "end_levels", def.end_levels);
   ReadEnum(root, path, "solver", &ParseSolverKind, def.solver);
   ReadEnum(root, path, "ordering", &ParseOrdering, def.ordering);
   ReadField(root, path, "cg_relative_tolerance", def.cg_relative_tolerance);

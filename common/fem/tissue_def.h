@@ -58,13 +58,15 @@ struct TissueDef {
   double grading = 2.0;
   // Multi-scale mesh only, "end grading": around every pressed vertex of a bar or polyline
   // tool, where the prescribed displacement ends and w ~ r^½, the mesh goes on to the end
-  // level: the first level whose cells are no larger than (tool length) / end_resolution
-  // (capped at max_level; no effect when it is not finer than `level`). The force error of
+  // level: the first level whose cells are no larger than (tool length) / end_resolution,
+  // at most end_levels beyond `level` and at most max_level (no effect when it is not finer
+  // than `level`). The force error of
   // the end singularity is O(h_end / length), so this fixes it relative to the tool. A cell
   // at level l ∈ [level, end level) is refined when its distance to such a vertex is below
   // grading · h_l. Not applied to a point tool nor to a tool with contact_radius_m > 0 (its
   // ends are rounded). 0 disables.
   double end_resolution = 64;
+  int end_levels = 2;
   SolverKind solver = SolverKind::kCholmod;
   Ordering ordering = Ordering::kNestedDissection;
   double cg_relative_tolerance = 1e-8;  // ‖b − K u‖ / ‖b‖ at which CG stops

@@ -74,10 +74,10 @@ TissueModel BuildTissueModel(const TissueDef& def) {
   // End zones (multi-scale, vertices of a tool with zero contact radius): the children of a
   // level-(level + j) cell refined by the end rule, box distance to the vertex below
   // grading·max(hx, hy). Such cells fit in a square of side 2·grading·aspect + 2 cells around
-  // the vertex, 4 children each, for j < max_level − level (the end level is capped at
-  // max_level), at most kMaxToolPoints vertices.
+  // the vertex, 4 children each, for j < min(end_levels, max_level − level), at most
+  // kMaxToolPoints vertices.
   std::int64_t extra = 0;
-  const int end_levels = def.max_level - def.level;
+  const int end_levels = std::min(def.end_levels, def.max_level - def.level);
   if (def.mesh == MeshKind::kMultiscale && def.end_resolution > 0 && end_levels > 0) {
     const double aspect =
         std::max(def.length_x_m, def.length_y_m) / std::min(def.length_x_m, def.length_y_m);

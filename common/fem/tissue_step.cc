@@ -169,36 +169,31 @@ class ContactFinder {
   TissueWorkspace& ws_;
 };
 
-// The CSR pattern of K_ff and the slot of every element entry, in three linear passes (no
-// searches in sorted rows): gather each row's columns unsorted, remembering where each
-// element entry landed; sort each short row and record the sorted position of every
-// unsorted one; translate the remembered places into slots.
+// The CSR pattern of K_ff and the slot of every element entry, without searching rows. The
+// mesh is conforming and every triangle counter-clockwise, so a directed edge u→v belongs to
+// exactly one triangle and its reverse v→u to the neighbour across it; every edge at a free
+// node is interior. Row u therefore gets its diagonal plus one column per outgoing edge u→v,
+// each exactly once. After sorting the short rows, the slot of (v, u) — the "twin" of (u, v)
+// — is found by walking the rows in order: the columns below the diagonal of row v are
+// sorted, so they are met in the order the rows u < v are visited. A triangle's entry
+// (a, prev(a)) is then the twin of (prev(a), a), the outgoing edge of prev(a).
 void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
   const MeshSelection& mesh = ws.mesh;
-  std::fill_n(ws.row_count.begin(), n, 0);
+  for (int i = 0; i < n; ++i) {
+    ws.row_fill[static_cast<size_t>(i) * kMaxRowEntries] = i;
+    ws.row_count[i] = 1;
+  }
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
-    int* place = &entry.scatter[9 * e];
+    int* place = &entry.scatter[9 * static_cast<size_t>(e)];
     for (int a = 0; a < 3; ++a) {
-      if (d[a] < 0) {
-        place[3 * a] = place[3 * a + 1] = place[3 * a + 2] = -1;
-        continue;
-      }
-      int* row = &ws.row_fill[static_cast<size_t>(d[a]) * kMaxRowEntries];
+      const int b = a == 2 ? 0 : a + 1;
+      place[a] = -1;  // place of the outgoing edge a→b in row_fill, kept in slots 0–2 for now
+      if (d[a] < 0 || d[b] < 0) continue;
       int& count = ws.row_count[d[a]];
-      for (int b = 0; b < 3; ++b) {
-        if (d[b] < 0) {
-          place[3 * a + b] = -1;
-          continue;
-        }
-        int k = 0;
-        while (k < count && row[k] != d[b]) ++k;
-        if (k == count) {
-          MICRODEX_CHECK(count < kMaxRowEntries);
-          row[count++] = d[b];
-        }
-        place[3 * a + b] = d[a] * kMaxRowEntries + k;
-      }
+      MICRODEX_CHECK(count < kMaxRowEntries);
+      ws.row_fill[static_cast<size_t>(d[a]) * kMaxRowEntries + count] = d[b];
+      place[a] = d[a] * kMaxRowEntries + count++;
     }
   }
   int nnz = 0;
@@ -225,9 +220,31 @@ void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
     nnz += count;
   }
   entry.row_ptr[n] = nnz;
-  for (int j = 0; j < 9 * mesh.num_triangles; ++j) {
-    const int place = entry.scatter[j];
-    if (place >= 0) entry.scatter[j] = entry.row_ptr[place / kMaxRowEntries] + ws.row_rank[place];
+  std::fill_n(ws.row_count.begin(), n, 0);  // now: lower entries of each row matched so far
+  for (int u = 0; u < n; ++u) {
+    for (int p = entry.diag[u] + 1; p < entry.row_ptr[u + 1]; ++p) {
+      const int v = entry.cols[p];
+      const int q = entry.row_ptr[v] + ws.row_count[v]++;
+      MICRODEX_CHECK(entry.cols[q] == u);  // the mesh is conforming
+      ws.slot_twin[p] = q;
+      ws.slot_twin[q] = p;
+    }
+  }
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
+    int* slots = &entry.scatter[9 * static_cast<size_t>(e)];
+    int out[3];  // slot of the outgoing edge of each vertex
+    for (int a = 0; a < 3; ++a) {
+      const int place = slots[a];
+      out[a] = place < 0 ? -1 : entry.row_ptr[place / kMaxRowEntries] + ws.row_rank[place];
+    }
+    for (int a = 0; a < 3; ++a) {
+      const int next = a == 2 ? 0 : a + 1, prev = a == 0 ? 2 : a - 1;
+      const bool free_a = d[a] >= 0;
+      slots[3 * a + a] = free_a ? entry.diag[d[a]] : -1;
+      slots[3 * a + next] = out[a];
+      slots[3 * a + prev] = free_a && out[prev] >= 0 ? ws.slot_twin[out[prev]] : -1;
+    }
   }
   entry.num_dofs = n;
   entry.valid = true;
@@ -324,6 +341,7 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   contact_f_N.resize(model.def.max_contact_nodes);
   row_fill.resize(static_cast<size_t>(kMaxRowEntries) * n);
   row_rank.resize(static_cast<size_t>(kMaxRowEntries) * n);
+  slot_twin.resize(static_cast<size_t>(kMaxRowEntries) * n);
   row_count.resize(n);
   rhs.resize(n);
   x.resize(n);

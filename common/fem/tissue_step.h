@@ -100,6 +100,7 @@ struct TissueWorkspace {
   int num_contacts = 0;
   std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
   std::vector<std::int32_t> row_rank;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
+  std::vector<std::int32_t> slot_twin;   // [kMaxRowEntries · max_mesh_nodes] slot of (v, u)
   std::vector<int> row_count;            // [max_mesh_nodes]
   std::vector<double> rhs, x, residual;  // [max_mesh_nodes]
   std::vector<PatternEntry> patterns;

@@ -186,6 +186,7 @@ TEST(MultiscaleMesh, SixteenVertexPolylineFitsTheCapacities) {
   def.level = 4;
   def.max_level = 8;
   def.end_resolution = 1e4;  // capped at max_level
+  def.end_levels = 4;
   def.grading = 4.0;
   const TissueModel model = BuildTissueModel(def);
   MeshSelection mesh = MakeMeshSelection(model);

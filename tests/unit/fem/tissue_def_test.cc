@@ -83,6 +83,7 @@ TEST(TissueDefFile, BadFilesNameFileAndField) {
       {"tissue_negative_g.yaml", "tissue:\n  shear_modulus_Pa: -1\n", "shear_modulus_Pa"},
       {"tissue_level_high.yaml", "tissue:\n  max_level: 6\n  level: 7\n", "level"},
       {"tissue_end_resolution.yaml", "tissue:\n  end_resolution: -64\n", "end_resolution"},
+      {"tissue_end_levels.yaml", "tissue:\n  end_levels: 9\n", "end_levels"},
       {"tissue_malformed.yaml", "tissue: [1, 2\n", "malformed"},
   };
   for (const Bad& bad : cases) {

@@ -142,6 +142,52 @@ TEST(TissueStep, StiffnessAndDisplacementSweepsStayLinearAndFinite) {
   EXPECT_EQ(zero.contacts, 0);
 }
 
+// The reduced stiffness K_ff the step assembles (CSR pattern built from the mesh's directed
+// edges, element entries scattered to slots) equals a plain triplet assembly of the same
+// triangles, for a bar with end grading and an oblique polyline.
+TEST(TissueStep, AssembledStiffnessMatchesTripletAssembly) {
+  const Eigen::Vector3d polyline[] = {
+      {0.031, 0.077, -0.01}, {0.112, 0.141, -0.012}, {0.17, 0.09, -0.008}};
+  const ToolContact tools[] = {G1Bar(kPress_m), MakePolylineTool(polyline, 0.0)};
+  for (const ToolContact& tool : tools) {
+    const TissueModel model = Model(5, MeshKind::kMultiscale, SolverKind::kCholmod);
+    TissueWorkspace ws(model);
+    TissueState state = MakeTissueState(model);
+    StepTissue(model, tool, ws, state);
+    ASSERT_EQ(state.status, TissueStatus::kOk);
+    const PatternEntry* entry = nullptr;
+    for (const PatternEntry& p : ws.patterns)
+      if (p.valid && p.last_used == ws.use_clock) entry = &p;
+    ASSERT_NE(entry, nullptr);
+    const int n = entry->num_dofs;
+    std::vector<Eigen::Triplet<double>> triplets;
+    for (int e = 0; e < ws.mesh.num_triangles; ++e) {
+      const Triangle& t = ws.mesh.triangles[e];
+      const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          const int da = ws.node_dof[t.node[a]], db = ws.node_dof[t.node[b]];
+          if (da >= 0 && db >= 0) triplets.emplace_back(da, db, k[3 * a + b]);
+        }
+    }
+    Eigen::SparseMatrix<double, Eigen::RowMajor> reference(n, n);
+    reference.setFromTriplets(triplets.begin(), triplets.end());
+    reference.makeCompressed();
+    ASSERT_EQ(entry->row_ptr[n], reference.nonZeros());
+    const double scale = model.def.shear_modulus_Pa * model.def.thickness_m;
+    for (int i = 0; i < n; ++i) {
+      ASSERT_EQ(entry->row_ptr[i + 1] - entry->row_ptr[i],
+                reference.outerIndexPtr()[i + 1] - reference.outerIndexPtr()[i]);
+      for (int p = entry->row_ptr[i]; p < entry->row_ptr[i + 1]; ++p) {
+        const int q = reference.outerIndexPtr()[i] + (p - entry->row_ptr[i]);
+        ASSERT_EQ(entry->cols[p], reference.innerIndexPtr()[q]) << "row " << i;
+        EXPECT_NEAR(entry->vals[p], reference.valuePtr()[q], 1e-12 * scale) << "row " << i;
+      }
+      EXPECT_EQ(entry->cols[entry->diag[i]], i);
+    }
+  }
+}
+
 // With end grading the chain of contact nodes follows the leaves: every mesh vertex on a
 // bar that lies on a grid line is a contact node (none is left free under the tool), the
 // finer vertices near the ends included.
