@@ -22,6 +22,8 @@
 #include "station_infoPubSubTypes.h"
 #include "task_eventPubSubTypes.h"
 #include "telemetryPubSubTypes.h"
+#include "thread_statePubSubTypes.h"
+#include "tissue_statePubSubTypes.h"
 #include "tool_statePubSubTypes.h"
 
 namespace microdex::instructor {
@@ -68,6 +70,8 @@ struct Instructor::Dds {
   dds::DataReader* input = nullptr;
   dds::DataReader* tool = nullptr;
   dds::DataReader* needle = nullptr;
+  dds::DataReader* thread = nullptr;
+  dds::DataReader* tissue = nullptr;
   dds::DataReader* telemetry = nullptr;
   dds::DataReader* events = nullptr;
   dds::DataReader* score = nullptr;
@@ -88,11 +92,14 @@ Instructor::Instructor(const InstructorOptions& options)
   d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
   d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(net::kToolStateTopic);
   d.needle = d.context->CreateReader<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
+  d.thread = d.context->CreateReader<msg::ThreadStatePubSubType>(net::kThreadStateTopic);
+  d.tissue = d.context->CreateReader<msg::TissueStatePubSubType>(net::kTissueStateTopic);
   d.telemetry = d.context->CreateReader<msg::TelemetryPubSubType>(net::kTelemetryTopic);
   d.events = d.context->CreateReader<msg::TaskEventPubSubType>(net::kTaskEventTopic);
   d.score = d.context->CreateReader<msg::ScorePubSubType>(net::kScoreTopic);
   d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
-  for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.telemetry, d.events, d.score}) {
+  for (dds::DataReader* r :
+       {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry, d.events, d.score}) {
     dds::StatusMask mask = dds::StatusMask::data_available();
     if (r == d.info) mask << dds::StatusMask::liveliness_changed();
     r->get_statuscondition().set_enabled_statuses(mask);
@@ -108,7 +115,8 @@ Instructor::~Instructor() {
   if (thread_.joinable()) thread_.join();
   Dds& d = *dds_;
   d.waitset.detach_condition(d.guard);
-  for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.telemetry, d.events, d.score}) {
+  for (dds::DataReader* r :
+       {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry, d.events, d.score}) {
     d.waitset.detach_condition(r->get_statuscondition());
   }
   d.context.reset();
@@ -159,6 +167,8 @@ void Instructor::Run() {
     HandleInputs();
     TakeAll<msg::ToolState, net::ToolState>(dds_->tool, &StationView::tool);
     TakeAll<msg::NeedleState, net::NeedleState>(dds_->needle, &StationView::needle);
+    TakeAll<msg::ThreadState, net::ThreadState>(dds_->thread, &StationView::thread);
+    TakeAll<msg::TissueState, net::TissueState>(dds_->tissue, &StationView::tissue);
     TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry);
     HandleEvents();
     HandleScores();
@@ -349,9 +359,9 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
   std::ostringstream os;
   char line[512];
   std::snprintf(line, sizeof line,
-                "%-12s %-18s %-22s %-14s %-6s %7s %5s %9s %4s %-12s %6s %7s %13s\n", "STATION",
-                "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "CLEAR_mm", "CNT", "CUES",
-                "SCORE", "AGE_ms", "INPUT_rx/lost");
+                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-22s %4s %-12s %6s %7s %13s\n", "STATION",
+                "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "MODULE_STATE", "FLT",
+                "CUES", "SCORE", "AGE_ms", "INPUT_rx/lost");
   os << line;
   for (const StationView& v : stations) {
     std::string modules;
@@ -362,7 +372,7 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
     std::string scene = v.info.scene;
     if (const auto slash = scene.rfind('/'); slash != std::string::npos)
       scene = scene.substr(slash + 1);
-    double p99 = NAN, clear = NAN, score = NAN, age = NAN;
+    double p99 = NAN, score = NAN, age = NAN;
     std::uint64_t overruns = 0;
     std::uint32_t contacts = 0;
     std::string cues;  // active cue kinds, "" shown as "-"
@@ -370,7 +380,24 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
       p99 = v.telemetry.latest->period_p99_s * 1e3;
       overruns = v.telemetry.latest->overruns;
     }
-    if (v.needle.latest) clear = v.needle.latest->clearance_m * 1e3;
+    // The latest mirrored module states, briefly: needle clearance, thread strain and grasp
+    // force, tissue depth.
+    std::string state;
+    char part[64];
+    if (v.needle.latest) {
+      std::snprintf(part, sizeof part, "clr %.3fmm", v.needle.latest->clearance_m * 1e3);
+      state += part;
+    }
+    if (v.thread.latest) {
+      std::snprintf(part, sizeof part, "%sstr %.1f%% %.2fN", state.empty() ? "" : " ",
+                    v.thread.latest->max_strain * 1e2, v.thread.latest->f_grasp_W.norm());
+      state += part;
+    }
+    if (v.tissue.latest) {
+      std::snprintf(part, sizeof part, "%sw %.2fmm", state.empty() ? "" : " ",
+                    v.tissue.latest->max_displacement_m * 1e3);
+      state += part;
+    }
     if (v.tool.latest) {
       age = static_cast<double>(now_ns - v.tool.received_ns) * 1e-6;
       for (std::uint32_t k = 1; k < net::kCueKindCount; ++k) {
@@ -388,12 +415,12 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
     std::snprintf(io, sizeof io, "%llu/%llu", static_cast<unsigned long long>(v.inputs_received),
                   static_cast<unsigned long long>(v.inputs_lost));
     std::snprintf(line, sizeof line,
-                  "%-12.12s %-18.18s %-22.22s %-14.14s %-6s %7.3f %5llu %9.3f %4u %-12.12s %6.1f "
-                  "%7.1f %13s\n",
+                  "%-12.12s %-18.18s %-22.22s %-20.20s %-6s %7.3f %5llu %-22.22s %4u %-12.12s "
+                  "%6.1f %7.1f %13s\n",
                   v.info.header.station_id.c_str(), v.info.trainee.c_str(), scene.c_str(),
                   modules.c_str(), PresenceName(v.presence), p99,
-                  static_cast<unsigned long long>(overruns), clear, contacts,
-                  cues.empty() ? "-" : cues.c_str(), score, age, io);
+                  static_cast<unsigned long long>(overruns), state.empty() ? "-" : state.c_str(),
+                  contacts, cues.empty() ? "-" : cues.c_str(), score, age, io);
     os << line;
   }
   return os.str();

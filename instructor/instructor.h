@@ -64,6 +64,8 @@ struct StationView {
   std::int64_t last_heard_ns = 0;          // monotonic, last sample of any topic from it
   Mirror<net::ToolState> tool;
   Mirror<net::NeedleState> needle;
+  Mirror<net::ThreadState> thread;
+  Mirror<net::TissueState> tissue;
   Mirror<net::Telemetry> telemetry;
   Mirror<net::Score> score;
   std::uint64_t inputs_received = 0;

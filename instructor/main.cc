@@ -3,6 +3,7 @@
 #include <pthread.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <thread>
@@ -126,11 +127,15 @@ int main(int argc, char** argv) {
     for (const auto& v : console.Stations()) {
       if (!v.score.latest) continue;
       const auto& s = *v.score.latest;
-      std::printf(
-          "score %s: %.1f%s (contact %.2f s in %u episodes, mean clearance %.3f mm, "
-          "tremor %.1f um)\n",
-          v.info.header.station_id.c_str(), s.score, s.is_final ? " final" : "",
-          s.time_in_contact_s, s.contacts, s.mean_clearance_m * 1e3, s.tremor_rms_m * 1e6);
+      // "contact": needle on the wall, or a thread/tissue fault (overstretch, pressing too hard).
+      char clearance[64] = "";
+      if (std::isfinite(s.mean_clearance_m)) {
+        std::snprintf(clearance, sizeof clearance, ", mean clearance %.3f mm",
+                      s.mean_clearance_m * 1e3);
+      }
+      std::printf("score %s: %.1f%s (contact/fault %.2f s in %u episodes%s, tremor %.1f um)\n",
+                  v.info.header.station_id.c_str(), s.score, s.is_final ? " final" : "",
+                  s.time_in_contact_s, s.contacts, clearance, s.tremor_rms_m * 1e6);
     }
     std::fflush(stdout);
   } catch (const std::exception& e) {
