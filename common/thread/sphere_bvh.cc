@@ -1,69 +1,44 @@
 #include "common/thread/sphere_bvh.h"
 
 #include <algorithm>
-#include <utility>
+#include <cmath>
 
 #include "common/base/check.h"
 
 namespace microdex::thread {
 namespace {
 
-int BuildRange(SphereBvhTopology& t, int lo, int hi) {
-  if (hi - lo == 1) {
-    t.left.push_back(-1);
-    t.right.push_back(-1);
-    t.leaf_link.push_back(lo);
-    t.height.push_back(0);
-    return static_cast<int>(t.left.size()) - 1;
-  }
-  const int mid = (lo + hi) / 2;
-  const int l = BuildRange(t, lo, mid);
-  const int r = BuildRange(t, mid, hi);
-  t.left.push_back(l);
-  t.right.push_back(r);
-  t.leaf_link.push_back(-1);
-  t.height.push_back(std::max(t.height[l], t.height[r]) + 1);
-  return static_cast<int>(t.left.size()) - 1;
-}
+// Fixed traversal stack: FindCollision pushes two pairs per split and a pair's depth is at most
+// height(left) + height(right), so 2 * (2 * 32) covers any tree of up to 2^32 leaves.
+constexpr int kStackCapacity = 128;
+constexpr double kRelativeSlack = 1e-12;
 
-bool Overlap(const SphereBvhSpheres& s, int i, int j) {
-  const double r = s.radius_m[i] + s.radius_m[j];
-  return (s.center_W.col(i) - s.center_W.col(j)).squaredNorm() <= r * r;
-}
-
-struct Collector {
-  const SphereBvhTopology& t;
-  const SphereBvhSpheres& s;
-  LinkPair* pairs;
-  int capacity;
-  int count = 0;
-
-  void Save(int link_a, int link_b) {
-    if (link_a > link_b) std::swap(link_a, link_b);
-    if (link_b - link_a <= 1) return;  // the same link or neighbours sharing a node
-    if (count < capacity) pairs[count] = {link_a, link_b};
-    ++count;
-  }
-
-  // FindCollision (thesis §5.3).
-  void FindCollision(int t1, int t2) {
-    if (!Overlap(s, t1, t2)) return;
-    if (t.leaf_link[t1] >= 0 && t.leaf_link[t2] >= 0) {
-      Save(t.leaf_link[t1], t.leaf_link[t2]);
-      return;
-    }
-    if (t.height[t1] > t.height[t2]) std::swap(t1, t2);
-    FindCollision(t1, t.left[t2]);
-    FindCollision(t1, t.right[t2]);
-  }
-
-  void Self(int node) {
-    if (t.leaf_link[node] >= 0) return;
-    Self(t.left[node]);
-    Self(t.right[node]);
-    FindCollision(t.left[node], t.right[node]);
-  }
+struct PendingPair {
+  int p;
+  int q;
 };
+
+inline bool Overlap(const double* s, int i, int j) {
+  const double* a = s + 4 * i;
+  const double* b = s + 4 * j;
+  const double dx = a[0] - b[0];
+  const double dy = a[1] - b[1];
+  const double dz = a[2] - b[2];
+  const double r = a[3] + b[3];
+  return dx * dx + dy * dy + dz * dz <= r * r;
+}
+
+inline void FitLeaf(const double* x, int link, double inflate_m, double* out) {
+  const double* a = x + 3 * link;
+  const double* b = a + 3;
+  const double dx = b[0] - a[0];
+  const double dy = b[1] - a[1];
+  const double dz = b[2] - a[2];
+  out[0] = 0.5 * (a[0] + b[0]);
+  out[1] = 0.5 * (a[1] + b[1]);
+  out[2] = 0.5 * (a[2] + b[2]);
+  out[3] = 0.5 * std::sqrt(dx * dx + dy * dy + dz * dz) + inflate_m;
+}
 
 }  // namespace
 
@@ -71,72 +46,129 @@ SphereBvhTopology BuildSphereBvhTopology(int num_links) {
   MICRODEX_CHECK(num_links >= 1);
   SphereBvhTopology t;
   t.num_leaves = num_links;
-  t.left.reserve(2 * num_links - 1);
-  t.right.reserve(2 * num_links - 1);
-  t.leaf_link.reserve(2 * num_links - 1);
+  t.nodes.reserve(2 * num_links - 1);
   t.height.reserve(2 * num_links - 1);
-  t.root = BuildRange(t, 0, num_links);
-  t.leaf_node.assign(num_links, -1);
-  for (int i = 0; i < static_cast<int>(t.leaf_link.size()); ++i) {
-    if (t.leaf_link[i] >= 0) t.leaf_node[t.leaf_link[i]] = i;
+  std::vector<int> level;
+  for (int l = 0; l < num_links; ++l) {
+    t.nodes.push_back({-1, -1, l, l + 1});
+    t.height.push_back(0);
+    level.push_back(l);
   }
-  MICRODEX_CHECK(static_cast<int>(t.left.size()) == 2 * num_links - 1);
+  // Pair successive spheres level by level (thesis §5.3); an odd last one moves up unchanged.
+  while (level.size() > 1) {
+    std::vector<int> up;
+    for (size_t k = 0; k + 1 < level.size(); k += 2) {
+      const int a = level[k];
+      const int b = level[k + 1];
+      t.nodes.push_back({a, b, t.nodes[a].lo, t.nodes[b].hi});
+      t.height.push_back(std::max(t.height[a], t.height[b]) + 1);
+      up.push_back(static_cast<int>(t.nodes.size()) - 1);
+    }
+    if (level.size() % 2 == 1) up.push_back(level.back());
+    level.swap(up);
+  }
+  t.root = level[0];
+  MICRODEX_CHECK(static_cast<int>(t.nodes.size()) == 2 * num_links - 1);
+  t.max_stack = 2 * (2 * t.height[t.root] + 1);
+  MICRODEX_CHECK(t.max_stack <= kStackCapacity);
   return t;
 }
 
 SphereBvhSpheres MakeSphereBvhSpheres(const SphereBvhTopology& topology) {
-  const int n = static_cast<int>(topology.left.size());
   SphereBvhSpheres s;
-  s.center_W = Eigen::Matrix3Xd::Zero(3, n);
-  s.radius_m = Eigen::VectorXd::Zero(n);
+  s.xyzr = Eigen::Matrix4Xd::Zero(4, static_cast<Eigen::Index>(topology.nodes.size()));
   return s;
+}
+
+int RefitSphereBvhLeaves(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
+                         SphereBvhSpheres& s) {
+  const double* x = x_W.data();
+  double* out = s.xyzr.data();
+  for (int l = 0; l < t.num_leaves; ++l) FitLeaf(x, l, inflate_m, out + 4 * l);
+  return t.num_leaves;
 }
 
 int RefitSphereBvh(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
                    SphereBvhSpheres& s) {
-  const int n = static_cast<int>(t.left.size());
-  for (int i = 0; i < n; ++i) {  // post-order: children are refitted before their parent
-    const int link = t.leaf_link[i];
-    if (link >= 0) {
-      s.center_W.col(i) = 0.5 * (x_W.col(link) + x_W.col(link + 1));
-      s.radius_m[i] = 0.5 * (x_W.col(link + 1) - x_W.col(link)).norm() + inflate_m;
-      continue;
-    }
-    const int a = t.left[i];
-    const int b = t.right[i];
-    const Eigen::Vector3d d = s.center_W.col(b) - s.center_W.col(a);
-    const double dist = d.norm();
-    const double ra = s.radius_m[a];
-    const double rb = s.radius_m[b];
+  RefitSphereBvhLeaves(t, x_W, inflate_m, s);
+  double* out = s.xyzr.data();
+  const int n = static_cast<int>(t.nodes.size());
+  for (int i = t.num_leaves; i < n; ++i) {  // children precede their parent
+    const SphereBvhNode& node = t.nodes[i];
+    const double* a = out + 4 * node.left;
+    const double* b = out + 4 * node.right;
+    double* c = out + 4 * i;
+    const double dx = b[0] - a[0];
+    const double dy = b[1] - a[1];
+    const double dz = b[2] - a[2];
+    const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double ra = a[3];
+    const double rb = b[3];
     if (dist + rb <= ra) {
-      s.center_W.col(i) = s.center_W.col(a);
-      s.radius_m[i] = ra;
+      std::copy(a, a + 4, c);
     } else if (dist + ra <= rb) {
-      s.center_W.col(i) = s.center_W.col(b);
-      s.radius_m[i] = rb;
+      std::copy(b, b + 4, c);
     } else {
       const double r = 0.5 * (dist + ra + rb);
-      s.center_W.col(i) = s.center_W.col(a) + ((r - ra) / dist) * d;
-      s.radius_m[i] = r;
+      const double w = (r - ra) / dist;
+      c[0] = a[0] + w * dx;
+      c[1] = a[1] + w * dy;
+      c[2] = a[2] + w * dz;
+      // Rounding of the centre must not let a child stick out: a pair of leaves that just
+      // touch has to be reached through their ancestors.
+      c[3] = r * (1.0 + kRelativeSlack);
     }
   }
   return n;
 }
 
-int FindSelfCollisions(const SphereBvhTopology& topology, const SphereBvhSpheres& spheres,
-                       LinkPair* pairs, int capacity) {
-  Collector c{topology, spheres, pairs, capacity};
-  c.Self(topology.root);
-  return c.count;
+int FindSelfCollisions(const SphereBvhTopology& t, const SphereBvhSpheres& spheres, LinkPair* pairs,
+                       int capacity) {
+  const double* s = spheres.xyzr.data();
+  const SphereBvhNode* nodes = t.nodes.data();
+  PendingPair stack[kStackCapacity];
+  int count = 0;
+  const int n = static_cast<int>(t.nodes.size());
+  // Self(T) for every inner node T: FindCollision(left, right). Links under `p` always precede
+  // the links under `q`, so a pair of leaves is (p's link, q's link) in increasing order.
+  for (int i = t.num_leaves; i < n; ++i) {
+    int top = 0;
+    stack[top++] = {nodes[i].left, nodes[i].right};
+    while (top > 0) {
+      const PendingPair pq = stack[--top];
+      const SphereBvhNode& p = nodes[pq.p];
+      const SphereBvhNode& q = nodes[pq.q];
+      // All links of q within one of all links of p: only the same or neighbouring links.
+      if (q.hi - 1 - p.lo <= 1) continue;
+      if (!Overlap(s, pq.p, pq.q)) continue;
+      const bool p_leaf = p.left < 0;
+      const bool q_leaf = q.left < 0;
+      if (p_leaf && q_leaf) {
+        if (count < capacity) pairs[count] = {p.lo, q.lo};
+        ++count;
+        continue;
+      }
+      // Descend into the larger of the two (FindCollision's "level higher" rule).
+      if (q_leaf || (!p_leaf && p.hi - p.lo > q.hi - q.lo)) {
+        stack[top++] = {p.right, pq.q};
+        stack[top++] = {p.left, pq.q};
+      } else {
+        stack[top++] = {pq.p, q.right};
+        stack[top++] = {pq.p, q.left};
+      }
+    }
+  }
+  return count;
 }
 
-int FindSelfCollisionsAllPairs(const SphereBvhTopology& topology, const SphereBvhSpheres& spheres,
+int FindSelfCollisionsAllPairs(const SphereBvhTopology& t, const SphereBvhSpheres& spheres,
                                LinkPair* pairs, int capacity) {
-  const int n = topology.num_leaves;
+  const int n = t.num_leaves;
+  const double* s = spheres.xyzr.data();
   int count = 0;
   for (int la = 0; la < n; ++la) {
     for (int lb = la + 2; lb < n; ++lb) {
-      if (!Overlap(spheres, topology.leaf_node[la], topology.leaf_node[lb])) continue;
+      if (!Overlap(s, la, lb)) continue;
       if (count < capacity) pairs[count] = {la, lb};
       ++count;
     }

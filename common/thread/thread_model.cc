@@ -47,7 +47,7 @@ ThreadModel MakeThreadModel(const ThreadDef& def) {
   }
   m.inertia_kg_m2 = 0.5 * m.mass_kg * m.radius_m * m.radius_m;
   m.bvh = BuildSphereBvhTopology(m.num_links);
-  m.bvh_inflate_m = m.radius_m + def.contact_cutoff_m + def.diameter_m;
+  m.bvh_inflate_m = m.radius_m + def.contact_cutoff_m + 0.5 * def.diameter_m;
   m.contact_capacity = def.max_contacts > 0 ? def.max_contacts : 16 * m.num_links;
   m.half_bandwidth = 8;
   return m;

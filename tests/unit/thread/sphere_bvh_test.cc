@@ -33,15 +33,28 @@ std::vector<std::pair<int, int>> Sorted(const std::vector<LinkPair>& pairs, int 
 TEST(SphereBvh, BalancedTreeWithTwoNMinusOneSpheres) {
   for (int links : {1, 2, 3, 64, 100, 1024}) {
     const SphereBvhTopology t = BuildSphereBvhTopology(links);
-    EXPECT_EQ(static_cast<int>(t.left.size()), 2 * links - 1);
-    EXPECT_EQ(t.root, 2 * links - 2);  // post-order: the root comes last
+    const int n = static_cast<int>(t.nodes.size());
+    EXPECT_EQ(n, 2 * links - 1);
+    EXPECT_EQ(t.root, 2 * links - 2);  // children before parents: the root comes last
     EXPECT_LE(t.height[t.root], static_cast<int>(std::ceil(std::log2(links))));
-    for (int i = 0; i < static_cast<int>(t.left.size()); ++i) {
-      if (t.left[i] >= 0) {
-        EXPECT_LT(t.left[i], i);
-        EXPECT_LT(t.right[i], i);
+    for (int i = 0; i < n; ++i) {
+      const SphereBvhNode& node = t.nodes[i];
+      if (i < links) {  // leaves in link order
+        EXPECT_TRUE(t.IsLeaf(i));
+        EXPECT_EQ(node.lo, i);
+        EXPECT_EQ(node.hi, i + 1);
+        continue;
       }
+      ASSERT_FALSE(t.IsLeaf(i));
+      EXPECT_LT(node.left, i);
+      EXPECT_LT(node.right, i);
+      // A node covers exactly its two children's successive link ranges.
+      EXPECT_EQ(node.lo, t.nodes[node.left].lo);
+      EXPECT_EQ(t.nodes[node.left].hi, t.nodes[node.right].lo);
+      EXPECT_EQ(node.hi, t.nodes[node.right].hi);
     }
+    EXPECT_EQ(t.nodes[t.root].lo, 0);
+    EXPECT_EQ(t.nodes[t.root].hi, links);
   }
 }
 
@@ -51,16 +64,15 @@ TEST(SphereBvh, RefitEnclosesLinksAndChildren) {
   SphereBvhSpheres s = MakeSphereBvhSpheres(t);
   EXPECT_EQ(RefitSphereBvh(t, x, 1e-5, s), 2 * 64 - 1);
   constexpr double kTol_m = 1e-12;
-  for (int i = 0; i < static_cast<int>(t.left.size()); ++i) {
-    if (t.leaf_link[i] >= 0) {
-      const int l = t.leaf_link[i];
+  for (int i = 0; i < static_cast<int>(t.nodes.size()); ++i) {
+    if (t.IsLeaf(i)) {
+      const int l = t.nodes[i].lo;
       for (int k : {l, l + 1}) {
-        EXPECT_LE((x.col(k) - s.center_W.col(i)).norm() + 1e-5, s.radius_m[i] + kTol_m);
+        EXPECT_LE((x.col(k) - s.center_W(i)).norm() + 1e-5, s.radius_m(i) + kTol_m);
       }
     } else {
-      for (int c : {t.left[i], t.right[i]}) {
-        EXPECT_LE((s.center_W.col(c) - s.center_W.col(i)).norm() + s.radius_m[c],
-                  s.radius_m[i] + kTol_m);
+      for (int c : {t.nodes[i].left, t.nodes[i].right}) {
+        EXPECT_LE((s.center_W(c) - s.center_W(i)).norm() + s.radius_m(c), s.radius_m(i) + kTol_m);
       }
     }
   }
