@@ -578,12 +578,20 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     }
   }
 
-  // The thesis's pass against the vessel itself: its minima of φ with the piece ends decide
-  // touch / no-touch, and they start the distance ascent.
+  // The certificate needs the ascent (its starting points are not maxima themselves).
+  const int rounds = opt.polish_max_iters > 0 ? opt.max_certify_rounds : 0;
+  // The thesis's pass against the vessel wall: its minima of φ with the piece ends decide
+  // touch / no-touch, and they start the distance ascent. With the certificate it is the
+  // level-set search's first step at t = r; starting that search at the piece ends instead
+  // (t = their largest distance) gives the same certified answer with one pass less when an
+  // end is the deepest point (README_sp.md).
+  const bool wall_pass = rounds == 0 || opt.wall_pass_first || diagnostics != nullptr;
   SpPass pass;
-  if (!deep || diagnostics != nullptr) {
+  bool have_pass = false;
+  if (wall_pass && (!deep || diagnostics != nullptr)) {
     RunSpPass(nv, core_r, tube_r, iv, n_iv, opt, diagnostics != nullptr,
               std::numeric_limits<double>::infinity(), &pass);
+    have_pass = true;
     diag.lifted_radius = pass.lifted_radius;
     diag.phi_constant = pass.phi_constant;
     diag.quartic_fallback = pass.quartic_fallback;
@@ -597,18 +605,20 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
-  for (int j = 0; j < pass.n; ++j) {
-    if (!pass.is_min[j]) continue;
-    cand[n_cand++] = {pass.s[j], pass.cos_s[j], pass.sin_s[j], pass.interval[j],
-                      CandidateKind::kInterior};
-  }
-  if (!pass.ok) {
-    // No usable extrema (README_sp.md, "Fallbacks"): start from uniform points instead.
-    diag.fallback = true;
-    AddUniformCandidates(iv, n_iv, cand, &n_cand);
+  if (have_pass) {
+    for (int j = 0; j < pass.n; ++j) {
+      if (!pass.is_min[j]) continue;
+      cand[n_cand++] = {pass.s[j], pass.cos_s[j], pass.sin_s[j], pass.interval[j],
+                        CandidateKind::kInterior};
+    }
+    if (!pass.ok) {
+      // No usable extrema (README_sp.md, "Fallbacks"): start from uniform points instead.
+      diag.fallback = true;
+      AddUniformCandidates(iv, n_iv, cand, &n_cand);
+    }
   }
   Best best;
-  if (opt.max_certify_rounds > 0 && opt.polish_max_iters > 0 && pass.ok) {
+  if (rounds > 0 && (!have_pass || pass.ok)) {
     // The certificate below finds any farther point, so only the most promising candidate
     // (largest distance before the ascent) is refined here.
     int j_best = 0;
@@ -635,8 +645,6 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
-  // The certificate needs the ascent (its starting points are not maxima themselves).
-  const int rounds = opt.polish_max_iters > 0 ? opt.max_certify_rounds : 0;
   for (int round = 0; round < rounds; ++round) {
     ++diag.certify_passes;
     const double t = std::max(std::sqrt(best.f), kMinCertifyRel * core_r);

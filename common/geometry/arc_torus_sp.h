@@ -37,7 +37,11 @@ struct SpOptions {
   double polish_tol_rad = 1e-8;
   // Certificate passes against the level torus through the deepest point found (README_sp.md);
   // 0 keeps the thesis's single pass. Needs the ascent: ignored when polish_max_iters = 0.
-  int max_certify_rounds = 4;  // stop at a Newton step below this: f is then off by O(step²)
+  int max_certify_rounds = 6;
+  // With the certificate, run the thesis's pass against the tube wall first (as the thesis
+  // does; always run when diagnostics are requested or without the certificate). Off, the
+  // level-set search starts at the arc ends: the same answer, usually one pass less.
+  bool wall_pass_first = false;  // stop at a Newton step below this: f is then off by O(step²)
 };
 
 // What the SP path did for one query (tests, benchmark, telemetry). Optional output.
