@@ -6,9 +6,10 @@
 // 2-plane π (4.7)–(4.14); on π, G is a conic T (4.15), and its extrema on the lifted circle are
 // the real roots of a quartic (4.26). Because sign(G) = sign(r − distance to the core circle),
 // the values of φ(θ) = T on the circle (4.28) at those extrema and at the arc ends decide
-// touch / no-touch exactly. The clearance (arc_torus.h) is then evaluated at the SP candidates
-// and refined by a safeguarded Newton ascent of the true distance to the core circle,
-// because the extrema of G are not those of the distance (README_sp.md).
+// touch / no-touch exactly. The extrema of G are not those of the distance, so the clearance
+// (arc_torus.h) is evaluated at SP candidates refined by a Newton ascent of the true distance,
+// and certified by SP passes against the level torus {distance = t} through the deepest point
+// found, which is itself a torus of tube radius t (README_sp.md).
 //
 // Hot path: no allocation, no virtual call, no exception. Invalid input returns kInvalidInput.
 
@@ -50,7 +51,7 @@ struct SpDiagnostics {
   bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
   bool deep_fallback = false;     // a point ≥ R from the core circle: exact method answered
-  int certify_passes = 0;         // SP passes against level tori after the first
+  int certify_passes = 0;         // SP passes against level tori
   int certify_improvements = 0;   // of which found a farther point than the ascent had
   int num_extrema = 0;            // critical points of φ found on the whole lifted circle
   int num_intervals = 0;          // pieces of the arc inside the segment's azimuth range
