@@ -68,6 +68,17 @@ void RadixSortKeys(std::uint64_t* keys, std::uint64_t* scratch, int n) {
   // Two passes: the sorted keys are back in `keys`.
 }
 
+// Reorders ws.dof_node[0, n) by the model's nested-dissection rank.
+void OrderNestedDissection(const TissueModel& model, TissueWorkspace& ws, int n) {
+  for (int i = 0; i < n; ++i) {
+    const int node = ws.dof_node[i];
+    ws.order_keys[i] =
+        (static_cast<std::uint64_t>(model.nd_rank[node]) << 32) | static_cast<std::uint32_t>(node);
+  }
+  RadixSortKeys(ws.order_keys.data(), ws.order_scratch.data(), n);
+  for (int i = 0; i < n; ++i) ws.dof_node[i] = static_cast<int>(ws.order_keys[i] & 0xffffffffu);
+}
+
 std::uint64_t MixKey(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
   return h * 1099511628211ull;
@@ -352,6 +363,7 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
     entry.cols.resize(static_cast<size_t>(kMaxRowEntries) * n);
     entry.vals.resize(static_cast<size_t>(kMaxRowEntries) * n);
     entry.diag.resize(n);
+    entry.dof_order.resize(n);
     entry.scatter.resize(static_cast<size_t>(9) * model.max_triangles);
   }
   cg = MakeCgWorkspace(n, kMaxRowEntries * n);
@@ -387,40 +399,21 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
       ws.dof_node[n++] = node;
     }
   }
-  // CHOLMOD keeps the unknowns in the order given: number them by nested-dissection rank, so
-  // that a new pattern needs no ordering work (a sort of n keys instead of AMD).
-  if (def.solver == SolverKind::kCholmod && def.ordering == Ordering::kNestedDissection) {
-    for (int i = 0; i < n; ++i) {
-      const int node = ws.dof_node[i];
-      ws.order_keys[i] = (static_cast<std::uint64_t>(model.nd_rank[node]) << 32) |
-                         static_cast<std::uint32_t>(node);
-    }
-    RadixSortKeys(ws.order_keys.data(), ws.order_scratch.data(), n);
-    for (int i = 0; i < n; ++i) ws.dof_node[i] = static_cast<int>(ws.order_keys[i] & 0xffffffffu);
-  }
-  for (int i = 0; i < n; ++i) ws.node_dof[ws.dof_node[i]] = i;
-  // The dof codes of every triangle's vertices, read once here (node_dof is a grid-sized
-  // array: scattered reads) for the pattern, the right-hand side and the reactions.
-  for (int e = 0; e < mesh.num_triangles; ++e) {
-    const Triangle& t = mesh.triangles[e];
-    for (int k = 0; k < 3; ++k) ws.tri_dof[3 * static_cast<size_t>(e) + k] = ws.node_dof[t.node[k]];
-  }
   for (int c = 0; c < ws.num_contacts; ++c) key = MixKey(key, ws.contact_nodes[c]);
   stats.unknowns = n;
   stats.contact_nodes = ws.num_contacts;
   stats.active_nodes = mesh.num_active_nodes;
   stats.triangles = mesh.num_triangles;
   stats.leaves = mesh.num_leaves;
-  const Clock::time_point t_selected = Clock::now();
-  stats.select_us = Microseconds(t_begin, t_selected);
   if (!contacts_fit) {
-    stats.total_us = stats.select_us;
+    stats.select_us = stats.total_us = Microseconds(t_begin, Clock::now());
     state.stats = stats;
     Fail(state, TissueStatus::kTooManyContacts);
     return;
   }
 
-  // Assemble K_ff from the precomputed element matrices into the cached pattern.
+  // The cached pattern of this selection, or a slot for a new one (least recently used). A
+  // cached pattern keeps the numbering of the unknowns it was built with.
   int slot = -1;
   for (int e = 0; e < static_cast<int>(ws.patterns.size()); ++e) {
     if (ws.patterns[e].valid && ws.patterns[e].key == key && ws.patterns[e].num_dofs == n) slot = e;
@@ -435,8 +428,24 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
     }
     if (ws.ic_valid && ws.ic_key == ws.patterns[slot].key) ws.ic_valid = false;
     ws.patterns[slot].key = key;
-    BuildPattern(ws, ws.patterns[slot], n);
+    // CHOLMOD keeps the unknowns in the order given: number them by nested-dissection rank,
+    // so that a new pattern needs no ordering work (a sort of n keys instead of AMD).
+    if (def.solver == SolverKind::kCholmod && def.ordering == Ordering::kNestedDissection)
+      OrderNestedDissection(model, ws, n);
+    std::copy_n(ws.dof_node.begin(), n, ws.patterns[slot].dof_order.begin());
+  } else {
+    std::copy_n(ws.patterns[slot].dof_order.begin(), n, ws.dof_node.begin());
   }
+  for (int i = 0; i < n; ++i) ws.node_dof[ws.dof_node[i]] = i;
+  // The dof codes of every triangle's vertices, read once here (node_dof is a grid-sized
+  // array: scattered reads) for the pattern, the right-hand side and the reactions.
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    for (int k = 0; k < 3; ++k) ws.tri_dof[3 * static_cast<size_t>(e) + k] = ws.node_dof[t.node[k]];
+  }
+  const Clock::time_point t_selected = Clock::now();
+  stats.select_us = Microseconds(t_begin, t_selected);
+  if (new_pattern) BuildPattern(ws, ws.patterns[slot], n);
   PatternEntry& entry = ws.patterns[slot];
   entry.last_used = ++ws.use_clock;
   stats.pattern_reused = !new_pattern;

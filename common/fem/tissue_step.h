@@ -80,6 +80,7 @@ struct PatternEntry {
   std::vector<int> diag;     // [max_mesh_nodes]
   std::vector<double> vals;  // [kMaxRowEntries · max_mesh_nodes]
   std::vector<int> scatter;  // [9 · max_triangles] CSR slot of element entry (a, b), or −1
+  std::vector<std::int32_t> dof_order;  // [max_mesh_nodes] grid node of each unknown
 };
 
 inline constexpr int kMaxRowEntries = 16;

@@ -450,9 +450,11 @@ int RunFem(int argc, char** argv) {
   }
   std::fprintf(out,
                "{\n  \"bench\": \"fem\",\n  \"domain_m\": %s, \"shear_modulus_Pa\": %s, "
-               "\"thickness_m\": %s, \"bar_length_m\": %s, \"press_m\": %s, \"grading\": %s,\n",
+               "\"thickness_m\": %s, \"bar_length_m\": %s, \"press_m\": %s, \"grading\": %s, "
+               "\"end_resolution\": %s,\n",
                Num(kDomain_m).c_str(), Num(1e4).c_str(), Num(0.01).c_str(),
-               Num(kBarLength_m).c_str(), Num(kPress_m).c_str(), Num(opt.grading).c_str());
+               Num(kBarLength_m).c_str(), Num(kPress_m).c_str(), Num(opt.grading).c_str(),
+               Num(opt.end_resolution).c_str());
   std::fprintf(out, "  \"navier_force_N\": {");
   for (size_t i = 0; i < navier_force.size(); ++i)
     std::fprintf(out, "%s\"%s\": %s", i ? ", " : "", navier_force[i].first.c_str(),
