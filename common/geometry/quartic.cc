@@ -69,12 +69,10 @@ int RootsOnMonotonePieces(const double k[5], double lo, double hi, const double*
     return f[i] != 0 && f[i + 1] != 0 && (f[i] < 0) != (f[i + 1] < 0);
   };
   for (int i = 0; i < m; ++i) {
-    if (f[i] == 0) {
-      push(x[i]);
-    } else if (i > 0 && i < m - 1 && std::abs(f[i]) <= touch_tol && !sign_change(i - 1) &&
-               !sign_change(i)) {
-      push(x[i]);  // p touches 0 at this extremum: a double root
-    }
+    // An exact zero, or p touching 0 at an interior extremum (a double root).
+    const bool touches =
+        i > 0 && i < m - 1 && std::abs(f[i]) <= touch_tol && !sign_change(i - 1) && !sign_change(i);
+    if (f[i] == 0 || touches) push(x[i]);
     if (i + 1 < m && sign_change(i)) push(SolveBracketed(k, x[i], x[i + 1], f[i], f[i + 1], opt));
   }
   return n;
