@@ -73,5 +73,27 @@ TEST(PathField, SpringTowardsOrAwayFromTheCircle) {
   EXPECT_LT(CalcPathFieldForce(c, Eigen::Vector3d(1e-3, 5e-3, 0), 300, 10).norm(), 1e-15);
 }
 
+TEST(PathField, SegmentSpringTowardsTheNearestPointOfTheSegment) {
+  IdealPath path;
+  path.is_segment = true;
+  path.segment = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.01, 0, 0)};
+  // Beside the middle: the nearest point is the foot of the perpendicular.
+  const Eigen::Vector3d p(4e-3, 0.3e-3, -0.4e-3);
+  EXPECT_LT((CalcNearestOnSegment(path.segment, p) - Eigen::Vector3d(4e-3, 0, 0)).norm(), 1e-18);
+  EXPECT_LT(
+      (CalcPathFieldForce(path, p, 200, 10) + 200 * Eigen::Vector3d(0, 0.3e-3, -0.4e-3)).norm(),
+      1e-12);
+  EXPECT_LT(
+      (CalcPathFieldForce(path, p, -200, 10) - 200 * Eigen::Vector3d(0, 0.3e-3, -0.4e-3)).norm(),
+      1e-12);
+  // Beyond either end: the end point.
+  EXPECT_EQ(CalcNearestOnSegment(path.segment, Eigen::Vector3d(-1e-3, 1e-3, 0)), path.segment.a_W);
+  EXPECT_EQ(CalcNearestOnSegment(path.segment, Eigen::Vector3d(2e-2, 1e-3, 0)), path.segment.b_W);
+  EXPECT_NEAR(CalcPathFieldForce(path, Eigen::Vector3d(0.05, 0, 0), 1e4, 0.3).norm(), 0.3, 1e-12);
+  // A degenerate segment is its point.
+  path.segment.b_W = path.segment.a_W;
+  EXPECT_EQ(CalcNearestOnSegment(path.segment, p), path.segment.a_W);
+}
+
 }  // namespace
 }  // namespace microdex::cues

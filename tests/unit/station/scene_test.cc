@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 
 #include "station/needle_module.h"
 
@@ -96,6 +97,96 @@ TEST(Scene, IdealPathStaysOnTheCoreCircle) {
     // The ideal needle lies on the core circle: its clearance is the tube radius.
     EXPECT_NEAR(station::CalcSampledClearance(arc, torus, 65), s.vessel.tube_radius_m, 1e-12);
   }
+}
+
+std::string SceneDir() {
+  const char* dir = std::getenv("MICRODEX_SOURCE_DIR");
+  return std::string(dir ? dir : ".") + "/assets/scenes";
+}
+
+TEST(Scene, ShippedThreadAndTissueScenesLoad) {
+  const SceneModel t = LoadScene(SceneDir() + "/thread_pull.yaml");
+  ASSERT_TRUE(t.thread.has_value());
+  EXPECT_FALSE(t.tissue.has_value());
+  EXPECT_EQ(t.thread->def.num_nodes, 65);
+  EXPECT_DOUBLE_EQ(t.thread->def.time_step_s, 1.0 / t.haptic.rate_hz);
+  EXPECT_EQ(t.task.path, PathKind::kLine);
+  const SceneModel p = LoadScene(SceneDir() + "/tissue_press.yaml");
+  ASSERT_TRUE(p.tissue.has_value());
+  EXPECT_FALSE(p.thread.has_value());
+  EXPECT_EQ(p.tissue->def.level, 6);  // the scene's override of the parameter file
+  EXPECT_EQ(p.tissue->def.solver, fem::SolverKind::kPcgIc);
+  EXPECT_EQ(p.tissue->tool, TissueToolKind::kBar);
+  const SceneModel both = LoadScene(SceneDir() + "/suture_on_tissue.yaml");
+  EXPECT_TRUE(both.thread && both.tissue);
+}
+
+TEST(Scene, LinePathRunsBetweenItsEndsWithMinimumJerk) {
+  const SceneModel s = LoadScene(SceneDir() + "/thread_pull.yaml");
+  const double T = s.task.pass_duration_s;
+  EXPECT_EQ(s.CalcIdealToolPose(0).translation(), s.task.line_start_m);
+  EXPECT_NEAR((s.CalcIdealToolPose(T).translation() - s.task.line_end_m).norm(), 0, 1e-15);
+  EXPECT_NEAR((s.CalcIdealToolPose(2 * T).translation() - s.task.line_start_m).norm(), 0, 1e-15);
+  EXPECT_NEAR(
+      (s.CalcIdealToolPose(T / 2).translation() - 0.5 * (s.task.line_start_m + s.task.line_end_m))
+          .norm(),
+      0, 1e-15);
+  EXPECT_TRUE(s.CalcIdealToolPose(0.3 * T).linear().isApprox(s.task.R_WT_line, 0));
+  // On the arc path the pose is the needle's, bit for bit.
+  const SceneModel a = ParseScene(kGood, "t");
+  for (double t : {0.0, 0.7, 5.1}) {
+    EXPECT_TRUE(a.CalcIdealToolPose(t).isApprox(a.CalcIdealX_WT(a.CalcIdealAzimuth(t)), 0));
+  }
+}
+
+TEST(Scene, ThreadAndTissueSectionsAreChecked) {
+  const std::string origin = SceneDir() + "/inline.yaml";
+  auto error_of = [&](const std::string& yaml) {
+    try {
+      ParseScene(yaml, origin);
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string line =
+      "task: {path: line, line_start_m: [0, 0, 0], line_end_m: [0.01, 0, 0]}\n";
+  const std::string thread = "thread: {params: thread_stiff_nylon_10_0.yaml}\n";
+  const std::string tissue = "tissue: {params: tissue_skin_patch.yaml, level: 6}\n";
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\n" + thread + line), "");
+  EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n" + tissue + line), "");
+  EXPECT_NE(error_of("name: t\nmodules: [thread]\n" + line).find("thread"), std::string::npos);
+  EXPECT_NE(error_of("name: t\nmodules: [tremor]\n" + thread + line).find("not in modules"),
+            std::string::npos);
+  const std::string missing =
+      error_of("name: t\nmodules: [thread]\nthread: {params: no_such.yaml}\n" + line);
+  EXPECT_NE(missing.find("thread.params"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("no_such.yaml"), std::string::npos) << missing;
+  EXPECT_NE(error_of("name: t\nmodules: [tissue]\n"
+                     "tissue: {params: tissue_skin_patch.yaml, display_level: 7}\n" +
+                     line)
+                .find("tissue.display_level"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: t\nmodules: [tissue]\n"
+                     "tissue: {params: tissue_skin_patch.yaml, solver: magic}\n" +
+                     line)
+                .find("tissue.solver"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: t\nmodules: [tissue]\n"
+                     "tissue: {params: tissue_skin_patch.yaml, level: 0}\n" +
+                     line)
+                .find("tissue"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: t\nmodules: [needle]\n" + line).find("task.path"), std::string::npos);
+  EXPECT_NE(error_of("name: t\nmodules: [tremor]\n"
+                     "task: {path: line, line_start_m: [0, 0, 0], line_end_m: [0, 0, 0]}\n")
+                .find("task.line_end_m"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: t\nmodules: [thread]\n"
+                     "thread: {params: thread_stiff_nylon_10_0.yaml, direction: [0, 0, 0]}\n" +
+                     line)
+                .find("thread.direction"),
+            std::string::npos);
 }
 
 }  // namespace
