@@ -539,12 +539,23 @@ int RunFem(int argc, char** argv) {
         for (size_t k = 0; k + 1 < qs.size(); k += 2)
           std::fprintf(f, "%s %s\n", q(qs[k] * 100).c_str(), q(-qs[k + 1] / 100).c_str());
       }
+      // Nodal force over the node's share of the bar (half the distance to each neighbour):
+      // the end-graded multi-scale mesh has finer contact spacing near the ends.
       for (const Distribution& d : distributions) {
         if (d.case_name != "G1") continue;
-        const double h_cm = 100 * kDomain_m / (1 << d.level);
-        std::fprintf(f, "\n\n# %s level %d: x_cm f/h N_per_cm\n", d.mesh.c_str(), d.level);
-        for (size_t k = 0; k < d.x_m.size(); ++k)
-          std::fprintf(f, "%s %s\n", q(d.x_m[k] * 100).c_str(), q(-d.f_N[k] / h_cm).c_str());
+        std::vector<size_t> order(d.x_m.size());
+        for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+        std::sort(order.begin(), order.end(),
+                  [&](size_t a, size_t b) { return d.x_m[a] < d.x_m[b]; });
+        std::fprintf(f, "\n\n# %s level %d: x_cm f/share N_per_cm\n", d.mesh.c_str(), d.level);
+        for (size_t k = 0; k < order.size(); ++k) {
+          const double left = k > 0 ? d.x_m[order[k]] - d.x_m[order[k - 1]] : 0;
+          const double right = k + 1 < order.size() ? d.x_m[order[k + 1]] - d.x_m[order[k]] : 0;
+          const double share_cm = 100 * 0.5 * (left + right);
+          if (share_cm <= 0) continue;
+          std::fprintf(f, "%s %s\n", q(d.x_m[order[k]] * 100).c_str(),
+                       q(-d.f_N[order[k]] / share_cm).c_str());
+        }
       }
       std::fclose(f);
     }
