@@ -165,11 +165,11 @@ void Instructor::Run() {
     HandleLiveliness();
     HandleStationInfo();
     HandleInputs();
-    TakeAll<msg::ToolState, net::ToolState>(dds_->tool, &StationView::tool);
-    TakeAll<msg::NeedleState, net::NeedleState>(dds_->needle, &StationView::needle);
-    TakeAll<msg::ThreadState, net::ThreadState>(dds_->thread, &StationView::thread);
-    TakeAll<msg::TissueState, net::TissueState>(dds_->tissue, &StationView::tissue);
-    TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry);
+    TakeAll<msg::ToolState, net::ToolState>(dds_->tool, &StationView::tool, "tool_state");
+    TakeAll<msg::NeedleState, net::NeedleState>(dds_->needle, &StationView::needle, "needle_state");
+    TakeAll<msg::ThreadState, net::ThreadState>(dds_->thread, &StationView::thread, "thread_state");
+    TakeAll<msg::TissueState, net::TissueState>(dds_->tissue, &StationView::tissue, "tissue_state");
+    TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry, "telemetry");
     HandleEvents();
     HandleScores();
     CheckSilence();
@@ -233,7 +233,7 @@ void Instructor::HandleLiveliness() {
 }
 
 template <class Msg, class Plain>
-void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror) {
+void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, const char* topic) {
   auto* reader = static_cast<dds::DataReader*>(reader_ptr);
   Msg m;
   dds::SampleInfo si;
@@ -246,7 +246,9 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror) {
     std::lock_guard<std::mutex> lock(mutex_);
     StationView& v = ViewFor(p.header.station_id);
     if (options_.record_latency) {
-      latency_.state_age_us.push_back(static_cast<double>(now_rt - p.header.stamp_ns) * 1e-3);
+      const double age_us = static_cast<double>(now_rt - p.header.stamp_ns) * 1e-3;
+      latency_.state_age_us.push_back(age_us);
+      latency_.state_age_us_by_topic[topic].push_back(age_us);
       latency_.transport_us.push_back(static_cast<double>(now_rt - si.source_timestamp.to_ns()) *
                                       1e-3);
     }
@@ -292,7 +294,7 @@ void Instructor::HandleEvents() {
 }
 
 void Instructor::HandleScores() {
-  TakeAll<msg::Score, net::Score>(dds_->score, &StationView::score);
+  TakeAll<msg::Score, net::Score>(dds_->score, &StationView::score, "score");
 }
 
 void Instructor::SendQueuedCues() {

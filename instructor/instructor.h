@@ -78,6 +78,7 @@ struct StationView {
 struct LatencySamples {
   std::vector<double> state_age_us;  // receive − stamp_ns (tick start of the state)
   std::vector<double> transport_us;  // receive − the writer's source timestamp
+  std::map<std::string, std::vector<double>> state_age_us_by_topic;  // "tool_state", ...
 };
 
 class Instructor {
@@ -119,7 +120,7 @@ class Instructor {
   void HandleStationInfo();
   void HandleLiveliness();
   template <class Msg, class Plain>
-  void TakeAll(void* reader, Mirror<Plain> StationView::*mirror);
+  void TakeAll(void* reader, Mirror<Plain> StationView::*mirror, const char* topic);
   void HandleInputs();
   void HandleEvents();
   void HandleScores();

@@ -264,8 +264,12 @@ void StationPublisher::PublishMirror() {
     net::ToMsg(n, w_->needle_msg);
     w_->needle->write(&w_->needle_msg);
   }
-  if (w_->thread != nullptr && (rings_.frames.thread.Update() || have_thread_frame_)) {
-    have_thread_frame_ = true;
+}
+
+// The modules write their large frames once per mirror period (HapticLoop); each is
+// published as soon as it is taken, so its age is that of its tick, not of the mirror clock.
+void StationPublisher::PublishFrames() {
+  if (w_->thread != nullptr && rings_.frames.thread.Update()) {
     const ThreadFrame& f = rings_.frames.thread.front();
     auto& t = w_->thread_plain;
     t.header = MakeHeader(f.step, f.stamp_ns);
@@ -278,8 +282,7 @@ void StationPublisher::PublishMirror() {
     net::ToMsg(t, w_->thread_msg);
     w_->thread->write(&w_->thread_msg);
   }
-  if (w_->tissue != nullptr && (rings_.frames.tissue.Update() || have_tissue_frame_)) {
-    have_tissue_frame_ = true;
+  if (w_->tissue != nullptr && rings_.frames.tissue.Update()) {
     const TissueFrame& f = rings_.frames.tissue.front();
     auto& t = w_->tissue_plain;
     t.header = MakeHeader(f.step, f.stamp_ns);
@@ -369,6 +372,7 @@ void StationPublisher::Run() {
                      eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(timeout_ns)));
     HandleCues();
     Drain();
+    PublishFrames();
     now = SystemClock().NowNs();
     if (now >= next_mirror_ns_) {
       PublishMirror();
@@ -393,6 +397,7 @@ void StationPublisher::Run() {
 void StationPublisher::Goodbye() {
   Drain();
   PublishMirror();
+  PublishFrames();
   PublishScore(true);
   PublishEvent(net::TaskEventKind::kTaskEnd, last_.step, 0, final_score_.score, "");
   // Give the reliable topics a moment to deliver the final samples to a live instructor;

@@ -7,8 +7,10 @@
 //   - drains the snapshot ring: one DeviceInput per step (1 kHz, reliable keep-all), one
 //     TaskEvent per cue applied (with the step it was applied at) and per contact change;
 //   - publishes the mirrored states (ToolState, and NeedleState/ThreadState/TissueState when the
-//     scene has that module: their writers exist only then) at the mirror rate, Telemetry at
-//     10 Hz and a running Score every second; recognises the thread's knot at knot_rate_hz.
+//     scene has that module: their writers exist only then) at the mirror rate (thread and
+//     tissue as soon as the haptic thread hands over their frame, once per mirror period),
+//     Telemetry at 10 Hz and a running Score every second; recognises the thread's knot at
+//     knot_rate_hz.
 // Stop() publishes the last states, the final Score and a TaskEnd event, waits briefly for
 // their acknowledgement, and disposes the station's StationInfo instance (its departure).
 
@@ -86,6 +88,7 @@ class StationPublisher {
   void HandleCues();
   void Drain();
   void PublishMirror();
+  void PublishFrames();
   void RecognizeKnot();
   void PublishTelemetry(std::int64_t now_ns);
   void PublishScore(bool is_final);
@@ -114,8 +117,6 @@ class StationPublisher {
   PublisherTotals totals_;
   TickSnapshot last_;
   bool have_last_ = false;
-  bool have_thread_frame_ = false;
-  bool have_tissue_frame_ = false;
   std::string knot_;  // "" until the first recognition
   std::vector<std::pair<std::string, std::uint64_t>> seen_cues_;
   net::Score final_score_;

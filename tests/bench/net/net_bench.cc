@@ -1,6 +1,8 @@
 // microdex-bench net: 4 stations + 1 instructor on one host, on the loopback profile.
 // Reports the haptic period (p99, p99.9, max over the stations, overruns), the
 // station→instructor state latency, DeviceInput loss at 1 kHz and the instructor's CPU use.
+// With several --scene options the stations take them in turn (mixed classes: needle, thread,
+// tissue); each station's period and its modules' step times are listed too.
 //
 // The stations are microdex-station processes (next to this binary); this process is the
 // instructor (microdex::instructor::Instructor), so its CPU use is the instructor's.
@@ -57,13 +59,15 @@ int RunNet(int argc, char** argv) {
   double duration_s = 60;
   int stations = 4;
   int domain = 90;
-  std::string scene;
+  std::vector<std::string> scenes;
   CLI::App app{"microdex-bench net: haptic period, DDS latency and loss, 4 stations + instructor"};
   app.add_option("--json", json_path, "write the results as JSON to FILE");
   app.add_option("--duration", duration_s, "seconds of measurement (default 60)");
   app.add_option("--stations", stations, "station processes (default 4)");
   app.add_option("--domain", domain, "DDS domain id (default 90)");
-  app.add_option("--scene", scene, "scene (default assets/scenes/needle_tube.yaml)");
+  app.add_option("--scene", scenes,
+                 "scene, repeatable: stations take them in turn (default "
+                 "assets/scenes/needle_tube.yaml)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -76,9 +80,10 @@ int RunNet(int argc, char** argv) {
     std::fprintf(stderr, "microdex-bench net: --duration >= 1 s and --stations 1..16 expected\n");
     return 2;
   }
-  if (scene.empty()) {
+  if (scenes.empty()) {
     const char* src = std::getenv("MICRODEX_SOURCE_DIR");
-    scene = std::string(src ? src : MICRODEX_BENCH_SOURCE_DIR) + "/assets/scenes/needle_tube.yaml";
+    scenes.push_back(std::string(src ? src : MICRODEX_BENCH_SOURCE_DIR) +
+                     "/assets/scenes/needle_tube.yaml");
   }
   const std::string dir = "/tmp/microdex-bench-net-" + std::to_string(getpid());
   mkdir(dir.c_str(), 0755);
@@ -107,6 +112,7 @@ int RunNet(int argc, char** argv) {
       const std::string dom = std::to_string(domain);
       const std::string skill = std::to_string(0.25 * (i % 5));
       const std::string out = dir + "/" + id + ".json";
+      const std::string& scene = scenes[static_cast<std::size_t>(i) % scenes.size()];
       execl(bin.c_str(), bin.c_str(), "--scene", scene.c_str(), "--station-id", id.c_str(),
             "--duration", dur.c_str(), "--domain", dom.c_str(), "--skill", skill.c_str(),
             "--score-out", out.c_str(), static_cast<char*>(nullptr));
@@ -129,6 +135,7 @@ int RunNet(int argc, char** argv) {
 
   double p99 = 0, p999 = 0, pmax = 0, overruns = 0, lost = 0, steps = 0, received = 0;
   bool realtime = true;
+  std::string per_station;  // JSON array items
   for (int i = 0; i < stations; ++i) {
     const std::string id = "bench-" + std::to_string(i + 1);
     std::ifstream f(dir + "/" + id + ".json");
@@ -141,6 +148,24 @@ int RunNet(int argc, char** argv) {
     overruns += JsonNumber(j, "overruns");
     steps += JsonNumber(j, "steps");
     realtime = realtime && j.find("\"realtime\": true") != std::string::npos;
+    {
+      const std::string& scene = scenes[static_cast<std::size_t>(i) % scenes.size()];
+      std::string modules = "[]";  // the station's own list (name, step mean/p99/max µs, error)
+      if (const auto at = j.find("\"modules\": ["); at != std::string::npos) {
+        const auto end = j.find("],", at);
+        if (end != std::string::npos) modules = j.substr(at + 11, end + 1 - (at + 11));
+      }
+      char line[512];
+      std::snprintf(line, sizeof line,
+                    "%s\n    {\"id\": \"%s\", \"scene\": \"%s\", \"period_p99_ms\": %.4f, "
+                    "\"period_p999_ms\": %.4f, \"period_max_ms\": %.4f, \"overruns\": %.0f, "
+                    "\"modules\": ",
+                    per_station.empty() ? "" : ",", id.c_str(),
+                    scene.substr(scene.rfind('/') + 1).c_str(), JsonNumber(j, "period_p99_ms"),
+                    JsonNumber(j, "period_p999_ms"), JsonNumber(j, "period_max_ms"),
+                    JsonNumber(j, "overruns"));
+      per_station += line + modules + "}";
+    }
     // Lost inputs: dropped before publication (ring, writer) and gaps in the instructor's
     // received step sequence.
     lost += JsonNumber(j, "ring_dropped") + JsonNumber(j, "input_write_failed");
@@ -159,12 +184,22 @@ int RunNet(int argc, char** argv) {
       "  \"latency_p50_us\": %.1f,\n  \"latency_p99_us\": %.1f,\n"
       "  \"transport_latency_p50_us\": %.1f,\n  \"transport_latency_p99_us\": %.1f,\n"
       "  \"latency_samples\": %zu,\n  \"input_lost\": %.0f,\n  \"input_received\": %.0f,\n"
-      "  \"station_steps\": %.0f,\n  \"instructor_cpu\": %.3f,\n  \"realtime\": %s\n}\n",
+      "  \"station_steps\": %.0f,\n  \"instructor_cpu\": %.3f,\n  \"realtime\": %s,\n",
       stations, duration_s, p99, p999, pmax, overruns, Quantile(lat.state_age_us, 0.5),
       Quantile(lat.state_age_us, 0.99), Quantile(lat.transport_us, 0.5),
       Quantile(lat.transport_us, 0.99), lat.state_age_us.size(), lost, received, steps,
       instructor_cpu, realtime ? "true" : "false");
-  std::fputs(out, stdout);
+  std::string by_topic;
+  for (const auto& [topic, ages] : lat.state_age_us_by_topic) {
+    char item[160];
+    std::snprintf(item, sizeof item, "%s\"%s\": {\"p50_us\": %.1f, \"p99_us\": %.1f, \"n\": %zu}",
+                  by_topic.empty() ? "" : ", ", topic.c_str(), Quantile(ages, 0.5),
+                  Quantile(ages, 0.99), ages.size());
+    by_topic += item;
+  }
+  const std::string report = std::string(out) + "  \"latency_by_topic\": {" + by_topic +
+                             "},\n  \"per_station\": [" + per_station + "\n  ]\n}\n";
+  std::fputs(report.c_str(), stdout);
   std::printf(
       "goals: period p99 <= 1.1 ms: %s; p99.9 <= 2 ms: %s; latency p50 <= 200 us: %s; "
       "p99 <= 2 ms: %s; zero loss: %s; instructor < 1 core: %s (max is reported, not a goal)\n",
@@ -178,7 +213,7 @@ int RunNet(int argc, char** argv) {
       std::fprintf(stderr, "microdex-bench net: --json '%s': cannot write\n", json_path.c_str());
       return 2;
     }
-    f << out;
+    f << report;
   }
   return 0;
 }
