@@ -551,8 +551,9 @@ int RunFem(int argc, char** argv) {
         for (size_t k = 0; k < order.size(); ++k) {
           const double left = k > 0 ? d.x_m[order[k]] - d.x_m[order[k - 1]] : 0;
           const double right = k + 1 < order.size() ? d.x_m[order[k + 1]] - d.x_m[order[k]] : 0;
-          const double share_cm = 100 * 0.5 * (left + right);
-          if (share_cm <= 0) continue;
+          // A lone contact node carries the whole bar.
+          const double share_cm =
+              order.size() > 1 ? 100 * 0.5 * (left + right) : 100 * kBarLength_m;
           std::fprintf(f, "%s %s\n", q(d.x_m[order[k]] * 100).c_str(),
                        q(-d.f_N[order[k]] / share_cm).c_str());
         }
