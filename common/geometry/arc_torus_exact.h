@@ -22,10 +22,11 @@ namespace microdex::geometry {
 
 // Work counters of one query, for tests and the benchmark.
 struct ExactDiagnostics {
-  int num_intervals = 0;  // pieces of the arc inside the azimuth range
-  int num_nodes = 0;      // Bernstein subdivision nodes visited
-  int num_roots = 0;      // isolated simple roots of P
-  int num_fuzzy = 0;      // nodes left unresolved by rounding, settled through Φ
+  int num_intervals = 0;    // pieces of the arc inside the azimuth range
+  int num_nodes = 0;        // Bernstein subdivision nodes visited
+  int num_roots = 0;        // isolated simple roots of P
+  int num_fuzzy = 0;        // nodes left unresolved by rounding, settled through Φ
+  int num_local_forms = 0;  // nodes re-expanded about a local needle point
   bool node_budget_hit = false;
 };
 
