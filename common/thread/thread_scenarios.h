@@ -21,6 +21,9 @@ struct SwingPullOptions {
   double duration_s = 2.0;
   double sample_period_s = 0.02;  // node positions are recorded this often
   bool stop_when_unstable = true;
+  // The rod the thread is dropped over. Without it the motion is free of contact events
+  // (the accuracy study needs a smooth reference trajectory).
+  bool rod = true;
 };
 
 struct SwingPullReport {
@@ -34,6 +37,8 @@ struct SwingPullReport {
   double energy_bound_J = 0.0;
   int steps = 0;
   double seconds_per_step = 0.0;  // median-free mean wall time, filled by the caller if wanted
+  int max_self_contacts = 0;      // most self contacts in one step
+  int max_object_contacts = 0;
   std::vector<Eigen::Matrix3Xd> samples;  // positions every sample_period_s
 };
 
