@@ -1,5 +1,6 @@
 #include "station/thread_module.h"
 
+#include <algorithm>
 #include <cmath>
 #include <span>
 #include <stdexcept>
@@ -10,6 +11,50 @@
 
 namespace microdex::station {
 
+Eigen::Matrix3Xd CalcSlackThreadNodes(const Eigen::Vector3d& p_W_a, const Eigen::Vector3d& p_W_b,
+                                      const Eigen::Vector3d& side_W, double length_m,
+                                      int num_nodes) {
+  MICRODEX_CHECK(num_nodes >= 2 && length_m > 0);
+  Eigen::Matrix3Xd x(3, num_nodes);
+  const Eigen::Vector3d chord = p_W_b - p_W_a;
+  const double d = chord.norm();
+  MICRODEX_CHECK(d > 0);
+  const Eigen::Vector3d c = chord / d;
+  // Bow direction: side_W without its part along the chord (any normal when parallel).
+  Eigen::Vector3d u = side_W - side_W.dot(c) * c;
+  if (u.norm() < 1e-9) u = c.unitOrthogonal();
+  u.normalize();
+  // Arc of length L over the chord d: half-angle θ with sin θ / θ = d / L (Newton on
+  // g(θ) = sin θ − (d / L) θ from θ = π/2 ... π, where g is concave and decreasing past its
+  // maximum); a taut thread (d >= L) is straight.
+  const double ratio = d / length_m;
+  if (ratio >= 1 - 1e-12) {
+    for (int i = 0; i < num_nodes; ++i) {
+      x.col(i) = p_W_a + chord * (static_cast<double>(i) / (num_nodes - 1));
+    }
+    return x;
+  }
+  double theta = std::sqrt(6 * (1 - ratio));  // small-angle start: sin θ/θ ≈ 1 − θ²/6
+  theta = std::min(theta, 3.0);
+  for (int it = 0; it < 60; ++it) {
+    const double g = std::sin(theta) - ratio * theta;
+    const double dg = std::cos(theta) - ratio;
+    if (dg == 0) break;
+    const double next = std::clamp(theta - g / dg, 1e-9, 3.14159);
+    if (std::abs(next - theta) < 1e-15) break;
+    theta = next;
+  }
+  const double radius_m = length_m / (2 * theta);
+  // Centre below the chord's midpoint, on the side away from u.
+  const Eigen::Vector3d mid = 0.5 * (p_W_a + p_W_b);
+  const Eigen::Vector3d centre = mid - radius_m * std::cos(theta) * u;
+  for (int i = 0; i < num_nodes; ++i) {
+    const double phi = -theta + 2 * theta * static_cast<double>(i) / (num_nodes - 1);
+    x.col(i) = centre + radius_m * (std::sin(phi) * c + std::cos(phi) * u);
+  }
+  return x;
+}
+
 ThreadModule::ThreadModule(const scene::SceneModel& scene)
     : max_force_N_(scene.haptic.max_force_N), max_strain_(scene.thread->max_strain) {
   const scene::ThreadSceneDef& d = *scene.thread;
@@ -19,7 +64,9 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
                              " (the ThreadState bound)");
   }
   model_ = thread::MakeThreadModel(d.def);
-  state_ = thread::MakeStraightThreadState(model_, d.p_W_anchor, d.direction_W);
+  state_ = thread::MakeThreadState(
+      model_, CalcSlackThreadNodes(d.p_W_anchor, scene.CalcIdealToolPose(0).translation(),
+                                   d.slack_side_W, d.def.length_m, model_.num_nodes));
   if (std::isfinite(d.floor_height_m)) {
     colliders_[0] =
         thread::Collider::Plane(Eigen::Vector3d(0, 0, d.floor_height_m), Eigen::Vector3d::UnitZ());

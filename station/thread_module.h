@@ -1,6 +1,7 @@
 #pragma once
 // The suture-thread module (thesis chapter 5, common/thread): node 0 is held at the scene's
-// anchor (the stitch), the last node is grasped by the tool tip and follows it; each tick
+// anchor (the stitch), the last node is grasped by the tool tip and follows it (it starts at
+// the tool's ideal start point, the slack bowed as an arc: CalcSlackThreadNodes); each tick
 // runs one StepThread (the linearly-implicit integrator of the parameter file at the haptic
 // period) and renders the force of the thread on the grasped node (§5.4) to the device.
 //
@@ -16,6 +17,13 @@
 #include "station/module.h"
 
 namespace microdex::station {
+
+// num_nodes points, equally spaced along a circular arc of length length_m from p_W_a to
+// p_W_b (their distance d <= length_m), bowed towards side_W; the straight segment when
+// d = length_m. Consecutive points are length_m / (num_nodes − 1) apart along the arc.
+Eigen::Matrix3Xd CalcSlackThreadNodes(const Eigen::Vector3d& p_W_a, const Eigen::Vector3d& p_W_b,
+                                      const Eigen::Vector3d& side_W, double length_m,
+                                      int num_nodes);
 
 class ThreadModule final : public Module {
  public:

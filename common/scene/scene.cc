@@ -205,8 +205,19 @@ void ValidateScene(const SceneModel& s) {
       Fail(o, "thread.params", "time_step_s: expected the haptic period 1 / haptic.rate_hz");
     }
     if (th.def.max_grasps < 2) Fail(o, "thread.params", "max_grasps: expected >= 2");
-    if (!(std::abs(th.direction_W.norm() - 1.0) < 1e-9)) {
-      Fail(o, "thread.direction", "expected a non-zero vector");
+    if (!(std::abs(th.slack_side_W.norm() - 1.0) < 1e-9)) {
+      Fail(o, "thread.slack_side", "expected a non-zero vector");
+    }
+    const double reach_m = (s.CalcIdealToolPose(0).translation() - th.p_W_anchor).norm();
+    if (!(reach_m <= th.def.length_m * (1 + 1e-9))) {
+      Fail(o, "thread.anchor_m",
+           "expected within the thread's length of the tool's start point (the thread would "
+           "start stretched)");
+    }
+    if (!(reach_m > 0.2 * th.def.length_m)) {
+      Fail(o, "thread.anchor_m",
+           "expected farther than a fifth of the thread's length from the "
+           "tool's start point");
     }
     if (!(th.max_strain > 0 && th.max_strain <= 1)) Fail(o, "thread.max_strain", "expected (0, 1]");
   }
@@ -315,7 +326,7 @@ SceneModel ParseScene(const std::string& yaml_text, const std::string& origin) {
   }
   if (const YAML::Node th = root["thread"]) {
     if (!th.IsMap()) Fail(origin, "thread", "expected a map");
-    CheckKeys(th, {"params", "anchor_m", "direction", "floor_height_m", "max_strain"}, "thread.",
+    CheckKeys(th, {"params", "anchor_m", "slack_side", "floor_height_m", "max_strain"}, "thread.",
               origin);
     ThreadSceneDef d;
     const std::string params = ReadString(th, "params", "thread.", origin, "");
@@ -329,9 +340,9 @@ SceneModel ParseScene(const std::string& yaml_text, const std::string& origin) {
     // The thread steps once per haptic tick.
     d.def.time_step_s = 1.0 / s.haptic.rate_hz;
     d.p_W_anchor = ReadVec3(th, "anchor_m", "thread.", origin);
-    if (th["direction"]) {
-      const Eigen::Vector3d dir = ReadVec3(th, "direction", "thread.", origin);
-      d.direction_W = dir.norm() > 0 ? Eigen::Vector3d(dir.normalized()) : dir;
+    if (th["slack_side"]) {
+      const Eigen::Vector3d side = ReadVec3(th, "slack_side", "thread.", origin);
+      d.slack_side_W = side.norm() > 0 ? Eigen::Vector3d(side.normalized()) : side;
     }
     d.floor_height_m = ReadDouble(th, "floor_height_m", "thread.", origin, d.floor_height_m);
     d.max_strain = ReadDouble(th, "max_strain", "thread.", origin, d.max_strain);

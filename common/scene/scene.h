@@ -64,13 +64,17 @@ struct TaskDef {
 };
 
 // The suture thread (station "thread" module): a ThreadDef from a parameter file, node 0
-// held fixed at the anchor (the stitch), the last node grasped by the tool tip.
+// held fixed at the anchor (the stitch), the last node grasped by the tool tip. At the start
+// the thread runs from the anchor to the tool's ideal start point, with its slack (thread
+// longer than that distance) taken up by a circular arc bowed towards slack_side, so the
+// grasped node starts at the tool and every link at its rest length.
 struct ThreadSceneDef {
   std::string params_path;  // the parameter file, resolved against the scene's folder
   thread::ThreadDef def;    // loaded from params_path; time step set to the haptic period
   Eigen::Vector3d p_W_anchor = Eigen::Vector3d::Zero();
-  // The thread starts straight from the anchor along this unit direction.
-  Eigen::Vector3d direction_W = Eigen::Vector3d::UnitX();
+  // The side a slack thread bows towards at the start (unit; its part along the anchor–tool
+  // line is ignored).
+  Eigen::Vector3d slack_side_W = Eigen::Vector3d::UnitZ();
   // A floor the thread rests on (plane z = floor_height_m, normal +z); NaN: none.
   double floor_height_m = std::numeric_limits<double>::quiet_NaN();
   // A step whose largest link strain exceeds this is a fault (an overstretched suture).

@@ -151,7 +151,8 @@ TEST(Scene, ThreadAndTissueSectionsAreChecked) {
   };
   const std::string line =
       "task: {path: line, line_start_m: [0, 0, 0], line_end_m: [0.01, 0, 0]}\n";
-  const std::string thread = "thread: {params: thread_stiff_nylon_10_0.yaml}\n";
+  const std::string thread =
+      "thread: {params: thread_stiff_nylon_10_0.yaml, anchor_m: [-0.02, 0, 0]}\n";
   const std::string tissue = "tissue: {params: tissue_skin_patch.yaml, level: 6}\n";
   EXPECT_EQ(error_of("name: t\nmodules: [thread]\n" + thread + line), "");
   EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n" + tissue + line), "");
@@ -183,9 +184,16 @@ TEST(Scene, ThreadAndTissueSectionsAreChecked) {
                 .find("task.line_end_m"),
             std::string::npos);
   EXPECT_NE(error_of("name: t\nmodules: [thread]\n"
-                     "thread: {params: thread_stiff_nylon_10_0.yaml, direction: [0, 0, 0]}\n" +
+                     "thread: {params: thread_stiff_nylon_10_0.yaml, anchor_m: [-0.02, 0, 0], "
+                     "slack_side: [0, 0, 0]}\n" +
                      line)
-                .find("thread.direction"),
+                .find("thread.slack_side"),
+            std::string::npos);
+  // The thread must reach the tool's start point without stretching.
+  EXPECT_NE(error_of("name: t\nmodules: [thread]\n"
+                     "thread: {params: thread_stiff_nylon_10_0.yaml, anchor_m: [-0.05, 0, 0]}\n" +
+                     line)
+                .find("thread.anchor_m"),
             std::string::npos);
 }
 

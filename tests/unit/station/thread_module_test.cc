@@ -26,9 +26,8 @@ modules: [thread]
 thread:
   params: thread_stiff_nylon_10_0.yaml
   anchor_m: [0.001, 0.002, 0.003]
-  direction: [1, 0, 0]
   max_strain: 0.03
-task: {path: line, line_start_m: [0.03, 0, 0], line_end_m: [0.031, 0, 0]}
+task: {path: line, line_start_m: [0.031, 0.002, 0.003], line_end_m: [0.032, 0.002, 0.003]}
 haptic: {rate_hz: 1000, max_force_N: 2.0}
 )",
                            SceneDir() + "/inline.yaml");
@@ -121,6 +120,36 @@ TEST(ThreadModule, FrameCarriesTheNodes) {
   EXPECT_EQ(f.grasped_node, f.num_nodes - 1);
   EXPECT_EQ(f.max_strain, m.error_estimate());
   EXPECT_EQ(f.f_grasp_W[0], m.f_tool_W().x());
+}
+
+TEST(ThreadModule, SlackThreadStartsAsAnArcOfRestLengthLinks) {
+  const Eigen::Vector3d a(0.001, -0.002, 0.0005), b(0.021, 0.004, -0.001);
+  const Eigen::Vector3d side = Eigen::Vector3d::UnitZ();
+  for (double length_m :
+       {(b - a).norm(), 1.02 * (b - a).norm(), 1.5 * (b - a).norm(), 3.0 * (b - a).norm()}) {
+    const int n = 65;
+    const Eigen::Matrix3Xd x = CalcSlackThreadNodes(a, b, side, length_m, n);
+    EXPECT_LT((x.col(0) - a).norm(), 1e-15);
+    EXPECT_LT((x.col(n - 1) - b).norm(), 1e-15);
+    // Equal chords of an arc of length L: each chord is 2R sin(θ / (n − 1)), just under the
+    // rest length L / (n − 1): relative gap about θ² / (6 (n − 1)²) < π² / (6 · 64²) = 4.0e-4.
+    const double rest_m = length_m / (n - 1);
+    double sum_m = 0;
+    for (int i = 0; i + 1 < n; ++i) {
+      const double l = (x.col(i + 1) - x.col(i)).norm();
+      EXPECT_LE(l, rest_m * (1 + 1e-12)) << "L " << length_m << " link " << i;
+      EXPECT_GE(l, rest_m * (1 - 4.1e-4)) << "L " << length_m << " link " << i;
+      sum_m += l;
+    }
+    EXPECT_NEAR(sum_m, length_m, 4.1e-4 * length_m);
+    // The middle bows towards +z (above the chord's midpoint) unless taut.
+    const double bow_m = (x.col(n / 2) - 0.5 * (a + b)).dot(side);
+    if (length_m > (b - a).norm() * (1 + 1e-9)) {
+      EXPECT_GT(bow_m, 0);
+    } else {
+      EXPECT_NEAR(bow_m, 0, 1e-15);
+    }
+  }
 }
 
 TEST(ThreadModule, ThreadBeyondThePublishedBoundIsRefused) {
