@@ -151,12 +151,27 @@ inline CoreDistSq EvalCoreDistSq(const NeedleInV& nv, double core_radius, double
 }
 
 // (cos, sin) of s + h from those of s: a rotation by h, with h's cosine and sine from their
-// Taylor series when h is small (truncation < 1e-28), so a converging ascent calls no libm.
+// Taylor series (through h¹⁴ and h¹⁵: truncation < 1e-18 for |h| ≤ 0.5, the largest ascent
+// step), so that the ascent calls no libm.
 void AdvanceAngle(double s_new, double h, double* cs, double* sn) {
-  if (std::abs(h) < 1e-3) {
+  if (std::abs(h) <= kMaxPolishStep_rad) {
     const double h2 = h * h;
-    const double ch = 1 - 0.5 * h2 * (1 - h2 / 12 * (1 - h2 / 30));
-    const double sh = h * (1 - h2 / 6 * (1 - h2 / 20 * (1 - h2 / 42)));
+    const double ch =
+        1 -
+        h2 * (1.0 / 2) *
+            (1 - h2 * (1.0 / 12) *
+                     (1 - h2 * (1.0 / 30) *
+                              (1 - h2 * (1.0 / 56) *
+                                       (1 - h2 * (1.0 / 90) *
+                                                (1 - h2 * (1.0 / 132) * (1 - h2 * (1.0 / 182)))))));
+    const double sh =
+        h * (1 - h2 * (1.0 / 6) *
+                     (1 - h2 * (1.0 / 20) *
+                              (1 - h2 * (1.0 / 42) *
+                                       (1 - h2 * (1.0 / 72) *
+                                                (1 - h2 * (1.0 / 110) *
+                                                         (1 - h2 * (1.0 / 156) *
+                                                                  (1 - h2 * (1.0 / 210))))))));
     const double c0 = *cs, s0 = *sn;
     *cs = c0 * ch - s0 * sh;
     *sn = s0 * ch + c0 * sh;
@@ -166,12 +181,23 @@ void AdvanceAngle(double s_new, double h, double* cs, double* sn) {
   }
 }
 
+// cos s and sin s, free at s = 0 (the needle's first point, the usual first piece end).
+void CosSin(double s, double* cs, double* sn) {
+  if (s == 0) {
+    *cs = 1;
+    *sn = 0;
+    return;
+  }
+  *cs = std::cos(s);
+  *sn = std::sin(s);
+}
+
 // Safeguarded Newton ascent of the distance² on [iv.lo, iv.hi] from s (cos s = cs,
 // sin s = sn, values cur there): the Newton step where f is concave, a bounded step uphill
 // elsewhere, halved until f does not decrease. Returns the best f and writes its s.
 double AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval& iv, double s,
-                        double cs, double sn, CoreDistSq cur, const SpOptions& opt,
-                        double* s_best) {
+                        double cs, double sn, CoreDistSq cur, const SpOptions& opt, double* s_best,
+                        double* cs_best, double* sn_best) {
   for (int it = 0; it < opt.polish_max_iters; ++it) {
     const bool newton = cur.d2f < 0;
     double step;
@@ -205,6 +231,8 @@ double AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval&
     if (std::abs(h) <= opt.polish_tol_rad) break;
   }
   *s_best = s;
+  *cs_best = cs;
+  *sn_best = sn;
   return cur.f;
 }
 
@@ -216,7 +244,15 @@ struct Candidate {
   double s, cos_s, sin_s;
   int interval;
   CandidateKind kind;
+  double f, df, d2f;  // CoreDistSq there, evaluated once (plain: no initialisers)
+  CoreDistSq e() const { return {f, df, d2f}; }
 };
+
+Candidate MakeCandidate(const NeedleInV& nv, double core_r, double s, double cs, double sn,
+                        int interval, CandidateKind kind) {
+  const CoreDistSq e = EvalCoreDistSq(nv, core_r, cs, sn);
+  return {s, cs, sn, interval, kind, e.f, e.df, e.d2f};
+}
 // The deep-contact threshold: see kDeepRel.
 inline bool IsDeep(double f, double core_r) {
   return f >= (1 - kDeepRel) * (1 - kDeepRel) * core_r * core_r;
@@ -462,31 +498,31 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
 
 // The deepest point found so far: the needle parameter of the largest distance² to the core.
 struct Best {
-  double f = -1, s = 0;
+  double f = -1, s = 0, cos_s = 1, sin_s = 0;
 };
 
 // Distance ascent from one candidate, keeping the best. Returns the f it reached.
 double TryCandidate(const NeedleInV& nv, double core_r, const Interval* iv, const Candidate& c,
                     const SpOptions& opt, Best* best) {
-  double s = c.s;
-  const CoreDistSq e = EvalCoreDistSq(nv, core_r, c.cos_s, c.sin_s);
-  double f = e.f;
+  double s = c.s, cs = c.cos_s, sn = c.sin_s;
+  double f = c.f;
   bool ascend = opt.polish_max_iters > 0;
-  if (c.kind == CandidateKind::kLowEnd) ascend = ascend && e.df > 0;
-  if (c.kind == CandidateKind::kHighEnd) ascend = ascend && e.df < 0;
-  if (ascend) f = AscendCoreDistSq(nv, core_r, iv[c.interval], s, c.cos_s, c.sin_s, e, opt, &s);
-  if (f > best->f) {
-    best->f = f;
-    best->s = s;
+  if (c.kind == CandidateKind::kLowEnd) ascend = ascend && c.df > 0;
+  if (c.kind == CandidateKind::kHighEnd) ascend = ascend && c.df < 0;
+  if (ascend) {
+    f = AscendCoreDistSq(nv, core_r, iv[c.interval], s, cs, sn, c.e(), opt, &s, &cs, &sn);
   }
+  if (f > best->f) *best = {f, s, cs, sn};
   return f;
 }
 
-void AddUniformCandidates(const Interval* iv, int n_iv, Candidate* cand, int* n_cand) {
+void AddUniformCandidates(const NeedleInV& nv, double core_r, const Interval* iv, int n_iv,
+                          Candidate* cand, int* n_cand) {
   for (int i = 0; i < n_iv; ++i) {
     for (int j = 1; j <= kRobustSamples; ++j) {
       const double s = iv[i].lo + (iv[i].hi - iv[i].lo) * j / (kRobustSamples + 1);
-      cand[(*n_cand)++] = {s, std::cos(s), std::sin(s), i, CandidateKind::kInterior};
+      cand[(*n_cand)++] =
+          MakeCandidate(nv, core_r, s, std::cos(s), std::sin(s), i, CandidateKind::kInterior);
     }
   }
 }
@@ -571,9 +607,12 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   bool deep = false;
   for (int i = 0; i < n_iv; ++i) {
     for (const double s : {iv[i].lo, iv[i].hi}) {
-      const Candidate c = {s, std::cos(s), std::sin(s), i,
-                           s == iv[i].lo ? CandidateKind::kLowEnd : CandidateKind::kHighEnd};
-      deep = deep || IsDeep(EvalCoreDistSq(nv, core_r, c.cos_s, c.sin_s).f, core_r);
+      double cs, sn;
+      CosSin(s, &cs, &sn);
+      const Candidate c =
+          MakeCandidate(nv, core_r, s, cs, sn, i,
+                        s == iv[i].lo ? CandidateKind::kLowEnd : CandidateKind::kHighEnd);
+      deep = deep || IsDeep(c.f, core_r);
       cand[n_cand++] = c;
     }
   }
@@ -608,13 +647,13 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   if (have_pass) {
     for (int j = 0; j < pass.n; ++j) {
       if (!pass.is_min[j]) continue;
-      cand[n_cand++] = {pass.s[j], pass.cos_s[j], pass.sin_s[j], pass.interval[j],
-                        CandidateKind::kInterior};
+      cand[n_cand++] = MakeCandidate(nv, core_r, pass.s[j], pass.cos_s[j], pass.sin_s[j],
+                                     pass.interval[j], CandidateKind::kInterior);
     }
     if (!pass.ok) {
       // No usable extrema (README_sp.md, "Fallbacks"): start from uniform points instead.
       diag.fallback = true;
-      AddUniformCandidates(iv, n_iv, cand, &n_cand);
+      AddUniformCandidates(nv, core_r, iv, n_iv, cand, &n_cand);
     }
   }
   Best best;
@@ -624,7 +663,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     int j_best = 0;
     double f_best = -1;
     for (int j = 0; j < n_cand; ++j) {
-      const double f = EvalCoreDistSq(nv, core_r, cand[j].cos_s, cand[j].sin_s).f;
+      const double f = cand[j].f;
       if (f > f_best) {
         f_best = f;
         j_best = j;
@@ -655,13 +694,13 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     if (cert.ok) {
       for (int j = 0; j < cert.n; ++j) {
         if (cert.is_min[j]) {
-          starts[n_start++] = {cert.s[j], cert.cos_s[j], cert.sin_s[j], cert.interval[j],
-                               CandidateKind::kInterior};
+          starts[n_start++] = MakeCandidate(nv, core_r, cert.s[j], cert.cos_s[j], cert.sin_s[j],
+                                            cert.interval[j], CandidateKind::kInterior);
         }
       }
     } else {
       diag.fallback = true;
-      AddUniformCandidates(iv, n_iv, starts, &n_start);
+      AddUniformCandidates(nv, core_r, iv, n_iv, starts, &n_start);
     }
     const double f_before = best.f;
     for (int j = 0; j < n_start; ++j) TryCandidate(nv, core_r, iv, starts[j], opt, &best);
@@ -683,7 +722,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   out.clearance_m = clearance;
   out.contact = clearance <= 0;
   out.s_rad = best.s;
-  const Eigen::Vector3d p_VN = nv.PointAt(best.s);
+  const Eigen::Vector3d p_VN = nv.o + nv.rho * (best.cos_s * nv.e1 + best.sin_s * nv.e2);
   out.p_WN = torus.X_WV * p_VN;
   // Nearest wall point: along the ray from the nearest core point through the needle point.
   const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());
