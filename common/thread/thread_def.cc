@@ -75,6 +75,8 @@ void ThreadDef::Validate() const {
           "contact_cutoff_m", "a positive length below the link length");
   Require(Finite(guard_fraction) && guard_fraction >= 0.0 && guard_fraction <= 1.0,
           "guard_fraction", "a fraction in [0, 1]");
+  Require(Finite(strain_limit) && strain_limit >= 0.0 && strain_limit < 1.0, "strain_limit",
+          "0 (off) or a fraction in (0, 1)");
   Require(gravity_m_per_s2.allFinite() && gravity_m_per_s2.norm() < 1e3, "gravity_m_per_s2",
           "a finite acceleration below 1000 m/s^2");
   Require(Finite(time_step_s) && time_step_s > 0.0 && time_step_s <= 0.1, "time_step_s",
@@ -203,6 +205,7 @@ ThreadDef LoadThreadDef(const std::string& path) {
                                            "contact_decay_m",
                                            "contact_cutoff_m",
                                            "guard_fraction",
+                                           "strain_limit",
                                            "gravity_m_per_s2",
                                            "integrator",
                                            "time_step_s",
@@ -244,6 +247,7 @@ ThreadDef LoadThreadDef(const std::string& path) {
   ReadField(root, path, "contact_decay_m", def.contact_decay_m);
   ReadField(root, path, "contact_cutoff_m", def.contact_cutoff_m);
   ReadField(root, path, "guard_fraction", def.guard_fraction);
+  ReadField(root, path, "strain_limit", def.strain_limit);
   ReadField(root, path, "time_step_s", def.time_step_s);
   ReadField(root, path, "max_grasps", def.max_grasps);
   ReadField(root, path, "max_contacts", def.max_contacts);

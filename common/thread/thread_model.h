@@ -71,6 +71,7 @@ struct ThreadStatus {
   std::int64_t factorization_failures = 0;  // non-SPD system: state rolled back
   std::int64_t contact_overflows = 0;       // more candidate pairs than capacity
   std::int64_t guard_corrections = 0;       // non-penetration projections applied
+  std::int64_t strain_corrections = 0;      // link lengths projected by the strain limit
   int num_candidate_pairs = 0;
   int num_self_contacts = 0;
   int num_object_contacts = 0;

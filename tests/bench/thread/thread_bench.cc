@@ -4,22 +4,26 @@
 //   microdex-bench thread [--json FILE]                  speed during knot tying (default)
 //   microdex-bench thread --stability --json FILE [--plot FILE.png]
 //   microdex-bench thread --accuracy --json FILE
+//   microdex-bench thread --adversarial [--steps 1000000] [--json FILE]
 //   microdex-bench thread --tie 2 | 1r,1l [--nodes N] [--obj FILE]   tie throws, trace them
 //   --quick                                              reduced sizes (CTest)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/thread/grasp.h"
 #include "common/thread/knot_recognition.h"
 #include "common/thread/segment_distance.h"
 #include "common/thread/sphere_bvh.h"
@@ -69,10 +73,12 @@ int RunStability(bool quick, const std::string& json, const std::string& plot) {
     mass = {1e-5};
     dts = {1e-4, 1e-3};
   } else {
-    for (int e = 0; e <= 8; ++e) ks.push_back(std::pow(10.0, e));
-    for (int e = -9; e <= -3; ++e) kb.push_back(std::pow(10.0, e));
-    for (int e = -7; e <= -2; ++e) mass.push_back(std::pow(10.0, e));
-    dts = {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3};
+    // The ranges, sampled every two decades (stretch), three (bending) and at the
+    // ends and middle (mass), so the sweep runs in a few minutes on one core.
+    ks = {1e0, 1e2, 1e4, 1e6, 1e8};
+    kb = {1e-9, 1e-6, 1e-3};
+    mass = {1e-7, 1e-5, 1e-3, 1e-2};
+    dts = {1e-4, 2.5e-4, 1e-3, 4e-3};
   }
   std::ostringstream runs;
   // Largest stable dt per (integrator, k_s, mass), minimised over k_b: the PNG map.
@@ -557,8 +563,94 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
   return 0;
 }
 
+// ---- adversarial -----------------------------------------------------------------------------
+// Random, jerky, extreme grasp motion (the CTest ThreadAdversarial at any length): +-2 mm jerks
+// per step, 10 cm teleports of each grasp every 5,000 steps, 10 rad roll jumps, tools moved to
+// random nodes every 7,919 steps; then the thread is let go by one tool and must return to its
+// rest length (strain < 1 %).
+int RunAdversarial(std::int64_t steps, const std::string& json) {
+  ThreadDef def = StiffNylon10_0();
+  def.num_nodes = 33;
+  def.length_m = 0.015;
+  const ThreadModel model = MakeThreadModel(def);
+  ThreadState state =
+      MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> node(0, model.num_nodes - 1);
+  int slots[2] = {GraspNode(model, 0, state), GraspNode(model, model.num_nodes - 1, state)};
+  const std::vector<Collider> colliders = {
+      Collider::Plane(Eigen::Vector3d(0, 0, -0.002), Eigen::Vector3d::UnitZ()),
+      Collider::Sphere(Eigen::Vector3d(0.007, 0.0, 0.0), 0.001)};
+  std::int64_t nonfinite_states = 0, nonfinite_forces = 0, teleports = 0;
+  double max_force = 0.0;
+  const auto t0 = Clock::now();
+  for (std::int64_t k = 0; k < steps; ++k) {
+    for (int s = 0; s < 2; ++s) {
+      Grasp& g = state.grasps[slots[s]];
+      Eigen::Vector3d p = g.p_WT + 2e-3 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      if (k % 5000 == 2500 * s) {
+        p += 0.1 * Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+        ++teleports;
+      }
+      p = p.cwiseMax(-0.2).cwiseMin(0.2);
+      SetGraspTarget(state, slots[s], p, 10.0 * u(rng));
+    }
+    if (k % 7919 == 0) {
+      const int s = static_cast<int>(k % 2);
+      ReleaseGrasp(state, slots[s]);
+      slots[s] = GraspNode(model, node(rng), state);
+    }
+    StepThread(model, colliders, state);
+    if (!state.x_W.allFinite() || !state.v_W.allFinite() || !state.q_rad.allFinite()) {
+      ++nonfinite_states;
+    }
+    for (int s = 0; s < 2; ++s) {
+      const Eigen::Vector3d f = GraspForce(state, slots[s], 10.0);
+      if (!f.allFinite()) ++nonfinite_forces;
+      max_force = std::max(max_force, f.norm());
+    }
+  }
+  const double seconds = Seconds(t0, Clock::now());
+  ReleaseGrasp(state, slots[1]);
+  int recovered_at = -1;
+  for (int k = 0; k < 2000; ++k) {
+    StepThread(model, colliders, state);
+    if (CalcMaxStrain(model, state.x_W) < 0.01) {
+      recovered_at = k + 1;
+      break;
+    }
+  }
+  const long long rollbacks =
+      static_cast<long long>(state.status.nonfinite_resets + state.status.factorization_failures);
+  std::printf(
+      "adversarial: %lld steps (%.1f s simulated, %.1f s wall, %.0f steps/s), %lld teleports\n"
+      "non-finite states %lld, non-finite tool forces %lld, rolled-back steps %lld, largest "
+      "saturated tool force %.3g N\nrest length (strain < 1 %%) recovered %s%.3f s after "
+      "letting go\n",
+      static_cast<long long>(steps), steps * def.time_step_s, seconds, steps / seconds,
+      static_cast<long long>(teleports), static_cast<long long>(nonfinite_states),
+      static_cast<long long>(nonfinite_forces), rollbacks, max_force,
+      recovered_at > 0 ? "" : "NOT within 2 s; ",
+      (recovered_at > 0 ? recovered_at : 2000) * def.time_step_s);
+  if (!json.empty()) {
+    std::ostringstream out;
+    out << "{\n  \"study\": \"adversarial\",\n  \"steps\": " << steps
+        << ",\n  \"teleports\": " << teleports << ",\n  \"nonfinite_states\": " << nonfinite_states
+        << ",\n  \"nonfinite_tool_forces\": " << nonfinite_forces
+        << ",\n  \"rolled_back_steps\": " << rollbacks
+        << ",\n  \"max_tool_force_N\": " << Num(max_force)
+        << ",\n  \"recovered\": " << (recovered_at > 0 ? "true" : "false")
+        << ",\n  \"recovery_s\": " << Num(recovered_at > 0 ? recovered_at * def.time_step_s : NAN)
+        << ",\n  \"steps_per_s\": " << Num(steps / seconds) << "\n}\n";
+    WriteFile(json, out.str());
+  }
+  return nonfinite_states == 0 && nonfinite_forces == 0 && recovered_at > 0 ? 0 : 1;
+}
+
 int Main(int argc, char** argv) {
-  bool stability = false, accuracy = false, quick = false;
+  bool stability = false, accuracy = false, quick = false, adversarial = false;
+  std::int64_t steps = 1000000;
   int nodes = 257;
   std::string json, plot, tie, obj;
   for (int i = 1; i < argc; ++i) {
@@ -571,6 +663,11 @@ int Main(int argc, char** argv) {
       stability = true;
     } else if (arg == "--accuracy") {
       accuracy = true;
+    } else if (arg == "--adversarial") {
+      adversarial = true;
+    } else if (arg == "--steps") {
+      steps = std::atoll(value("--steps").c_str());
+      if (steps < 1) throw std::invalid_argument("--steps: expected a positive count");
     } else if (arg == "--quick") {
       quick = true;
     } else if (arg == "--obj") {
@@ -586,7 +683,8 @@ int Main(int argc, char** argv) {
       if (nodes < 33) throw std::invalid_argument("--nodes: expected at least 33");
     } else if (arg == "--help" || arg == "-h") {
       std::printf(
-          "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --tie THROWS "
+          "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --adversarial "
+          "[--steps N] | --tie THROWS "
           "[--nodes N] [--obj FILE]] [--json FILE] [--quick]\n");
       return 0;
     } else {
@@ -595,6 +693,7 @@ int Main(int argc, char** argv) {
   }
   if (!tie.empty()) return RunTie(tie, nodes, obj);
   if (stability) return RunStability(quick, json, plot);
+  if (adversarial) return RunAdversarial(quick ? 20000 : steps, json);
   if (accuracy) return RunAccuracy(quick, json);
   return RunSpeed(quick, json);
 }

@@ -108,6 +108,19 @@ TEST(ThreadStability, BothStableAtSoftPointSmallStep) {
   }
 }
 
+// The post-step strain limit is what keeps the linearly implicit step inside the region here:
+// a light, soft thread (k_s = 1e2 N/m, m = 1e-5 kg) swung at 1 ms.
+TEST(ThreadStability, StrainLimitKeepsImplicitStepInsideAtOneMs) {
+  SwingPullOptions opt;
+  opt.time_step_s = 1e-3;
+  ThreadDef def = SwingPullDef(1e2, 1e-9, 1e-5);
+  const SwingPullReport limited = RunSwingPull(def, opt);
+  EXPECT_TRUE(limited.stable()) << "strain " << limited.max_strain;
+  def.strain_limit = 0.0;
+  const SwingPullReport free = RunSwingPull(def, opt);
+  EXPECT_FALSE(free.strain_ok) << "strain " << free.max_strain;
+}
+
 TEST(ThreadStability, StiffNylonPresetSwungAtOneMs) {
   for (Integrator integ : {Integrator::kSemiImplicitEuler, Integrator::kLinearlyImplicitEuler}) {
     const ThreadModel model = MakeThreadModel(StiffNylon10_0());
