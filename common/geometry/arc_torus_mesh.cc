@@ -25,8 +25,11 @@ std::string FormatNumber(double v) {
   return buf;
 }
 
-std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> MakeBvh(const TriangleMesh& mesh) {
-  std::vector<fcl::Vector3d> points(mesh.vertices.begin(), mesh.vertices.end());
+// The BVH of a mesh with every length multiplied by `scale`.
+std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> MakeBvh(const TriangleMesh& mesh, double scale) {
+  std::vector<fcl::Vector3d> points;
+  points.reserve(mesh.vertices.size());
+  for (const Eigen::Vector3d& v : mesh.vertices) points.push_back(scale * v);
   std::vector<fcl::Triangle> triangles;
   triangles.reserve(mesh.triangles.size());
   for (const Eigen::Vector3i& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
@@ -136,6 +139,7 @@ struct ArcTorusMeshModel::Impl {
   std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> needle, vessel;
   Eigen::Vector3d first_vertex_N;
   double core_radius_m = 0, tube_radius_m = 0;
+  double scale = 1;  // BVH lengths per metre (1/R)
   int num_triangles = 0;
 };
 
@@ -159,8 +163,14 @@ ArcTorusMeshModel::ArcTorusMeshModel(const ArcDef& arc, const TorusSegmentDef& t
   const TriangleMesh vessel =
       LoadOrCreate(vessel_path_, MakeTorusWallMesh(torus.core_radius_m, torus.tube_radius_m,
                                                    torus.segment_angle_rad, n_major, res.n_minor));
-  impl_->needle = MakeBvh(needle);
-  impl_->vessel = MakeBvh(vessel);
+  // FCL's triangle–triangle distance tests the vertex–face case only where the squared length
+  // of a triangle's edge cross product exceeds 1e-15 (an absolute threshold, in length⁴):
+  // millimetre-scale facets fall below it and get edge–edge distances only, up to ~1e-6 m too
+  // large where a needle end faces a facet (checked against point–triangle distances). In
+  // units of R the wall's facets are far above it (the needle's ribbon needs no face test).
+  impl_->scale = 1 / torus.core_radius_m;
+  impl_->needle = MakeBvh(needle, impl_->scale);
+  impl_->vessel = MakeBvh(vessel, impl_->scale);
   impl_->first_vertex_N = needle.vertices.front();
   impl_->core_radius_m = torus.core_radius_m;
   impl_->tube_radius_m = torus.tube_radius_m;
@@ -176,19 +186,25 @@ ArcTorusClearance ArcTorusMeshModel::Calc(const Eigen::Isometry3d& X_WN,
   fcl::DistanceRequestd request;
   request.enable_nearest_points = true;
   fcl::DistanceResultd result;
-  const fcl::Transform3d tf_n(X_WN.matrix()), tf_v(X_WV.matrix());
-  const double distance =
-      fcl::distance(impl_->needle.get(), tf_n, impl_->vessel.get(), tf_v, request, result);
+  // In the vessel frame, scaled (see the constructor): the relative pose in double, so world
+  // translations cost nothing.
+  const Eigen::Isometry3d X_VN = X_WV.inverse() * X_WN;
+  fcl::Transform3d tf_n = fcl::Transform3d::Identity();
+  tf_n.linear() = X_VN.linear();
+  tf_n.translation() = impl_->scale * X_VN.translation();
+  const double distance = fcl::distance(impl_->needle.get(), tf_n, impl_->vessel.get(),
+                                        fcl::Transform3d::Identity(), request, result) /
+                          impl_->scale;
   ArcTorusClearance out;
   out.status = ClearanceStatus::kOk;
-  out.p_WN = result.nearest_points[0];
-  out.p_WW = result.nearest_points[1];
+  out.p_WN = X_WV * Eigen::Vector3d(result.nearest_points[0] / impl_->scale);
+  out.p_WW = X_WV * Eigen::Vector3d(result.nearest_points[1] / impl_->scale);
   if (!(distance > 0)) {
     out.contact = true;
     out.clearance_m = 0;
     return out;
   }
-  const Eigen::Vector3d p_V = X_WV.inverse() * (X_WN * impl_->first_vertex_N);
+  const Eigen::Vector3d p_V = X_VN * impl_->first_vertex_N;
   const double k = std::hypot(p_V.x(), p_V.y());
   const bool inside = std::hypot(k - impl_->core_radius_m, p_V.z()) < impl_->tube_radius_m;
   out.clearance_m = inside ? distance : -distance;

@@ -6,7 +6,9 @@
 // negligible width across the needle plane; the wall is the torus segment's surface with
 // n_major × n_minor quads (no end caps: the clearance ignores points outside the azimuth
 // range). Meshes are OBJ files in assets/meshes/, written when missing and always loaded
-// through assimp, so the method runs on exactly what an asset pipeline would give it.
+// through assimp, so the method runs on exactly what an asset pipeline would give it. The
+// files are in metres; the BVHs are built in units of R and queried in the vessel frame (FCL's
+// triangle distance has an absolute threshold that millimetre-scale facets fall below).
 //
 // The mesh "clearance" (README.md, "Mesh baseline"): FCL's mesh–mesh distance D is unsigned
 // and gives no depth once the meshes intersect, so

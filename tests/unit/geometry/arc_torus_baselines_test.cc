@@ -112,5 +112,46 @@ TEST(ArcTorusMesh, ApproachesExactClearanceAsTheMeshesRefine) {
   EXPECT_LT(previous_max_error, 1e-2 * r);
 }
 
+// Needles whose deepest point is an end, close to the wall (the vertex–face case of the
+// triangle distance): the mesh clearance is within the sum of the three sagittas of the exact
+// one. FCL's triangle distance skips that case for facets whose squared edge cross product is
+// below 1e-15 (millimetre-scale facets in metres): the model works in units of R.
+TEST(ArcTorusMesh, WithinTheSagittasWhereANeedleEndIsDeepest) {
+  const std::string dir = ::testing::TempDir() + "/arc_torus_mesh_test_ends";
+  ArcDef arc;
+  TorusSegmentDef torus;
+  torus.X_WV.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -2, 0.5).normalized()).matrix();
+  torus.X_WV.translation() = Eigen::Vector3d(0.02, -0.01, 0.03);
+  const double R = torus.core_radius_m, r = torus.tube_radius_m;
+  arc.radius_m = R;
+  arc.sweep_rad = 0.75 * kPi;
+  const MeshResolution res{256, 512, 128};
+  const ArcTorusMeshModel model(arc, torus, res, dir);
+  // Chord sagittas: the wall around the core (outer equator) and around the tube, the needle.
+  const double sagittas = (R + r) * (1 - std::cos(kPi / res.n_major)) +
+                          r * (1 - std::cos(kPi / res.n_minor)) +
+                          arc.radius_m * (1 - std::cos(arc.sweep_rad / (2 * res.needle_segments)));
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int checked = 0;
+  for (int i = 0; i < 2000 && checked < 40; ++i) {
+    Eigen::Isometry3d X_VN = Eigen::Isometry3d::Identity();
+    const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    X_VN.linear() = (Eigen::AngleAxisd(0.9 * r / R * std::abs(u(rng)), axis) *
+                     Eigen::AngleAxisd(kPi * u(rng), Eigen::Vector3d::UnitZ()))
+                        .matrix();
+    X_VN.translation() = 0.9 * r * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    arc.X_WN = torus.X_WV * X_VN;
+    const ArcTorusClearance exact = CalcArcTorusClearanceExact(arc, torus);
+    const bool at_end = exact.s_rad == 0 || exact.s_rad == arc.sweep_rad;
+    if (!at_end || exact.contact || exact.clearance_m > 0.2 * r) continue;
+    ++checked;
+    const ArcTorusClearance mesh = model.Calc(arc.X_WN, torus.X_WV);
+    ASSERT_EQ(mesh.status, ClearanceStatus::kOk);
+    EXPECT_NEAR(mesh.clearance_m, exact.clearance_m, sagittas) << i;
+  }
+  EXPECT_EQ(checked, 40);
+}
+
 }  // namespace
 }  // namespace microdex::geometry
