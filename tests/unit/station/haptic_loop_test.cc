@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <thread>
 #include <vector>
 
 #include "station/sim_trainee.h"
@@ -323,6 +324,63 @@ TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
       EXPECT_TRUE(rig.rings.frames.tissue.Update()) << "no tissue frame was published";
     }
   }
+}
+
+// The haptic thread and a publisher-side consumer at once, as in the station (the tsan preset
+// checks the handoffs): snapshots arrive in step order with none lost but those counted as
+// dropped, cues pushed from the consumer side are acknowledged, and the thread and tissue
+// frames taken are whole and newer each time, written at multiples of the frame period.
+TEST(HapticLoop, HapticAndPublisherSidesRunConcurrently) {
+  SceneRig rig(scene::LoadScene(SceneFile("suture_on_tissue.yaml")));
+  constexpr std::uint64_t kSteps = 3000;
+  std::atomic<bool> stop{false};
+  std::atomic<bool> finished{false};
+  std::thread haptic([&] {
+    rig.loop.Run(stop, kSteps);
+    finished = true;
+  });
+  std::uint64_t next_step = 0, received = 0, acks = 0, thread_frames = 0, tissue_frames = 0;
+  std::uint64_t last_thread_step = 0, last_tissue_step = 0;
+  bool ordered = true, framed = true;
+  bool cue_sent = false;
+  for (;;) {
+    const bool done = finished.load();
+    TickSnapshot s;
+    while (rig.rings.snapshots.TryPop(s)) {
+      ordered = ordered && s.step >= next_step;  // gaps only where the ring was full
+      next_step = s.step + 1;
+      ++received;
+      acks += static_cast<std::uint64_t>(s.ack_count);
+    }
+    if (!cue_sent && received > 100) {
+      cue_sent = rig.rings.cues.TryPush({9, net::CueKind::kAmplifiedTremor, 2, 0});
+    }
+    if (rig.rings.frames.thread.Update()) {
+      const ThreadFrame& f = rig.rings.frames.thread.front();
+      framed = framed && f.step % 16 == 0 && (thread_frames == 0 || f.step > last_thread_step) &&
+               f.num_nodes == 65;
+      last_thread_step = f.step;
+      ++thread_frames;
+    }
+    if (rig.rings.frames.tissue.Update()) {
+      const TissueFrame& f = rig.rings.frames.tissue.front();
+      framed = framed && f.step % 16 == 0 && (tissue_frames == 0 || f.step > last_tissue_step) &&
+               f.nodes_x == 65;
+      last_tissue_step = f.step;
+      ++tissue_frames;
+    }
+    if (done && rig.rings.snapshots.size() == 0) break;
+    std::this_thread::yield();
+  }
+  haptic.join();
+  EXPECT_TRUE(ordered);
+  EXPECT_TRUE(framed);
+  EXPECT_EQ(received + rig.loop.ring_dropped(), kSteps);
+  EXPECT_TRUE(cue_sent);
+  EXPECT_EQ(acks, 1u);
+  EXPECT_GT(thread_frames, 0u);
+  EXPECT_GT(tissue_frames, 0u);
+  EXPECT_EQ(last_thread_step, (kSteps - 1) / 16 * 16);
 }
 
 // Why the shipped tissue scenes use the warm-started IC(0) CG: CHOLMOD's factorisation of
