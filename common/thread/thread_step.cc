@@ -236,10 +236,19 @@ void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
     CalcForces(model, state, &w.system, h * h);
     ok = IntegrateLinearlyImplicit(model, h, state);
     if (!ok) ++state.status.factorization_failures;
-    if (ok) state.status.strain_corrections += LimitStrain(model, h, state);
+
   }
   if (ok) {
     state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, state);
+    if (integrator == Integrator::kLinearlyImplicitEuler) {
+      // After the guard: its projections stretch links too; the limit's moves along the
+      // links are small and a second guard pass keeps the pairs apart.
+      const int limited = LimitStrain(model, h, state);
+      state.status.strain_corrections += limited;
+      if (limited > 0) {
+        state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, state);
+      }
+    }
     ok = state.x_W.allFinite() && state.v_W.allFinite() && state.q_rad.allFinite() &&
          state.qdot_rad_per_s.allFinite();
     if (!ok) ++state.status.nonfinite_resets;
