@@ -361,7 +361,7 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
   std::ostringstream os;
   char line[512];
   std::snprintf(line, sizeof line,
-                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-22s %4s %-12s %6s %7s %13s\n", "STATION",
+                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-28s %4s %-12s %6s %7s %13s\n", "STATION",
                 "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "MODULE_STATE", "FLT",
                 "CUES", "SCORE", "AGE_ms", "INPUT_rx/lost");
   os << line;
@@ -417,7 +417,7 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
     std::snprintf(io, sizeof io, "%llu/%llu", static_cast<unsigned long long>(v.inputs_received),
                   static_cast<unsigned long long>(v.inputs_lost));
     std::snprintf(line, sizeof line,
-                  "%-12.12s %-18.18s %-22.22s %-20.20s %-6s %7.3f %5llu %-22.22s %4u %-12.12s "
+                  "%-12.12s %-18.18s %-22.22s %-20.20s %-6s %7.3f %5llu %-28.28s %4u %-12.12s "
                   "%6.1f %7.1f %13s\n",
                   v.info.header.station_id.c_str(), v.info.trainee.c_str(), scene.c_str(),
                   modules.c_str(), PresenceName(v.presence), p99,
