@@ -236,7 +236,6 @@ void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
     CalcForces(model, state, &w.system, h * h);
     ok = IntegrateLinearlyImplicit(model, h, state);
     if (!ok) ++state.status.factorization_failures;
-
   }
   if (ok) {
     state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, state);
