@@ -13,4 +13,12 @@ namespace microdex::geometry {
 ArcTorusClearance CalcArcTorusClearanceSampled(const ArcDef& arc, const TorusSegmentDef& torus,
                                                int samples);
 
+// The same budget spread over the needle's pieces inside the azimuth range
+// (arc_azimuth_clip.h), each sampled evenly with both ends: a deepest point on a segment's end
+// plane is then sampled exactly, and the error keeps falling like the spacing squared where
+// the plain version's falls like the spacing (a boundary missed by up to S/N). No azimuth test
+// per sample. samples ≥ 2 per piece. No allocation.
+ArcTorusClearance CalcArcTorusClearanceSampledClipped(const ArcDef& arc,
+                                                      const TorusSegmentDef& torus, int samples);
+
 }  // namespace microdex::geometry

@@ -129,40 +129,145 @@ int RunCases(const std::string& in_path, const std::string& out_path) {
 
 // ---- Error against run time ----------------------------------------------------------------
 
-// The training geometry: tube of core radius 5 mm and radius 0.5 mm (whole torus, so that the
-// mesh baseline answers the same question), needle of the same radius over 3/4 of a half turn.
-struct Scene {
+// One needle–vessel query.
+struct Query {
   ArcDef arc;
   TorusSegmentDef torus;
-  std::vector<Eigen::Isometry3d> X_WN;  // one needle pose per query
 };
 
-Scene MakeScene(int queries, uint64_t seed) {
-  Scene scene;
-  scene.torus.core_radius_m = 5e-3;
-  scene.torus.tube_radius_m = 0.5e-3;
-  scene.torus.segment_angle_rad = 2 * kPi;
+// A family of queries: what the station asks in one situation. The mesh baseline answers
+// only where the geometry is fixed and the tube is a whole torus (its wall mesh has no notion
+// of the azimuth range, README.md).
+struct Family {
+  std::string name, description;
+  std::vector<Query> queries;
+  bool mesh = false;
+};
+
+Eigen::Isometry3d TrainingVesselPose() {
   Eigen::Isometry3d X_WV = Eigen::Isometry3d::Identity();
   X_WV.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -2, 0.5).normalized()).matrix();
   X_WV.translation() = Eigen::Vector3d(0.02, -0.01, 0.03);
-  scene.torus.X_WV = X_WV;
-  scene.arc.radius_m = 5e-3;
-  scene.arc.sweep_rad = 0.75 * kPi;
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  const double R = scene.torus.core_radius_m, r = scene.torus.tube_radius_m;
-  for (int i = 0; i < queries; ++i) {
-    // On the core circle at a random azimuth, then moved by up to 0.9 r along each axis and
-    // turned by up to 0.9 r/R about a random axis: mostly inside the tube, some in contact.
+  return X_WV;
+}
+
+// The training geometry: tube of core radius 5 mm and radius 0.5 mm, needle of the same
+// radius over 3/4 of a half turn. The needle starts on the core circle at an azimuth drawn from
+// [azimuth_lo, azimuth_hi], then is moved by up to 0.9 r along each axis and turned by up to
+// 0.9 r/R about a random axis: mostly inside the tube, some in contact.
+Family MakeTrainingFamily(const std::string& name, double segment_angle, double azimuth_lo,
+                          double azimuth_hi, int queries, std::mt19937_64& rng) {
+  Family family;
+  family.name = name;
+  Query q;
+  q.torus.core_radius_m = 5e-3;
+  q.torus.tube_radius_m = 0.5e-3;
+  q.torus.segment_angle_rad = segment_angle;
+  q.torus.X_WV = TrainingVesselPose();
+  q.arc.radius_m = 5e-3;
+  q.arc.sweep_rad = 0.75 * kPi;
+  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
+  const double R = q.torus.core_radius_m, r = q.torus.tube_radius_m;
+  while (static_cast<int>(family.queries.size()) < queries) {
     Eigen::Isometry3d X_VN = Eigen::Isometry3d::Identity();
     const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const double azimuth = azimuth_lo + (azimuth_hi - azimuth_lo) * unit(rng);
     X_VN.linear() = (Eigen::AngleAxisd(0.9 * r / R * std::abs(u(rng)), axis) *
-                     Eigen::AngleAxisd(kPi * u(rng), Eigen::Vector3d::UnitZ()))
+                     Eigen::AngleAxisd(azimuth, Eigen::Vector3d::UnitZ()))
                         .matrix();
     X_VN.translation() = 0.9 * r * Eigen::Vector3d(u(rng), u(rng), u(rng));
-    scene.X_WN.push_back(X_WV * X_VN);
+    q.arc.X_WN = q.torus.X_WV * X_VN;
+    if (geometry::CalcArcTorusClearanceExact(q.arc, q.torus).status == ClearanceStatus::kOk) {
+      family.queries.push_back(q);
+    }
   }
-  return scene;
+  return family;
+}
+
+// Needles through the wall: through a random point 0.7–1.3 r from the core circle inside the
+// range, in a random direction, ρ = 0.2–1.7 R, any sweep; half of the tubes are segments.
+Family MakeCrossingFamily(int queries, std::mt19937_64& rng) {
+  Family family;
+  family.name = "crossing the wall";
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> n;
+  while (static_cast<int>(family.queries.size()) < queries) {
+    Query q;
+    q.torus.core_radius_m = 5e-3;
+    q.torus.tube_radius_m = 0.5e-3;
+    q.torus.segment_angle_rad = u(rng) < 0.5 ? 2 * kPi : 0.3 + (2 * kPi - 0.3) * u(rng);
+    q.torus.X_WV = TrainingVesselPose();
+    const double R = q.torus.core_radius_m, r = q.torus.tube_radius_m;
+    q.arc.radius_m = R * (0.2 + 1.5 * u(rng));
+    q.arc.sweep_rad = 0.05 + (2 * kPi - 0.05) * u(rng);
+    const double phi = q.torus.segment_angle_rad * u(rng), psi = 2 * kPi * u(rng);
+    const double rr = r * (0.7 + 0.6 * u(rng));
+    const Eigen::Vector3d p_V((R + rr * std::cos(psi)) * std::cos(phi),
+                              (R + rr * std::cos(psi)) * std::sin(phi), rr * std::sin(psi));
+    const Eigen::Matrix3d R_VN =
+        Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+    const double s0 = q.arc.sweep_rad * u(rng);
+    Eigen::Isometry3d X_VN = Eigen::Isometry3d::Identity();
+    X_VN.linear() = R_VN;
+    X_VN.translation() = p_V - R_VN * Eigen::Vector3d(q.arc.radius_m * std::cos(s0),
+                                                      q.arc.radius_m * std::sin(s0), 0);
+    q.arc.X_WN = q.torus.X_WV * X_VN;
+    if (geometry::CalcArcTorusClearanceExact(q.arc, q.torus).status == ClearanceStatus::kOk) {
+      family.queries.push_back(q);
+    }
+  }
+  return family;
+}
+
+// The pose range SP handles: r/R 0.05–0.5, ρ/R log-uniform in [0.1, 10], the needle centre
+// anywhere within 3(R + ρ) of the vessel, any orientation and sweep; half segments. Mostly
+// far from the tube (deep contacts): the exact method answers those inside SP.
+Family MakeWideFamily(int queries, std::mt19937_64& rng) {
+  Family family;
+  family.name = "wide poses";
+  std::uniform_real_distribution<double> u(0, 1), v(-1, 1);
+  std::normal_distribution<double> n;
+  while (static_cast<int>(family.queries.size()) < queries) {
+    Query q;
+    const double R = 5e-3;
+    q.torus.core_radius_m = R;
+    q.torus.tube_radius_m = R * (0.05 + 0.45 * u(rng));
+    q.torus.segment_angle_rad = u(rng) < 0.5 ? 2 * kPi : 0.1 + (2 * kPi - 0.1) * u(rng);
+    q.torus.X_WV = TrainingVesselPose();
+    q.arc.radius_m = R * std::pow(10.0, -1 + 2 * u(rng));
+    q.arc.sweep_rad = 2 * kPi * (0.01 + 0.99 * u(rng));
+    Eigen::Isometry3d X_VN = Eigen::Isometry3d::Identity();
+    X_VN.linear() =
+        Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+    X_VN.translation() = 3 * (R + q.arc.radius_m) * Eigen::Vector3d(v(rng), v(rng), v(rng));
+    q.arc.X_WN = q.torus.X_WV * X_VN;
+    if (geometry::CalcArcTorusClearanceExact(q.arc, q.torus).status == ClearanceStatus::kOk) {
+      family.queries.push_back(q);
+    }
+  }
+  return family;
+}
+
+std::vector<Family> MakeFamilies(int queries, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Family> families;
+  families.push_back(MakeTrainingFamily("training, whole torus", 2 * kPi, -kPi, kPi, queries, rng));
+  families.back().mesh = true;
+  families.back().description =
+      "needle on the core circle at any azimuth, moved by <= 0.9 r, turned by <= 0.9 r/R";
+  // The station's scenario: the needle moved along a curved segment (Ω = π/2), entering and
+  // leaving it, so the clipping (§4.2.4) acts on nearly every query.
+  families.push_back(MakeTrainingFamily("training, along a segment", kPi / 2, -0.75 * kPi + 0.1,
+                                        kPi / 2 - 0.1, queries, rng));
+  families.back().description =
+      "segment Ω = π/2; needle starting anywhere from 3π/4 before it to its end, same moves";
+  families.push_back(MakeCrossingFamily(queries, rng));
+  families.back().description =
+      "through a point 0.7-1.3 r from the core, random direction, ρ 0.2-1.7 R, any sweep";
+  families.push_back(MakeWideFamily(queries, rng));
+  families.back().description =
+      "r/R 0.05-0.5, ρ/R 0.1-10, centre within 3(R + ρ), any orientation and sweep";
+  return families;
 }
 
 struct MethodResult {
@@ -236,10 +341,11 @@ const MethodResult* Cheapest(const std::vector<MethodResult>& all, const std::st
   return best;
 }
 
-void WritePlot(const std::vector<MethodResult>& all, const std::string& png) {
+void WritePlot(const std::vector<MethodResult>& all, const std::string& png,
+               const std::string& family) {
   const std::string data = png + ".dat";
   std::ofstream d(data);
-  const char* names[] = {"sp", "exact", "sampling", "mesh"};
+  const char* names[] = {"sp", "exact", "sampling", "mesh", "sampling_clipped"};
   for (const char* name : names) {
     d << "# " << name << "\n";
     for (const MethodResult& m : all) {
@@ -257,12 +363,13 @@ void WritePlot(const std::vector<MethodResult>& all, const std::string& png) {
     << "set output '" << png << "'\n"
     << "set logscale xy\nset grid\n"
     << "set xlabel 'time per query (ns)'\nset ylabel 'max |clearance error| (m)'\n"
-    << "set title 'needle-vessel clearance: error against run time'\n"
+    << "set title 'needle-vessel clearance: error against run time (" << family << ")'\n"
     << "set key top right\n"
     << "plot '" << data << "' index 0 with linespoints title 'SP (quartic tol / polish)', \\\n"
     << "  '' index 1 with points pt 7 ps 2 title 'exact (reference, error 0)', \\\n"
     << "  '' index 2 with linespoints title 'sampling N=10..10^4', \\\n"
-    << "  '' index 3 with linespoints title 'mesh (FCL OBBRSS)'\n";
+    << "  '' index 3 with linespoints title 'mesh (FCL OBBRSS)', \\\n"
+    << "  '' index 4 with linespoints title 'sampling over the clipped pieces'\n";
   g.close();
   const std::string cmd = "gnuplot '" + script + "'";
   if (std::system(cmd.c_str()) != 0) {
@@ -270,40 +377,55 @@ void WritePlot(const std::vector<MethodResult>& all, const std::string& png) {
   }
 }
 
-int RunReport(const ReportOptions& opt) {
-  const int queries = opt.queries > 0 ? opt.queries : (opt.quick ? 200 : 2000);
-  const int reps = opt.reps > 0 ? opt.reps : (opt.quick ? 3 : 7);
-  const double budget_s = opt.quick ? 0.5 : 4.0;
-  const Scene scene = MakeScene(queries, opt.seed);
-  const TorusSegmentDef& torus = scene.torus;
-  const double r = torus.tube_radius_m;
+struct Ratios {
+  double mesh_over_sp = std::numeric_limits<double>::quiet_NaN();
+  double sampling_over_sp = std::numeric_limits<double>::quiet_NaN();
+  double exact_over_sp = std::numeric_limits<double>::quiet_NaN();
+  // The sampling baseline over the clipped pieces, ends included (arc_torus_sampled.h).
+  double sampling_clipped_over_sp = std::numeric_limits<double>::quiet_NaN();
+  // The cheapest settings within the tolerance.
+  std::string sampling_setting, sampling_clipped_setting, mesh_setting;
+};
+
+struct FamilyResult {
+  const Family* family = nullptr;
+  int contacts = 0;
+  double tol = 0;                 // 1e-3·r (the smallest r of the family)
+  std::vector<MethodResult> all;  // every method and setting
+  const MethodResult* sp = nullptr;
+  Ratios ratios;
+};
+
+FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps, double budget_s) {
+  FamilyResult fr;
+  fr.family = &family;
+  const int queries = static_cast<int>(family.queries.size());
+  double r_min = std::numeric_limits<double>::infinity();
+  for (const Query& q : family.queries) r_min = std::min(r_min, q.torus.tube_radius_m);
+  fr.tol = 1e-3 * r_min;
   std::vector<ArcTorusClearance> exact(queries);
   for (int i = 0; i < queries; ++i) {
-    ArcDef arc = scene.arc;
-    arc.X_WN = scene.X_WN[i];
-    exact[i] = geometry::CalcArcTorusClearanceExact(arc, torus);
+    exact[i] = geometry::CalcArcTorusClearanceExact(family.queries[i].arc, family.queries[i].torus);
     if (exact[i].status != ClearanceStatus::kOk) {
       throw std::runtime_error("exact method failed on benchmark query " + std::to_string(i));
     }
+    fr.contacts += exact[i].contact;
   }
-  std::vector<MethodResult> all;
   std::vector<ArcTorusClearance> got(queries);
   volatile double sink = 0;
-
+  std::fprintf(stderr, "%s (%d queries, %d in contact)\n", family.name.c_str(), queries,
+               fr.contacts);
   auto run_analytic = [&](const std::string& name, const std::string& setting, auto&& calc) {
     MethodResult m{name, setting};
     m.ns_per_query = MedianNsPerQuery(queries, reps, budget_s, [&](int i) {
-      ArcDef arc = scene.arc;
-      arc.X_WN = scene.X_WN[i];
-      got[i] = calc(arc);
+      got[i] = calc(family.queries[i]);
       sink = sink + got[i].clearance_m;
     });
     Score(got, exact, false, &m);
-    all.push_back(m);
-    std::fprintf(stderr, "  %-9s %-26s %12.1f ns  max err %.3g m\n", name.c_str(), setting.c_str(),
+    fr.all.push_back(m);
+    std::fprintf(stderr, "  %-9s %-30s %12.1f ns  max err %.3g m\n", name.c_str(), setting.c_str(),
                  m.ns_per_query, m.max_abs_error);
   };
-
   struct SpSetting {
     const char* label;
     double quartic_tol;
@@ -318,89 +440,173 @@ int RunReport(const ReportOptions& opt) {
     geometry::SpOptions options;
     options.quartic_tol = s.quartic_tol;
     options.polish_max_iters = s.polish;
-    run_analytic("sp", s.label, [&](const ArcDef& arc) {
-      return geometry::CalcArcTorusClearanceSP(arc, torus, options);
+    run_analytic("sp", s.label, [&](const Query& q) {
+      return geometry::CalcArcTorusClearanceSP(q.arc, q.torus, options);
     });
   }
-  run_analytic("exact", "closed form",
-               [&](const ArcDef& arc) { return geometry::CalcArcTorusClearanceExact(arc, torus); });
+  run_analytic("exact", "closed form", [&](const Query& q) {
+    return geometry::CalcArcTorusClearanceExact(q.arc, q.torus);
+  });
   for (int n : {10, 30, 100, 300, 1000, 3000, 10000}) {
-    run_analytic("sampling", "N=" + std::to_string(n), [&](const ArcDef& arc) {
-      return geometry::CalcArcTorusClearanceSampled(arc, torus, n);
+    run_analytic("sampling", "N=" + std::to_string(n), [&](const Query& q) {
+      return geometry::CalcArcTorusClearanceSampled(q.arc, q.torus, n);
     });
   }
-  std::vector<geometry::MeshResolution> resolutions = {
-      {16, 32, 8}, {32, 64, 16}, {64, 128, 32}, {128, 256, 64}, {256, 512, 128}};
-  if (opt.quick) resolutions.resize(3);
-  for (const geometry::MeshResolution& res : resolutions) {
-    const geometry::ArcTorusMeshModel model(scene.arc, torus, res, opt.mesh_dir);
-    const std::string setting = "needle " + std::to_string(res.needle_segments) + ", wall " +
-                                std::to_string(res.n_major) + "x" + std::to_string(res.n_minor);
-    MethodResult m{"mesh", setting};
-    m.ns_per_query = MedianNsPerQuery(queries, reps, budget_s, [&](int i) {
-      got[i] = model.Calc(scene.X_WN[i], torus.X_WV);
-      sink = sink + got[i].clearance_m;
+  for (int n : {10, 30, 100, 300, 1000, 3000, 10000}) {
+    run_analytic("sampling_clipped", "N=" + std::to_string(n), [&](const Query& q) {
+      return geometry::CalcArcTorusClearanceSampledClipped(q.arc, q.torus, n);
     });
-    Score(got, exact, true, &m);
-    all.push_back(m);
-    std::fprintf(stderr, "  %-9s %-26s %12.1f ns  max err %.3g m (over %d no-contact)\n", "mesh",
-                 setting.c_str(), m.ns_per_query, m.max_abs_error, m.error_queries);
   }
-
-  // Ratios: cheapest setting within 1e-3·r against the SP default (the most accurate SP
-  // setting).
-  const double tol = 1e-3 * r;
-  const MethodResult* sp = nullptr;
-  for (const MethodResult& m : all) {
-    if (m.name == "sp" && m.setting.find("default") != std::string::npos) sp = &m;
+  if (family.mesh) {
+    std::vector<geometry::MeshResolution> resolutions = {
+        {16, 32, 8}, {32, 64, 16}, {64, 128, 32}, {128, 256, 64}, {256, 512, 128}};
+    if (opt.quick) resolutions.resize(3);
+    const Query& q0 = family.queries.front();
+    for (const geometry::MeshResolution& res : resolutions) {
+      const geometry::ArcTorusMeshModel model(q0.arc, q0.torus, res, opt.mesh_dir);
+      const std::string setting = "needle " + std::to_string(res.needle_segments) + ", wall " +
+                                  std::to_string(res.n_major) + "x" + std::to_string(res.n_minor);
+      MethodResult m{"mesh", setting};
+      m.ns_per_query = MedianNsPerQuery(queries, reps, budget_s, [&](int i) {
+        got[i] = model.Calc(family.queries[i].arc.X_WN, family.queries[i].torus.X_WV);
+        sink = sink + got[i].clearance_m;
+      });
+      Score(got, exact, true, &m);
+      fr.all.push_back(m);
+      std::fprintf(stderr, "  %-9s %-30s %12.1f ns  max err %.3g m (over %d no-contact)\n", "mesh",
+                   setting.c_str(), m.ns_per_query, m.max_abs_error, m.error_queries);
+    }
   }
-  auto ratio = [&](const char* name) {
-    const MethodResult* m = Cheapest(all, name, tol);
-    return m == nullptr ? std::numeric_limits<double>::quiet_NaN()
-                        : m->ns_per_query / sp->ns_per_query;
+  // Ratios: cheapest setting within 1e-3·r against the SP default (its most accurate setting).
+  for (const MethodResult& m : fr.all) {
+    if (m.name == "sp" && m.setting.find("default") != std::string::npos) fr.sp = &m;
+  }
+  auto ratio = [&](const char* name, std::string* setting) {
+    const MethodResult* m = Cheapest(fr.all, name, fr.tol);
+    if (m == nullptr) return std::numeric_limits<double>::quiet_NaN();
+    if (setting != nullptr) *setting = m->setting;
+    return m->ns_per_query / fr.sp->ns_per_query;
   };
-  const double mesh_over_sp = ratio("mesh");
-  const double sampling_over_sp = ratio("sampling");
-  const double exact_over_sp = ratio("exact");
-  int contacts = 0;
-  for (const ArcTorusClearance& e : exact) contacts += e.contact;
+  fr.ratios.mesh_over_sp = ratio("mesh", &fr.ratios.mesh_setting);
+  fr.ratios.sampling_over_sp = ratio("sampling", &fr.ratios.sampling_setting);
+  fr.ratios.exact_over_sp = ratio("exact", nullptr);
+  fr.ratios.sampling_clipped_over_sp =
+      ratio("sampling_clipped", &fr.ratios.sampling_clipped_setting);
+  return fr;
+}
+
+void WriteMethodsJson(std::ostream& j, const std::vector<MethodResult>& all, const char* indent) {
+  for (size_t i = 0; i < all.size(); ++i) {
+    const MethodResult& m = all[i];
+    j << indent << "{\"name\": \"" << m.name << "\", \"setting\": \"" << m.setting
+      << "\", \"ns_per_query\": " << JsonNumber(m.ns_per_query)
+      << ", \"max_abs_error\": " << JsonNumber(m.max_abs_error)
+      << ", \"rms_error\": " << JsonNumber(m.rms_error)
+      << ", \"agreement\": " << JsonNumber(m.agreement)
+      << ", \"error_queries\": " << m.error_queries << "}" << (i + 1 < all.size() ? "," : "")
+      << "\n";
+  }
+}
+
+std::string RatiosJson(const Ratios& r) {
+  return "{\"mesh_over_sp\": " + JsonNumber(r.mesh_over_sp) +
+         ", \"sampling_over_sp\": " + JsonNumber(r.sampling_over_sp) +
+         ", \"exact_over_sp\": " + JsonNumber(r.exact_over_sp) + "}";
+}
+
+// The issue's goals, checked on one family's figures.
+struct Goal {
+  std::string what;
+  double value;
+  bool met;
+};
+
+std::vector<Goal> CheckGoals(const FamilyResult& fr) {
+  const Ratios& r = fr.ratios;
+  std::vector<Goal> goals;
+  const double qps = 1e9 / fr.sp->ns_per_query;
+  goals.push_back({"SP default >= 2e6 queries/s on one core", qps, qps >= 2e6});
+  if (fr.family->mesh) {
+    goals.push_back({"mesh_over_sp >= 300", r.mesh_over_sp, r.mesh_over_sp >= 300});
+  }
+  goals.push_back({"sampling_over_sp >= 30", r.sampling_over_sp, r.sampling_over_sp >= 30});
+  goals.push_back({"exact_over_sp <= 5", r.exact_over_sp, r.exact_over_sp <= 5});
+  return goals;
+}
+
+int RunReport(const ReportOptions& opt) {
+  const int queries = opt.queries > 0 ? opt.queries : (opt.quick ? 200 : 2000);
+  const int reps = opt.reps > 0 ? opt.reps : (opt.quick ? 3 : 7);
+  const double budget_s = opt.quick ? 0.5 : 4.0;
+  const std::vector<Family> families = MakeFamilies(queries, opt.seed);
+  std::vector<FamilyResult> results;
+  for (const Family& family : families) results.push_back(RunFamily(family, opt, reps, budget_s));
+  // The headline figures are the first family's (the one the mesh baseline can answer).
+  const FamilyResult& head = results.front();
 
   if (!opt.json.empty()) {
     std::ofstream j(opt.json);
     if (!j) throw BadInput(opt.json + ": cannot open for writing");
-    j << "{\n  \"queries\": " << queries << ",\n  \"contacts\": " << contacts
-      << ",\n  \"repetitions\": " << reps << ",\n  \"tube_radius_m\": " << JsonNumber(r)
-      << ",\n  \"error_tolerance_m\": " << JsonNumber(tol) << ",\n  \"sp_reference_setting\": \""
-      << sp->setting << "\",\n  \"methods\": [\n";
-    for (size_t i = 0; i < all.size(); ++i) {
-      const MethodResult& m = all[i];
-      j << "    {\"name\": \"" << m.name << "\", \"setting\": \"" << m.setting
-        << "\", \"ns_per_query\": " << JsonNumber(m.ns_per_query)
-        << ", \"max_abs_error\": " << JsonNumber(m.max_abs_error)
-        << ", \"rms_error\": " << JsonNumber(m.rms_error)
-        << ", \"agreement\": " << JsonNumber(m.agreement)
-        << ", \"error_queries\": " << m.error_queries << "}" << (i + 1 < all.size() ? "," : "")
-        << "\n";
+    j << "{\n  \"family\": \"" << head.family->name << "\",\n  \"queries\": " << queries
+      << ",\n  \"contacts\": " << head.contacts << ",\n  \"repetitions\": " << reps
+      << ",\n  \"error_tolerance_m\": " << JsonNumber(head.tol)
+      << ",\n  \"sp_reference_setting\": \"" << head.sp->setting << "\",\n  \"methods\": [\n";
+    WriteMethodsJson(j, head.all, "    ");
+    j << "  ],\n  \"ratios\": " << RatiosJson(head.ratios) << ",\n"
+      << "  \"sp_queries_per_second\": " << JsonNumber(1e9 / head.sp->ns_per_query) << ",\n"
+      << "  \"families\": [\n";
+    for (size_t f = 0; f < results.size(); ++f) {
+      const FamilyResult& fr = results[f];
+      j << "    {\"name\": \"" << fr.family->name << "\", \"description\": \""
+        << fr.family->description << "\", \"queries\": " << fr.family->queries.size()
+        << ", \"contacts\": " << fr.contacts << ", \"error_tolerance_m\": " << JsonNumber(fr.tol)
+        << ",\n     \"ratios\": " << RatiosJson(fr.ratios)
+        << ", \"sampling_clipped_over_sp\": " << JsonNumber(fr.ratios.sampling_clipped_over_sp)
+        << ", \"cheapest_sampling\": \"" << fr.ratios.sampling_setting
+        << "\", \"cheapest_sampling_clipped\": \"" << fr.ratios.sampling_clipped_setting
+        << "\", \"cheapest_mesh\": \"" << fr.ratios.mesh_setting
+        << "\", \"sp_queries_per_second\": " << JsonNumber(1e9 / fr.sp->ns_per_query)
+        << ",\n     \"goals\": [";
+      const std::vector<Goal> goals = CheckGoals(fr);
+      for (size_t g = 0; g < goals.size(); ++g) {
+        j << (g > 0 ? ", " : "") << "{\"goal\": \"" << goals[g].what
+          << "\", \"value\": " << JsonNumber(goals[g].value)
+          << ", \"met\": " << (goals[g].met ? "true" : "false") << "}";
+      }
+      j << "],\n     \"family_methods\": [\n";
+      WriteMethodsJson(j, fr.all, "       ");
+      j << "     ]}" << (f + 1 < results.size() ? "," : "") << "\n";
     }
-    j << "  ],\n  \"ratios\": {\"mesh_over_sp\": " << JsonNumber(mesh_over_sp)
-      << ", \"sampling_over_sp\": " << JsonNumber(sampling_over_sp)
-      << ", \"exact_over_sp\": " << JsonNumber(exact_over_sp) << "},\n"
-      << "  \"sp_queries_per_second\": " << JsonNumber(1e9 / sp->ns_per_query) << "\n}\n";
+    j << "  ]\n}\n";
   }
   if (!opt.csv.empty()) {
     std::ofstream c(opt.csv);
     if (!c) throw BadInput(opt.csv + ": cannot open for writing");
-    c << "name,setting,ns_per_query,max_abs_error,rms_error,agreement,error_queries\n";
-    for (const MethodResult& m : all) {
-      c << m.name << ",\"" << m.setting << "\"," << m.ns_per_query << ',' << m.max_abs_error << ','
-        << m.rms_error << ',' << m.agreement << ',' << m.error_queries << '\n';
+    c << "family,name,setting,ns_per_query,max_abs_error,rms_error,agreement,error_queries\n";
+    for (const FamilyResult& fr : results) {
+      for (const MethodResult& m : fr.all) {
+        c << '"' << fr.family->name << "\"," << m.name << ",\"" << m.setting << "\","
+          << m.ns_per_query << ',' << m.max_abs_error << ',' << m.rms_error << ',' << m.agreement
+          << ',' << m.error_queries << '\n';
+      }
     }
   }
-  if (!opt.plot.empty()) WritePlot(all, opt.plot);
-  std::printf("needle: %d queries (%d in contact); SP reference: %s, %.1f ns/query (%.3g/s)\n",
-              queries, contacts, sp->setting.c_str(), sp->ns_per_query, 1e9 / sp->ns_per_query);
-  std::printf("ratios within %.3g m: mesh/sp %.4g, sampling/sp %.4g, exact/sp %.4g\n", tol,
-              mesh_over_sp, sampling_over_sp, exact_over_sp);
+  if (!opt.plot.empty()) WritePlot(head.all, opt.plot, head.family->name);
+  for (const FamilyResult& fr : results) {
+    std::printf("%s: %zu queries (%d in contact), tolerance %.3g m; SP default %.1f ns/query\n",
+                fr.family->name.c_str(), fr.family->queries.size(), fr.contacts, fr.tol,
+                fr.sp->ns_per_query);
+    const auto setting = [](const std::string& v) { return v.empty() ? "none" : v.c_str(); };
+    std::printf(
+        "  ratios: mesh/sp %.4g (%s), sampling/sp %.4g (%s), sampling clipped/sp %.4g (%s), "
+        "exact/sp %.4g\n",
+        fr.ratios.mesh_over_sp, setting(fr.ratios.mesh_setting), fr.ratios.sampling_over_sp,
+        setting(fr.ratios.sampling_setting), fr.ratios.sampling_clipped_over_sp,
+        setting(fr.ratios.sampling_clipped_setting), fr.ratios.exact_over_sp);
+    for (const Goal& g : CheckGoals(fr)) {
+      std::printf("  goal %-40s %10.4g  %s\n", g.what.c_str(), g.value, g.met ? "met" : "NOT met");
+    }
+  }
   return 0;
 }
 
@@ -412,8 +618,8 @@ int RunNeedle(int argc, char** argv) {
   app.add_option("--json", opt.json, "write the report as JSON");
   app.add_option("--csv", opt.csv, "write the table as CSV");
   app.add_option("--plot", opt.plot, "write error (log) against time (log) as PNG (gnuplot)");
-  app.add_flag("--quick", opt.quick, "reduced run (200 queries, coarse meshes only)");
-  app.add_option("--queries", opt.queries, "number of random needle poses");
+  app.add_flag("--quick", opt.quick, "reduced run (200 queries per family, coarse meshes only)");
+  app.add_option("--queries", opt.queries, "number of random queries per family");
   app.add_option("--reps", opt.reps, "timing repetitions (median taken)");
   app.add_option("--seed", opt.seed, "random seed of the poses");
   app.add_option("--mesh-dir", opt.mesh_dir, "where the OBJ meshes are read / generated");

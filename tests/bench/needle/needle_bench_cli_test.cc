@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -132,7 +133,12 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
                      err),
             0)
       << ReadAll(err);
-  const std::string text = ReadAll(json);
+  const std::string all_text = ReadAll(json);
+  // The headline family's table comes first; every family follows with its own.
+  const size_t families_at = all_text.find("\"families\": [");
+  ASSERT_NE(families_at, std::string::npos) << all_text;
+  const std::string text = all_text.substr(0, families_at);
+  const std::string families = all_text.substr(families_at);
   const std::regex method(
       R"re(\{"name": "(sp|exact|sampling|mesh)", "setting": "[^"]*", "ns_per_query": [0-9.e+-]+, "max_abs_error": [0-9.e+-]+, "rms_error": [0-9.e+-]+, "agreement": [0-9.e+-]+)re");
   int count[4] = {0, 0, 0, 0};
@@ -151,11 +157,22 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
           R"re("ratios": \{"mesh_over_sp": ([0-9.e+-]+|null), "sampling_over_sp": ([0-9.e+-]+|null), "exact_over_sp": ([0-9.e+-]+|null)\})re")))
       << text;
   // The exact method is the reference: its own error is zero and it agrees everywhere.
-  EXPECT_TRUE(std::regex_search(
-      text,
-      std::regex(
-          R"re("name": "exact", "setting": "closed form", "ns_per_query": [0-9.e+-]+, "max_abs_error": 0, "rms_error": 0, "agreement": 1)re")))
-      << text;
+  const std::regex exact_line(
+      R"re("name": "exact", "setting": "closed form", "ns_per_query": [0-9.e+-]+, "max_abs_error": 0, "rms_error": 0, "agreement": 1)re");
+  EXPECT_TRUE(std::regex_search(text, exact_line)) << text;
+  // Four families, each with its ratios, goal checks and its own exact line.
+  const std::regex family_ratios(
+      R"re("ratios": \{"mesh_over_sp": ([0-9.e+-]+|null), "sampling_over_sp": ([0-9.e+-]+|null), "exact_over_sp": ([0-9.e+-]+|null)\})re");
+  const auto count_matches = [&](const std::regex& re) {
+    return std::distance(std::sregex_iterator(families.begin(), families.end(), re),
+                         std::sregex_iterator());
+  };
+  EXPECT_EQ(count_matches(family_ratios), 4) << families;
+  EXPECT_EQ(count_matches(exact_line), 4) << families;
+  EXPECT_EQ(count_matches(std::regex(R"re("goals": \[\{"goal": )re")), 4) << families;
+  EXPECT_EQ(count_matches(std::regex(R"re("met": (true|false))re")),
+            4 + 3 * 3)  // the mesh goal only where the mesh answers
+      << families;
 }
 
 }  // namespace

@@ -37,6 +37,7 @@ TEST(ArcTorusAllocation, ExactAndSampledQueriesDoNotAllocate) {
   for (const auto& c : cases) {
     sink = sink + CalcArcTorusClearanceExact(c.arc, c.torus).clearance_m;
     sink = sink + CalcArcTorusClearanceSampled(c.arc, c.torus, 50).clearance_m;
+    sink = sink + CalcArcTorusClearanceSampledClipped(c.arc, c.torus, 50).clearance_m;
     sink = sink + (FindArcTorusInputError(c.arc, c.torus) == nullptr);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);

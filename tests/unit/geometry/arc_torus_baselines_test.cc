@@ -43,6 +43,37 @@ TEST(ArcTorusSampled, NeverDeeperThanExactAndConvergesQuadratically) {
   EXPECT_LT(worst[1], worst[0] / 8);
 }
 
+// On segments, where the deepest point is often on an end plane: the clipped sampling is
+// never deeper than exact and converges quadratically; the plain one only linearly.
+TEST(ArcTorusSampled, ClippedSamplingConvergesQuadraticallyOnSegments) {
+  std::mt19937_64 rng(14);
+  double worst_clipped[2] = {0, 0}, worst_plain[2] = {0, 0};
+  for (int i = 0; i < 3000; ++i) {
+    auto c = testing::MakeNearCoreArcTorus(rng);
+    c.torus.segment_angle_rad = 0.5 + 0.002 * i;
+    const ArcTorusClearance exact = CalcArcTorusClearanceExact(c.arc, c.torus);
+    if (exact.status != ClearanceStatus::kOk) continue;
+    const double R = c.torus.core_radius_m;
+    for (int k = 0; k < 2; ++k) {
+      const int n = k == 0 ? 100 : 1600;
+      const ArcTorusClearance clipped = CalcArcTorusClearanceSampledClipped(c.arc, c.torus, n);
+      ASSERT_EQ(clipped.status, ClearanceStatus::kOk) << i;
+      EXPECT_GE(clipped.clearance_m, exact.clearance_m - 1e-12 * R) << i;
+      worst_clipped[k] = std::max(worst_clipped[k], (clipped.clearance_m - exact.clearance_m) / R);
+      const ArcTorusClearance plain = CalcArcTorusClearanceSampled(c.arc, c.torus, n);
+      if (plain.status == ClearanceStatus::kOk) {
+        worst_plain[k] = std::max(worst_plain[k], (plain.clearance_m - exact.clearance_m) / R);
+      }
+    }
+  }
+  EXPECT_GT(worst_clipped[0], 0);
+  // 16 times the samples: ~1/256 of the error if quadratic, ~1/16 if linear (a missed
+  // boundary); a factor 4 allowed for where the worst case falls on the grid.
+  EXPECT_LT(worst_clipped[1], worst_clipped[0] / 64);
+  EXPECT_GT(worst_plain[1], worst_plain[0] / 64);
+  EXPECT_LT(worst_clipped[1], worst_plain[1]);
+}
+
 TEST(ArcTorusSampled, EmptyAndInvalid) {
   ArcDef arc;
   TorusSegmentDef torus;
