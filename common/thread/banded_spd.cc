@@ -23,7 +23,10 @@ void BandedSpd::AddBlock(int a, int b, const Eigen::Matrix3d& block) {
   }
 }
 
-void BandedSpd::Multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+// x and y are Refs so that a Map of the state is read in place (a const VectorXd& would
+// build a heap temporary from it on every step).
+void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         Eigen::Ref<Eigen::VectorXd> y) const {
   for (int i = 0; i < size_; ++i) {
     double sum = band_(0, i) * x[i];
     const int lo = std::max(0, i - p_);

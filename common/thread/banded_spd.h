@@ -27,7 +27,7 @@ class BandedSpd {
   void AddBlock(int a, int b, const Eigen::Matrix3d& block);
 
   // y = A x using the (unfactorised) band.
-  void Multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  void Multiply(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const;
 
   // In place A = L L^T. Returns false (and leaves garbage) on a non-positive pivot.
   bool Factorize();
