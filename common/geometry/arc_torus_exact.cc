@@ -309,10 +309,11 @@ PolyE<N> PolyAdd(const PolyE<N>& p, const PolyE<N>& q) {
 // x = tan((s − m)/2) / τ ∈ [−1, 1], τ = tan(w/2): Q(x) = Σ q[j] x^j ∝ P. Either the global
 // trigonometric coefficients re-centred at m (the clipped pieces), or a local expansion about
 // the needle point at m (MakeLocalForm).
+// No member initialisers: a query keeps kMaxForms of them and fills only those it uses.
 struct Piece {
-  double begin = 0, end = 0;  // needle parameter range
-  double m = 0, cos_m = 1, sin_m = 0, tau = 0;
-  double q[kN + 1] = {};
+  double begin, end;  // needle parameter range
+  double m, cos_m, sin_m, tau;
+  double q[kN + 1];
 };
 
 struct Node {
