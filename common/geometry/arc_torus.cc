@@ -1,6 +1,5 @@
 #include "common/geometry/arc_torus.h"
 
-#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -15,21 +14,11 @@ constexpr double kRotationTol = 1e-9;
 // methods work in units of R and powers of these ratios up to the sixth appear.
 constexpr double kMaxScaleRatio = 1e9;
 
-// The 12 entries an isometry uses are finite: x·0 is 0 for finite x and NaN for NaN or ±∞
-// (one vectorisable sum instead of a test per entry; this runs on every query).
-bool IsFinitePose(const Eigen::Isometry3d& X) {
-  const Eigen::Matrix<double, 3, 4> m = X.affine();
-  return (m * 0.0).sum() == 0;
-}
+bool IsFinitePose(const Eigen::Isometry3d& X) { return X.matrix().allFinite(); }
 
-// max |(mᵀm − I)_ij| ≤ kRotationTol and det m > 0, from the six distinct entries of mᵀm and
-// the triple product (this check runs on every query).
 bool IsRotation(const Eigen::Matrix3d& m) {
-  const Eigen::Vector3d a = m.col(0), b = m.col(1), c = m.col(2);
-  const double worst =
-      std::max({std::abs(a.dot(a) - 1), std::abs(b.dot(b) - 1), std::abs(c.dot(c) - 1),
-                std::abs(a.dot(b)), std::abs(a.dot(c)), std::abs(b.dot(c))});
-  return worst <= kRotationTol && a.cross(b).dot(c) > 0;
+  const Eigen::Matrix3d e = m.transpose() * m - Eigen::Matrix3d::Identity();
+  return e.cwiseAbs().maxCoeff() <= kRotationTol && m.determinant() > 0;
 }
 
 }  // namespace
