@@ -13,7 +13,6 @@ namespace {
 // Initial-exec TLS of the executable: reading it never allocates (safe inside malloc).
 thread_local bool t_counting = false;
 thread_local std::uint64_t t_count = 0;
-thread_local std::uint64_t t_paused_at = 0;
 
 inline void Count() {
   if (t_counting) ++t_count;
@@ -87,12 +86,6 @@ std::uint64_t StopCountingAllocations() {
   return t_count;
 }
 bool CountsMalloc() { return MICRODEX_COUNT_MALLOC != 0; }
-void PauseCountingAllocations() { t_paused_at = t_count; }
-std::uint64_t ResumeCountingAllocations() {
-  const std::uint64_t during = t_count - t_paused_at;
-  t_count = t_paused_at;
-  return during;
-}
 }  // namespace microdex::testing
 
 void* operator new(std::size_t n) { return Allocate(n); }

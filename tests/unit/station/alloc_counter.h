@@ -13,8 +13,5 @@ void StartCountingAllocations();
 std::uint64_t StopCountingAllocations();
 // True when malloc itself is counted (not under ASan/TSan).
 bool CountsMalloc();
-// Excludes a section from the count (nesting not supported); returns what it allocated.
-void PauseCountingAllocations();
-std::uint64_t ResumeCountingAllocations();
 
 }  // namespace microdex::testing

@@ -207,49 +207,12 @@ std::string SceneFile(const std::string& name) {
   return std::string(dir ? dir : ".") + "/assets/scenes/" + name;
 }
 
-// A module whose Step is left out of the allocation count (the count it made is kept).
-class UncountedStep final : public Module {
- public:
-  explicit UncountedStep(std::unique_ptr<Module> inner) : inner_(std::move(inner)) {}
-  const char* name() const override { return inner_->name(); }
-  void Step(const ToolInput& in, Eigen::Vector3d& f_T_W) override {
-    testing::PauseCountingAllocations();
-    inner_->Step(in, f_T_W);
-    excluded_ += testing::ResumeCountingAllocations();
-  }
-  void WriteSnapshot(TickSnapshot& s) const override { inner_->WriteSnapshot(s); }
-  void WriteFrame(std::uint64_t step, std::int64_t stamp_ns, LargeFrames& frames) override {
-    inner_->WriteFrame(step, stamp_ns, frames);  // counted
-  }
-  double error_estimate() const override { return inner_->error_estimate(); }
-  bool fault() const override { return inner_->fault(); }
-  double fault_value() const override { return inner_->fault_value(); }
-  const Module& inner() const { return *inner_; }
-  std::uint64_t excluded() const { return excluded_; }
-
- private:
-  std::unique_ptr<Module> inner_;
-  std::uint64_t excluded_ = 0;
-};
-
-// The scene's modules, the thread's step wrapped in UncountedStep when asked.
-std::vector<std::unique_ptr<Module>> ModulesFor(const scene::SceneModel& scene,
-                                                bool exclude_thread_step) {
-  std::vector<std::unique_ptr<Module>> modules = MakeModules(scene);
-  for (auto& m : modules) {
-    if (exclude_thread_step && std::string(m->name()) == "thread") {
-      m = std::make_unique<UncountedStep>(std::move(m));
-    }
-  }
-  return modules;
-}
-
 // A station's loop on a shipped scene (thread, tissue), the trainee novice for large motion.
 struct SceneRig {
-  explicit SceneRig(scene::SceneModel s, bool exclude_thread_step = false)
+  explicit SceneRig(scene::SceneModel s)
       : scene(std::move(s)),
         device(scene, Rig::Def(0.0, 11)),
-        loop(scene, device, ModulesFor(scene, exclude_thread_step), rings, clock,
+        loop(scene, device, MakeModules(scene), rings, clock,
              /*frame_period_steps=*/16) {}
   void Steps(std::uint64_t n) {
     std::atomic<bool> stop{false};
@@ -264,18 +227,9 @@ struct SceneRig {
   template <class M>
   const M* Find() const {
     for (std::size_t i = 0; i < loop.module_count(); ++i) {
-      const Module* m = &loop.module(i);
-      if (auto* u = dynamic_cast<const UncountedStep*>(m)) m = &u->inner();
-      if (auto* t = dynamic_cast<const M*>(m)) return t;
+      if (auto* t = dynamic_cast<const M*>(&loop.module(i))) return t;
     }
     return nullptr;
-  }
-  std::uint64_t ExcludedAllocations() const {
-    std::uint64_t n = 0;
-    for (std::size_t i = 0; i < loop.module_count(); ++i) {
-      if (auto* u = dynamic_cast<const UncountedStep*>(&loop.module(i))) n += u->excluded();
-    }
-    return n;
   }
   scene::SceneModel scene;
   SimTrainee device;
@@ -290,21 +244,14 @@ struct SceneRig {
 // without draining, so the snapshot ring also fills and drops. Outside sanitizer builds
 // malloc itself is counted, so allocations inside C libraries and Eigen's heap temporaries
 // (which use malloc, not operator new) show too.
-//
-// Documented exclusion: thread::StepThread (common/thread, another part) makes one heap
-// allocation per step through malloc: in thread_step.cc, IntegrateLinearlyImplicit passes an
-// Eigen::Map of the velocities to BandedSpd::Multiply(const Eigen::VectorXd&, ...), which
-// builds a temporary VectorXd. Its operator-new test does not see Eigen's malloc. The thread
-// module's Step is therefore counted separately and only reported here; everything else in
-// the tick (the loop, cues, tissue, tremor, every WriteFrame) must allocate nothing.
+
 TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
   for (const char* file : {"suture_on_tissue.yaml", "tissue_press.yaml", "thread_pull.yaml"}) {
     SCOPED_TRACE(file);
-    SceneRig rig(scene::LoadScene(SceneFile(file)), /*exclude_thread_step=*/true);
+    SceneRig rig(scene::LoadScene(SceneFile(file)));
     rig.Steps(1000);  // warm-up: the pattern cache, the first frames
     const TissueModule* tissue = rig.Find<TissueModule>();
     const std::uint32_t revision0 = tissue ? tissue->mesh_revision() : 0;
-    const std::uint64_t excluded0 = rig.ExcludedAllocations();
     ASSERT_TRUE(rig.rings.cues.TryPush({1, net::CueKind::kConvergentField, 200, 1500}));
     std::atomic<bool> stop{false};
     testing::StartCountingAllocations();
@@ -313,8 +260,6 @@ TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
     EXPECT_EQ(allocations, 0u);
     EXPECT_GT(rig.loop.ring_dropped(), 0u);
     if (rig.scene.thread) {
-      std::printf("%s: thread::StepThread (excluded) made %llu allocations in 4500 steps\n", file,
-                  static_cast<unsigned long long>(rig.ExcludedAllocations() - excluded0));
       EXPECT_TRUE(rig.rings.frames.thread.Update()) << "no thread frame was published";
       EXPECT_GT(rig.Find<ThreadModule>()->state().status.steps, 5000);
     }
