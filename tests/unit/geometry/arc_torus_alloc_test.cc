@@ -8,19 +8,8 @@
 
 #include "common/geometry/arc_torus_exact.h"
 #include "common/geometry/arc_torus_sampled.h"
+#include "tests/support/alloc_counter.h"
 #include "tests/unit/geometry/random_arc_torus.h"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace microdex::geometry {
 namespace {
@@ -33,14 +22,14 @@ TEST(ArcTorusAllocation, ExactAndSampledQueriesDoNotAllocate) {
   }
   cases.back().torus.tube_radius_m = -1;  // invalid input too
   volatile double sink = 0;
-  const long before = g_allocations.load();
+  ::microdex::testing::StartCountingAllocations();
   for (const auto& c : cases) {
     sink = sink + CalcArcTorusClearanceExact(c.arc, c.torus).clearance_m;
     sink = sink + CalcArcTorusClearanceSampled(c.arc, c.torus, 50).clearance_m;
     sink = sink + CalcArcTorusClearanceSampledClipped(c.arc, c.torus, 50).clearance_m;
     sink = sink + (FindArcTorusInputError(c.arc, c.torus) == nullptr);
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(::microdex::testing::StopCountingAllocations(), 0u);
 }
 
 }  // namespace

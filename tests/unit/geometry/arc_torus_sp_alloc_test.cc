@@ -1,5 +1,5 @@
 // The SP query never allocates (it runs in the 1 kHz haptic step): every operator new of this
-// binary is counted around the calls.
+// binary, and malloc outside sanitizer builds, is counted around the calls.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -9,18 +9,7 @@
 #include <numbers>
 
 #include "common/geometry/arc_torus_sp.h"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "tests/support/alloc_counter.h"
 
 namespace microdex::geometry {
 namespace {
@@ -58,14 +47,14 @@ TEST(ArcTorusSpAllocation, NoAllocationPerQuery) {
   invalid.arc.radius_m = -1;
   SpDiagnostics diag;
   double sink = CalcArcTorusClearanceSP(near.arc, near.torus).clearance_m;  // warm-up
-  const long before = g_allocations.load();
+  ::microdex::testing::StartCountingAllocations();
   for (int i = 0; i < 100; ++i) {
     sink += CalcArcTorusClearanceSP(near.arc, near.torus).clearance_m;
     sink += CalcArcTorusClearanceSP(on_core.arc, on_core.torus).clearance_m;
     sink += CalcArcTorusClearanceSP(deep.arc, deep.torus, {}, &diag).clearance_m;
     sink += CalcArcTorusClearanceSP(invalid.arc, invalid.torus).s_rad;
   }
-  EXPECT_EQ(g_allocations.load(), before);
+  EXPECT_EQ(::microdex::testing::StopCountingAllocations(), 0u);
   EXPECT_TRUE(std::isfinite(sink));
 }
 

@@ -16,7 +16,7 @@
 #include "station/sim_trainee.h"
 #include "station/thread_module.h"
 #include "station/tissue_module.h"
-#include "tests/unit/station/alloc_counter.h"
+#include "tests/support/alloc_counter.h"
 
 namespace microdex::station {
 namespace {

@@ -15,33 +15,7 @@
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
 #include "common/thread/thread_scenarios.h"
-
-namespace {
-std::atomic<long long> g_allocations{0};
-}  // namespace
-
-// Every allocation of this test binary is counted.
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const std::size_t a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "tests/support/alloc_counter.h"
 
 namespace microdex::thread {
 namespace {
@@ -67,7 +41,7 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
     const int a = GraspNode(model, 0, state);
     const int b = GraspNode(model, 64, state);
     for (int k = 0; k < 10; ++k) StepThread(model, colliders, state);
-    const long long before = g_allocations.load();
+    ::microdex::testing::StartCountingAllocations();
     for (int k = 0; k < 200; ++k) {
       SetGraspTarget(state, a, Eigen::Vector3d(-1e-6 * k, 0, 0), 0.01 * k);
       SetGraspTarget(state, b, Eigen::Vector3d(-1e-6 * k, 30e-6, 1e-6 * k), 0.0);
@@ -75,7 +49,7 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
       if (k == 150) GraspNode(model, 40, state);
       StepThread(model, colliders, state);
     }
-    EXPECT_EQ(g_allocations.load() - before, 0) << IntegratorName(integ);
+    EXPECT_EQ(::microdex::testing::StopCountingAllocations(), 0u) << IntegratorName(integ);
     EXPECT_GT(state.status.num_candidate_pairs, 0) << IntegratorName(integ);
   }
 }
