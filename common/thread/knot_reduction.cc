@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "common/base/check.h"
+#include "common/thread/segment_distance.h"
 
 namespace microdex::thread::knot {
 namespace {
@@ -44,41 +45,6 @@ double SegmentSegmentDistance2(const Eigen::Vector2d& a, const Eigen::Vector2d& 
   }
   return std::min({PointSegmentDistance2(a, c, d), PointSegmentDistance2(b, c, d),
                    PointSegmentDistance2(c, a, b), PointSegmentDistance2(d, a, b)});
-}
-
-double SegmentSegmentDistance3(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
-                               const Eigen::Vector3d& q0, const Eigen::Vector3d& q1) {
-  // Closest points of two segments (clamped parameters, Ericson §5.1.9).
-  const Eigen::Vector3d d1 = p1 - p0;
-  const Eigen::Vector3d d2 = q1 - q0;
-  const Eigen::Vector3d r = p0 - q0;
-  const double a = d1.squaredNorm();
-  const double e = d2.squaredNorm();
-  const double f = d2.dot(r);
-  double s = 0.0;
-  double t = 0.0;
-  if (a <= 0.0 && e <= 0.0) return r.norm();
-  if (a <= 0.0) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= 0.0) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2);
-      const double denom = a * e - b * b;
-      s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0.0) {
-        t = 0.0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1.0) {
-        t = 1.0;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  return (p0 + s * d1 - (q0 + t * d2)).norm();
 }
 
 class Reducer {
@@ -300,9 +266,9 @@ bool SegmentMayMeetTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
   const double nn = n.norm();
   if (nn <= kRelTol * ab.norm() * ac.norm() || nn == 0.0) {
     // Degenerate triangle: it is the union of its edges.
-    return SegmentSegmentDistance3(p, q, a, b) <= tol_m ||
-           SegmentSegmentDistance3(p, q, b, c) <= tol_m ||
-           SegmentSegmentDistance3(p, q, a, c) <= tol_m;
+    return ClosestSegmentSegment(p, q, a, b).distance_m <= tol_m ||
+           ClosestSegmentSegment(p, q, b, c).distance_m <= tol_m ||
+           ClosestSegmentSegment(p, q, a, c).distance_m <= tol_m;
   }
   const Eigen::Vector3d nhat = n / nn;
   const double dp = nhat.dot(p - a);
