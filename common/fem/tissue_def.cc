@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "common/base/yaml_field.h"
+
 namespace microdex::fem {
 namespace {
 
@@ -80,28 +82,12 @@ void TissueDef::Validate() const {
 
 namespace {
 
-// Reads an optional field; a present field of the wrong type names file, field and line.
-template <typename T>
-void ReadField(const YAML::Node& root, const std::string& path, const char* field, T& out) {
-  const YAML::Node node = root[field];
-  if (!node) return;
-  try {
-    out = node.as<T>();
-  } catch (const YAML::Exception&) {
-    throw std::runtime_error(path + ": field 'tissue." + field + "' (line " +
-                             std::to_string(node.Mark().line + 1) + "): expected " +
-                             (std::is_same_v<T, std::string> ? "a string"
-                              : std::is_same_v<T, int>       ? "an integer"
-                                                             : "a number"));
-  }
-}
-
 // Reads an optional enumerated field through its parser.
 template <typename E>
 void ReadEnum(const YAML::Node& root, const std::string& path, const char* field,
               E (*parse)(const std::string&), E& out) {
   std::string text;
-  ReadField(root, path, field, text);
+  ReadYamlField(root, path, "tissue.", field, text);
   if (text.empty()) return;
   try {
     out = parse(text);
@@ -149,23 +135,23 @@ TissueDef LoadTissueDef(const std::string& path) {
   }
   TissueDef def;
   std::string name;  // documentation only
-  ReadField(root, path, "name", name);
-  ReadField(root, path, "length_x_m", def.length_x_m);
-  ReadField(root, path, "length_y_m", def.length_y_m);
-  ReadField(root, path, "shear_modulus_Pa", def.shear_modulus_Pa);
-  ReadField(root, path, "thickness_m", def.thickness_m);
-  ReadField(root, path, "max_level", def.max_level);
-  ReadField(root, path, "level", def.level);
+  ReadYamlField(root, path, "tissue.", "name", name);
+  ReadYamlField(root, path, "tissue.", "length_x_m", def.length_x_m);
+  ReadYamlField(root, path, "tissue.", "length_y_m", def.length_y_m);
+  ReadYamlField(root, path, "tissue.", "shear_modulus_Pa", def.shear_modulus_Pa);
+  ReadYamlField(root, path, "tissue.", "thickness_m", def.thickness_m);
+  ReadYamlField(root, path, "tissue.", "max_level", def.max_level);
+  ReadYamlField(root, path, "tissue.", "level", def.level);
   ReadEnum(root, path, "mesh", &ParseMeshKind, def.mesh);
-  ReadField(root, path, "grading", def.grading);
-  ReadField(root, path, "end_resolution", def.end_resolution);
-  ReadField(root, path, "end_levels", def.end_levels);
+  ReadYamlField(root, path, "tissue.", "grading", def.grading);
+  ReadYamlField(root, path, "tissue.", "end_resolution", def.end_resolution);
+  ReadYamlField(root, path, "tissue.", "end_levels", def.end_levels);
   ReadEnum(root, path, "solver", &ParseSolverKind, def.solver);
   ReadEnum(root, path, "ordering", &ParseOrdering, def.ordering);
-  ReadField(root, path, "cg_relative_tolerance", def.cg_relative_tolerance);
-  ReadField(root, path, "cg_max_iterations", def.cg_max_iterations);
-  ReadField(root, path, "max_contact_nodes", def.max_contact_nodes);
-  ReadField(root, path, "pattern_cache_entries", def.pattern_cache_entries);
+  ReadYamlField(root, path, "tissue.", "cg_relative_tolerance", def.cg_relative_tolerance);
+  ReadYamlField(root, path, "tissue.", "cg_max_iterations", def.cg_max_iterations);
+  ReadYamlField(root, path, "tissue.", "max_contact_nodes", def.max_contact_nodes);
+  ReadYamlField(root, path, "tissue.", "pattern_cache_entries", def.pattern_cache_entries);
   try {
     def.Validate();
   } catch (const std::invalid_argument& e) {

@@ -7,6 +7,8 @@
 #include <string>
 #include <type_traits>
 
+#include "common/base/yaml_field.h"
+
 namespace microdex::thread {
 namespace {
 
@@ -153,24 +155,6 @@ ThreadDef ThreadPreset(const std::string& name) {
       "thread preset: expected stiff-nylon-10-0, soft-silk or necklace, got '" + name + "'");
 }
 
-namespace {
-
-// Reads an optional scalar field; a present field of the wrong type names file and field.
-template <typename T>
-void ReadField(const YAML::Node& root, const std::string& path, const char* field, T& out) {
-  const YAML::Node node = root[field];
-  if (!node) return;
-  try {
-    out = node.as<T>();
-  } catch (const YAML::Exception&) {
-    throw std::runtime_error(path + ": field '" + field + "' (line " +
-                             std::to_string(node.Mark().line + 1) + "): expected a " +
-                             (std::is_same_v<T, std::string> ? "string" : "number"));
-  }
-}
-
-}  // namespace
-
 ThreadDef LoadThreadDef(const std::string& path) {
   YAML::Node file;
   try {
@@ -219,7 +203,7 @@ ThreadDef LoadThreadDef(const std::string& path) {
   }
   ThreadDef def;
   std::string base;
-  ReadField(root, path, "base", base);
+  ReadYamlField(root, path, "", "base", base);
   if (!base.empty()) {
     try {
       def = ThreadPreset(base);
@@ -227,30 +211,30 @@ ThreadDef LoadThreadDef(const std::string& path) {
       throw std::runtime_error(path + ": field 'thread.base': " + e.what());
     }
   }
-  ReadField(root, path, "name", def.name);
-  ReadField(root, path, "num_nodes", def.num_nodes);
-  ReadField(root, path, "length_m", def.length_m);
-  ReadField(root, path, "diameter_m", def.diameter_m);
-  ReadField(root, path, "youngs_modulus_Pa", def.youngs_modulus_Pa);
-  ReadField(root, path, "shear_modulus_Pa", def.shear_modulus_Pa);
-  ReadField(root, path, "density_kg_per_m3", def.density_kg_per_m3);
-  ReadField(root, path, "stretch_stiffness_N_per_m", def.stretch_stiffness_N_per_m);
-  ReadField(root, path, "bend_stiffness_N_m", def.bend_stiffness_N_m);
-  ReadField(root, path, "twist_stiffness_N_m", def.twist_stiffness_N_m);
-  ReadField(root, path, "node_mass_kg", def.node_mass_kg);
-  ReadField(root, path, "mass_scale", def.mass_scale);
-  ReadField(root, path, "twist_coupling_N", def.twist_coupling_N);
-  ReadField(root, path, "drag_N_s_per_m2", def.drag_N_s_per_m2);
-  ReadField(root, path, "twist_drag_N_m_s", def.twist_drag_N_m_s);
-  ReadField(root, path, "contact_damping_N_s_per_m", def.contact_damping_N_s_per_m);
-  ReadField(root, path, "contact_force_N", def.contact_force_N);
-  ReadField(root, path, "contact_decay_m", def.contact_decay_m);
-  ReadField(root, path, "contact_cutoff_m", def.contact_cutoff_m);
-  ReadField(root, path, "guard_fraction", def.guard_fraction);
-  ReadField(root, path, "strain_limit", def.strain_limit);
-  ReadField(root, path, "time_step_s", def.time_step_s);
-  ReadField(root, path, "max_grasps", def.max_grasps);
-  ReadField(root, path, "max_contacts", def.max_contacts);
+  ReadYamlField(root, path, "", "name", def.name);
+  ReadYamlField(root, path, "", "num_nodes", def.num_nodes);
+  ReadYamlField(root, path, "", "length_m", def.length_m);
+  ReadYamlField(root, path, "", "diameter_m", def.diameter_m);
+  ReadYamlField(root, path, "", "youngs_modulus_Pa", def.youngs_modulus_Pa);
+  ReadYamlField(root, path, "", "shear_modulus_Pa", def.shear_modulus_Pa);
+  ReadYamlField(root, path, "", "density_kg_per_m3", def.density_kg_per_m3);
+  ReadYamlField(root, path, "", "stretch_stiffness_N_per_m", def.stretch_stiffness_N_per_m);
+  ReadYamlField(root, path, "", "bend_stiffness_N_m", def.bend_stiffness_N_m);
+  ReadYamlField(root, path, "", "twist_stiffness_N_m", def.twist_stiffness_N_m);
+  ReadYamlField(root, path, "", "node_mass_kg", def.node_mass_kg);
+  ReadYamlField(root, path, "", "mass_scale", def.mass_scale);
+  ReadYamlField(root, path, "", "twist_coupling_N", def.twist_coupling_N);
+  ReadYamlField(root, path, "", "drag_N_s_per_m2", def.drag_N_s_per_m2);
+  ReadYamlField(root, path, "", "twist_drag_N_m_s", def.twist_drag_N_m_s);
+  ReadYamlField(root, path, "", "contact_damping_N_s_per_m", def.contact_damping_N_s_per_m);
+  ReadYamlField(root, path, "", "contact_force_N", def.contact_force_N);
+  ReadYamlField(root, path, "", "contact_decay_m", def.contact_decay_m);
+  ReadYamlField(root, path, "", "contact_cutoff_m", def.contact_cutoff_m);
+  ReadYamlField(root, path, "", "guard_fraction", def.guard_fraction);
+  ReadYamlField(root, path, "", "strain_limit", def.strain_limit);
+  ReadYamlField(root, path, "", "time_step_s", def.time_step_s);
+  ReadYamlField(root, path, "", "max_grasps", def.max_grasps);
+  ReadYamlField(root, path, "", "max_contacts", def.max_contacts);
   if (const YAML::Node g = root["gravity_m_per_s2"]) {
     if (!g.IsSequence() || g.size() != 3) {
       throw std::runtime_error(path + ": field 'thread.gravity_m_per_s2' (line " +
