@@ -275,6 +275,10 @@ struct MethodResult {
   double ns_per_query = 0;
   double max_abs_error = 0, rms_error = 0, agreement = 0;
   int error_queries = 0;  // queries the errors are taken over
+  // Distance of the method's deepest needle point from the exact one, over the queries whose
+  // deepest point is well defined (IsolatedMinimum); NaN when the method gives none.
+  double max_point_error = 0;
+  int point_queries = 0;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -296,10 +300,31 @@ double MedianNsPerQuery(int queries, int reps, double budget_s, Fn&& fn) {
   return per_rep[per_rep.size() / 2];
 }
 
+// Whether the exact deepest point of a query is well defined: every needle point inside the
+// segment farther than `radius_m` (along the needle) from it is shallower by more than
+// `margin_m`. Checked on a dense grid of the needle (its own clearance, computed here from the
+// definition). Where it fails (the needle runs nearly parallel to the wall, as on the ideal
+// path), any point of a long stretch is "deepest" and a point error means nothing.
+bool IsolatedMinimum(const Query& q, const ArcTorusClearance& exact, double radius_m,
+                     double margin_m) {
+  constexpr int kGrid = 4000;
+  const Eigen::Isometry3d X_VN = q.torus.X_WV.inverse() * q.arc.X_WN;
+  const double R = q.torus.core_radius_m, r = q.torus.tube_radius_m, rho = q.arc.radius_m;
+  for (int k = 0; k <= kGrid; ++k) {
+    const double s = q.arc.sweep_rad * k / kGrid;
+    if (rho * std::abs(s - exact.s_rad) <= radius_m) continue;
+    const Eigen::Vector3d p = X_VN * Eigen::Vector3d(rho * std::cos(s), rho * std::sin(s), 0);
+    if (!geometry::IsAzimuthInSegment(p.x(), p.y(), q.torus.segment_angle_rad)) continue;
+    const double c = r - std::hypot(std::hypot(p.x(), p.y()) - R, p.z());
+    if (c <= exact.clearance_m + margin_m) return false;
+  }
+  return true;
+}
+
 void Score(const std::vector<ArcTorusClearance>& got, const std::vector<ArcTorusClearance>& ref,
-           bool errors_only_without_contact, MethodResult* m) {
-  double max_e = 0, sum2 = 0;
-  int n = 0, agree = 0;
+           const std::vector<char>& isolated, bool errors_only_without_contact, MethodResult* m) {
+  double max_e = 0, sum2 = 0, max_p = 0;
+  int n = 0, agree = 0, np = 0;
   for (size_t i = 0; i < got.size(); ++i) {
     const bool got_contact = got[i].status == ClearanceStatus::kOk && got[i].contact;
     if (got_contact == ref[i].contact) ++agree;
@@ -309,8 +334,15 @@ void Score(const std::vector<ArcTorusClearance>& got, const std::vector<ArcTorus
     max_e = std::max(max_e, std::isfinite(e) ? e : std::numeric_limits<double>::infinity());
     sum2 += e * e;
     ++n;
+    if (isolated[i]) {
+      const double pe = (got[i].p_WN - ref[i].p_WN).norm();
+      max_p = std::max(max_p, std::isfinite(pe) ? pe : std::numeric_limits<double>::infinity());
+      ++np;
+    }
   }
   m->max_abs_error = max_e;
+  m->max_point_error = max_p;
+  m->point_queries = np;
   m->rms_error = n > 0 ? std::sqrt(sum2 / n) : 0;
   m->agreement = static_cast<double>(agree) / got.size();
   m->error_queries = n;
@@ -330,12 +362,14 @@ struct ReportOptions {
   uint64_t seed = 1;
 };
 
-// The cheapest setting of `name` whose max error is within `tol`; nullptr when none.
+// The cheapest setting of `name` whose max error is within `tol` (and, with `point`, whose
+// deepest point is also within `tol` of the exact one); nullptr when none.
 const MethodResult* Cheapest(const std::vector<MethodResult>& all, const std::string& name,
-                             double tol) {
+                             double tol, bool point = false) {
   const MethodResult* best = nullptr;
   for (const MethodResult& m : all) {
     if (m.name != name || !(m.max_abs_error <= tol)) continue;
+    if (point && !(m.max_point_error <= tol)) continue;
     if (best == nullptr || m.ns_per_query < best->ns_per_query) best = &m;
   }
   return best;
@@ -385,11 +419,18 @@ struct Ratios {
   double sampling_clipped_over_sp = std::numeric_limits<double>::quiet_NaN();
   // The cheapest settings within the tolerance.
   std::string sampling_setting, sampling_clipped_setting, mesh_setting;
+  // The same ratios when the deepest needle point must be within the tolerance too (what the
+  // visual and haptic cues use), over the queries where that point is well defined.
+  double mesh_over_sp_point = std::numeric_limits<double>::quiet_NaN();
+  double sampling_over_sp_point = std::numeric_limits<double>::quiet_NaN();
+  double sampling_clipped_over_sp_point = std::numeric_limits<double>::quiet_NaN();
+  std::string sampling_point_setting, sampling_clipped_point_setting, mesh_point_setting;
 };
 
 struct FamilyResult {
   const Family* family = nullptr;
   int contacts = 0;
+  int isolated = 0;               // queries with a well-defined deepest point
   double tol = 0;                 // 1e-3·r (the smallest r of the family)
   std::vector<MethodResult> all;  // every method and setting
   const MethodResult* sp = nullptr;
@@ -411,6 +452,11 @@ FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps,
     }
     fr.contacts += exact[i].contact;
   }
+  std::vector<char> isolated(queries);
+  for (int i = 0; i < queries; ++i) {
+    isolated[i] = IsolatedMinimum(family.queries[i], exact[i], 0.05 * r_min, fr.tol);
+    fr.isolated += isolated[i];
+  }
   std::vector<ArcTorusClearance> got(queries);
   volatile double sink = 0;
   std::fprintf(stderr, "%s (%d queries, %d in contact)\n", family.name.c_str(), queries,
@@ -421,10 +467,10 @@ FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps,
       got[i] = calc(family.queries[i]);
       sink = sink + got[i].clearance_m;
     });
-    Score(got, exact, false, &m);
+    Score(got, exact, isolated, false, &m);
     fr.all.push_back(m);
-    std::fprintf(stderr, "  %-9s %-30s %12.1f ns  max err %.3g m\n", name.c_str(), setting.c_str(),
-                 m.ns_per_query, m.max_abs_error);
+    std::fprintf(stderr, "  %-9s %-30s %12.1f ns  max err %.3g m  point %.3g m\n", name.c_str(),
+                 setting.c_str(), m.ns_per_query, m.max_abs_error, m.max_point_error);
   };
   struct SpSetting {
     const char* label;
@@ -471,18 +517,20 @@ FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps,
         got[i] = model.Calc(family.queries[i].arc.X_WN, family.queries[i].torus.X_WV);
         sink = sink + got[i].clearance_m;
       });
-      Score(got, exact, true, &m);
+      Score(got, exact, isolated, true, &m);
       fr.all.push_back(m);
-      std::fprintf(stderr, "  %-9s %-30s %12.1f ns  max err %.3g m (over %d no-contact)\n", "mesh",
-                   setting.c_str(), m.ns_per_query, m.max_abs_error, m.error_queries);
+      std::fprintf(stderr,
+                   "  %-9s %-30s %12.1f ns  max err %.3g m  point %.3g m (over %d no-contact)\n",
+                   "mesh", setting.c_str(), m.ns_per_query, m.max_abs_error, m.max_point_error,
+                   m.error_queries);
     }
   }
   // Ratios: cheapest setting within 1e-3·r against the SP default (its most accurate setting).
   for (const MethodResult& m : fr.all) {
     if (m.name == "sp" && m.setting.find("default") != std::string::npos) fr.sp = &m;
   }
-  auto ratio = [&](const char* name, std::string* setting) {
-    const MethodResult* m = Cheapest(fr.all, name, fr.tol);
+  auto ratio = [&](const char* name, std::string* setting, bool point = false) {
+    const MethodResult* m = Cheapest(fr.all, name, fr.tol, point);
     if (m == nullptr) return std::numeric_limits<double>::quiet_NaN();
     if (setting != nullptr) *setting = m->setting;
     return m->ns_per_query / fr.sp->ns_per_query;
@@ -492,6 +540,10 @@ FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps,
   fr.ratios.exact_over_sp = ratio("exact", nullptr);
   fr.ratios.sampling_clipped_over_sp =
       ratio("sampling_clipped", &fr.ratios.sampling_clipped_setting);
+  fr.ratios.mesh_over_sp_point = ratio("mesh", &fr.ratios.mesh_point_setting, true);
+  fr.ratios.sampling_over_sp_point = ratio("sampling", &fr.ratios.sampling_point_setting, true);
+  fr.ratios.sampling_clipped_over_sp_point =
+      ratio("sampling_clipped", &fr.ratios.sampling_clipped_point_setting, true);
   return fr;
 }
 
@@ -503,7 +555,9 @@ void WriteMethodsJson(std::ostream& j, const std::vector<MethodResult>& all, con
       << ", \"max_abs_error\": " << JsonNumber(m.max_abs_error)
       << ", \"rms_error\": " << JsonNumber(m.rms_error)
       << ", \"agreement\": " << JsonNumber(m.agreement)
-      << ", \"error_queries\": " << m.error_queries << "}" << (i + 1 < all.size() ? "," : "")
+      << ", \"error_queries\": " << m.error_queries
+      << ", \"max_point_error\": " << JsonNumber(m.max_point_error)
+      << ", \"point_queries\": " << m.point_queries << "}" << (i + 1 < all.size() ? "," : "")
       << "\n";
   }
 }
@@ -565,6 +619,12 @@ int RunReport(const ReportOptions& opt) {
         << ", \"cheapest_sampling\": \"" << fr.ratios.sampling_setting
         << "\", \"cheapest_sampling_clipped\": \"" << fr.ratios.sampling_clipped_setting
         << "\", \"cheapest_mesh\": \"" << fr.ratios.mesh_setting
+        << "\",\n     \"isolated_queries\": " << fr.isolated
+        << ", \"point_ratios\": {\"mesh_over_sp\": " << JsonNumber(fr.ratios.mesh_over_sp_point)
+        << ", \"sampling_over_sp\": " << JsonNumber(fr.ratios.sampling_over_sp_point)
+        << ", \"sampling_clipped_over_sp\": "
+        << JsonNumber(fr.ratios.sampling_clipped_over_sp_point)
+        << "}, \"cheapest_sampling_point\": \"" << fr.ratios.sampling_point_setting
         << "\", \"sp_queries_per_second\": " << JsonNumber(1e9 / fr.sp->ns_per_query)
         << ",\n     \"goals\": [";
       const std::vector<Goal> goals = CheckGoals(fr);
@@ -603,6 +663,13 @@ int RunReport(const ReportOptions& opt) {
         fr.ratios.mesh_over_sp, setting(fr.ratios.mesh_setting), fr.ratios.sampling_over_sp,
         setting(fr.ratios.sampling_setting), fr.ratios.sampling_clipped_over_sp,
         setting(fr.ratios.sampling_clipped_setting), fr.ratios.exact_over_sp);
+    std::printf(
+        "  with the deepest point within tolerance too (%d queries with a well-defined one): "
+        "mesh/sp %.4g (%s), sampling/sp %.4g (%s), sampling clipped/sp %.4g (%s)\n",
+        fr.isolated, fr.ratios.mesh_over_sp_point, setting(fr.ratios.mesh_point_setting),
+        fr.ratios.sampling_over_sp_point, setting(fr.ratios.sampling_point_setting),
+        fr.ratios.sampling_clipped_over_sp_point,
+        setting(fr.ratios.sampling_clipped_point_setting));
     for (const Goal& g : CheckGoals(fr)) {
       std::printf("  goal %-40s %10.4g  %s\n", g.what.c_str(), g.value, g.met ? "met" : "NOT met");
     }

@@ -170,6 +170,13 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
   EXPECT_EQ(count_matches(family_ratios), 4) << families;
   EXPECT_EQ(count_matches(exact_line), 4) << families;
   EXPECT_EQ(count_matches(std::regex(R"re("goals": \[\{"goal": )re")), 4) << families;
+  // The deepest-point error: zero for the reference itself, and counted per family.
+  EXPECT_EQ(
+      count_matches(std::regex(
+          R"re("name": "exact", "setting": "closed form", [^}]*"max_point_error": 0, "point_queries": [0-9]+)re")),
+      4)
+      << families;
+  EXPECT_EQ(count_matches(std::regex(R"re("point_ratios": \{"mesh_over_sp": )re")), 4) << families;
   EXPECT_EQ(count_matches(std::regex(R"re("met": (true|false))re")),
             4 + 3 * 3)  // the mesh goal only where the mesh answers
       << families;
