@@ -418,6 +418,34 @@ int FindConicExtremaOnCircle(const CircleConic& k, const SpOptions& opt, double 
 
 namespace {
 
+// The lifted needle circle and the conic of the torus of tube radius t on it (appendix B,
+// §4.2.3, (4.15)): shared by the certificate's quick test and its full pass.
+struct LiftedConic {
+  bool ok = false;  // false: lifted circle too ill-conditioned (README_sp.md, "Fallbacks")
+  double lambda = 1, alpha = 0;
+  LiftedCircle lc;
+  CircleConic conic;
+  double phi_size = 0;  // |A| + … + |F|: the scale of φ's values and of their rounding
+};
+
+void LiftLevelTorus(const NeedleInV& nv, double core_r, double tube_t, LiftedConic* out) {
+  LiftedConic& k = *out;
+  // Appendix B, then §4.2.3: lift the torus and the needle circle to S³.
+  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_t);
+  k.lambda = scale.lambda;
+  k.alpha = scale.alpha;
+  k.lc = CalcLiftedCircle(k.lambda * nv.o, nv.e1, nv.e2, k.lambda * nv.rho);
+  const LiftedCircle& lc = k.lc;
+  k.ok = lc.center.allFinite() && lc.bx.allFinite() && lc.by.allFinite() &&
+         lc.radius > kMinLiftedRadius &&
+         std::abs(lc.center.squaredNorm() + lc.radius * lc.radius - 1) <= kLiftedConsistencyTol;
+  if (!k.ok) return;
+  // (4.15), (4.28): the conic on the lifted circle.
+  k.conic = CalcCircleConic(k.alpha, lc);
+  k.phi_size = std::abs(k.conic.a) + std::abs(k.conic.b) + std::abs(k.conic.c) +
+               std::abs(k.conic.d) + std::abs(k.conic.e) + std::abs(k.conic.f);
+}
+
 // One SP pass (§4.2.2–§4.2.4) against the torus of core radius R and tube radius t: the
 // minima of φ(θ) that lie on the clipped arc, as needle parameters. With `all` set, the
 // maxima are kept too (for the sign-change count).
@@ -434,27 +462,21 @@ struct SpPass {
   int interval[8];
 };
 
-// With phi_below finite, only the minima with φ < phi_below·|φ|'s size are kept (and mapped
-// back to the needle), the others cost nothing more.
-void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval* iv, int n_iv,
-               const SpOptions& opt, bool all, double phi_below, SpPass* out) {
+// The extrema part of the pass on an already lifted conic. With phi_below finite, only the
+// minima with φ < phi_below·|φ|'s size are kept (and mapped back to the needle), the others
+// cost nothing more.
+void RunSpPassOnConic(const NeedleInV& nv, const LiftedConic& k, const Interval* iv, int n_iv,
+                      const SpOptions& opt, bool all, double phi_below, SpPass* out) {
   SpPass& r = *out;
   r.ok = false;
   r.n = 0;
-  // Appendix B, then §4.2.3: lift the torus and the needle circle to S³.
-  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_t);
-  const double lambda = scale.lambda;
-  const LiftedCircle lc = CalcLiftedCircle(lambda * nv.o, nv.e1, nv.e2, lambda * nv.rho);
-  r.lifted_radius = lc.radius;
-  r.lift_ok =
-      lc.center.allFinite() && lc.bx.allFinite() && lc.by.allFinite() &&
-      lc.radius > kMinLiftedRadius &&
-      std::abs(lc.center.squaredNorm() + lc.radius * lc.radius - 1) <= kLiftedConsistencyTol;
+  r.lifted_radius = k.lc.radius;
+  r.lift_ok = k.ok;
   if (!r.lift_ok) return;
-  // (4.15), (4.28): the conic on the lifted circle; (4.17)–(4.26): its extrema.
-  const CircleConic conic = CalcCircleConic(scale.alpha, lc);
-  r.phi_size = std::abs(conic.a) + std::abs(conic.b) + std::abs(conic.c) + std::abs(conic.d) +
-               std::abs(conic.e) + std::abs(conic.f);
+  const LiftedCircle& lc = k.lc;
+  const CircleConic& conic = k.conic;
+  r.phi_size = k.phi_size;
+  // (4.17)–(4.26): the extrema of φ on the lifted circle.
   double ct[8], st[8];
   const int n_ext =
       FindConicExtremaOnCircle(conic, opt, ct, st, &r.phi_constant, &r.quartic_fallback);
@@ -474,26 +496,133 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
     if (!(phi < phi_below * r.phi_size)) continue;
     // Back to R³ through (4.13) and P (4.2), then to the needle parameter s.
     const Eigen::Vector4d X = lc.center + lc.radius * (c * lc.bx + sn * lc.by);
-    const Eigen::Vector3d rel = ProjectFromS3(X) / lambda - nv.o;
+    const Eigen::Vector3d rel = ProjectFromS3(X) / k.lambda - nv.o;
     const double rx = rel.dot(nv.e1), ry = rel.dot(nv.e2);
     const double s = WrapTo2Pi(std::atan2(ry, rx));
     const int i = FindInterval(iv, n_iv, s);
     if (i < 0) continue;
     const double s_in = std::clamp(s, iv[i].lo, iv[i].hi);
     const double inv = 1 / std::sqrt(rx * rx + ry * ry);
-    const int k = r.n++;
-    r.s[k] = s_in;
+    const int m = r.n++;
+    r.s[m] = s_in;
     if (s_in == s && std::isfinite(inv)) {
-      r.cos_s[k] = rx * inv;
-      r.sin_s[k] = ry * inv;
+      r.cos_s[m] = rx * inv;
+      r.sin_s[m] = ry * inv;
     } else {
-      r.cos_s[k] = std::cos(s_in);
-      r.sin_s[k] = std::sin(s_in);
+      r.cos_s[m] = std::cos(s_in);
+      r.sin_s[m] = std::sin(s_in);
     }
-    r.phi[k] = phi;
-    r.is_min[k] = is_min;
-    r.interval[k] = i;
+    r.phi[m] = phi;
+    r.is_min[m] = is_min;
+    r.interval[m] = i;
   }
+}
+
+void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval* iv, int n_iv,
+               const SpOptions& opt, bool all, double phi_below, SpPass* out) {
+  LiftedConic k;
+  LiftLevelTorus(nv, core_r, tube_t, &k);
+  RunSpPassOnConic(nv, k, iv, n_iv, opt, all, phi_below, out);
+}
+
+// The position (cos θ, sin θ) on the lifted circle of the needle point with parameter s given
+// by (cos s, sin s): (4.3), then the coordinates on (b_x, b_y). False when it is not defined.
+bool CalcLiftedAngle(const NeedleInV& nv, const LiftedConic& k, double cs, double sn, double* cos_t,
+                     double* sin_t) {
+  const Eigen::Vector3d x = k.lambda * (nv.o + nv.rho * (cs * nv.e1 + sn * nv.e2));
+  const Eigen::Vector4d rel = LiftToS3(x) - k.lc.center;
+  const double a = rel.dot(k.lc.bx), b = rel.dot(k.lc.by);
+  const double n2 = a * a + b * b;
+  if (!(n2 > 0)) return false;
+  const double inv = 1 / std::sqrt(n2);
+  *cos_t = a * inv;
+  *sin_t = b * inv;
+  return true;
+}
+
+// The certificate's quick test (README_sp.md, "Certificate"). The level torus goes through
+// the deepest point found, θ*, so φ_t(θ*) ≈ 0, and φ_t'(θ*) ≈ 0 when the ascent stopped
+// inside a piece. With τ = tan((θ − θ*)/2), q(τ) = (1 + τ²)² φ_t(θ* + Δ) is a quartic
+// q₀ + q₁τ + τ² h(τ), h = q₂ + q₃τ + q₄τ². If h ≥ m ≥ 0 on the τ-range of every piece, then
+// q ≥ q₀ + q₁τ + mτ² there, and that quadratic's minimum ≥ −ε proves φ_t ≥ −ε on the clipped
+// arc: no point farther than t, without the quartic (4.26). Only sufficient: when it fails,
+// the full pass answers.
+bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interval* iv, int n_iv,
+                         const double* cos_lo, const double* sin_lo, const double* cos_hi,
+                         const double* sin_hi, double cos_best, double sin_best, double eps) {
+  double ca, sa;
+  if (!CalcLiftedAngle(nv, k, cos_best, sin_best, &ca, &sa)) return false;
+  // The conic rotated to θ*: φ = A'cos²Δ + B'cosΔ sinΔ + C'sin²Δ + D'cosΔ + E'sinΔ + F.
+  const CircleConic& q = k.conic;
+  const double cc = ca * ca, ss = sa * sa, cs = ca * sa;
+  const double a1 = q.a * cc + q.b * cs + q.c * ss;
+  const double c1 = q.a * ss - q.b * cs + q.c * cc;
+  const double b1 = 2 * (q.c - q.a) * cs + q.b * (cc - ss);
+  const double d1 = q.d * ca + q.e * sa;
+  const double e1 = q.e * ca - q.d * sa;
+  // cos Δ = (1 − τ²)/(1 + τ²), sin Δ = 2τ/(1 + τ²).
+  const double k0 = a1 + d1 + q.f;
+  const double k1 = 2 * (b1 + e1);
+  const double k2 = -2 * a1 + 4 * c1 + 2 * q.f;
+  const double k3 = 2 * (e1 - b1);
+  const double k4 = a1 - d1 + q.f;
+  const auto h = [&](double tau) { return k2 + tau * (k3 + tau * k4); };
+  // Minimum of k0 + k1 τ + m τ² over [lo, hi] (infinite ends allowed when m > 0).
+  const auto lower_ok = [&](double m, double lo, double hi) {
+    double v = std::numeric_limits<double>::infinity();
+    if (std::isfinite(lo)) v = std::min(v, k0 + lo * (k1 + lo * m));
+    if (std::isfinite(hi)) v = std::min(v, k0 + hi * (k1 + hi * m));
+    if (m > 0) {
+      const double tv = -k1 / (2 * m);
+      if (tv > lo && tv < hi) v = std::min(v, k0 - 0.25 * k1 * k1 / m);
+    } else if (!std::isfinite(lo) || !std::isfinite(hi)) {
+      return false;
+    }
+    return v >= -eps;
+  };
+  for (int i = 0; i < n_iv; ++i) {
+    double ta, tb;
+    bool whole = iv[i].hi - iv[i].lo >= kTwoPi;
+    if (!whole) {
+      double c_lo, s_lo, c_hi, s_hi;
+      if (!CalcLiftedAngle(nv, k, cos_lo[i], sin_lo[i], &c_lo, &s_lo) ||
+          !CalcLiftedAngle(nv, k, cos_hi[i], sin_hi[i], &c_hi, &s_hi)) {
+        return false;
+      }
+      // Δ of the ends relative to θ*, as τ = tan(Δ/2) = sin Δ / (1 + cos Δ).
+      const double cl = c_lo * ca + s_lo * sa, sl = s_lo * ca - c_lo * sa;
+      const double ch = c_hi * ca + s_hi * sa, sh = s_hi * ca - c_hi * sa;
+      // Near Δ = π the piece is treated as wrapping (whole circle: conservative).
+      constexpr double kNearAntipode = 1e-6;
+      if (cl <= -1 + kNearAntipode || ch <= -1 + kNearAntipode) {
+        whole = true;
+      } else {
+        ta = sl / (1 + cl);
+        tb = sh / (1 + ch);
+        // θ grows with s, so the piece runs counter-clockwise from θ(lo) to θ(hi); τ grows
+        // with Δ on (−π, π): ta > tb means the piece passes Δ = π.
+        whole = ta > tb;
+      }
+    }
+    if (whole) {
+      // Every τ, and Δ = π (τ = ∞), where φ = k₄.
+      if (!(k4 > 0)) return false;
+      const double m = k2 - 0.25 * k3 * k3 / k4;
+      if (!(m >= 0)) return false;
+      if (!lower_ok(m, -std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity())) {
+        return false;
+      }
+      continue;
+    }
+    double m = std::min(h(ta), h(tb));
+    if (k4 > 0) {
+      const double tv = -k3 / (2 * k4);
+      if (tv > ta && tv < tb) m = std::min(m, h(tv));
+    }
+    if (!(m >= 0) || !lower_ok(m, ta, tb)) return false;
+  }
+  return true;
 }
 
 // The deepest point found so far: the needle parameter of the largest distance² to the core.
@@ -605,13 +734,15 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   Candidate cand[kMaxCandidates];
   int n_cand = 0;
   bool deep = false;
+  double cos_lo[kMaxIntervals], sin_lo[kMaxIntervals], cos_hi[kMaxIntervals], sin_hi[kMaxIntervals];
   for (int i = 0; i < n_iv; ++i) {
-    for (const double s : {iv[i].lo, iv[i].hi}) {
-      double cs, sn;
-      CosSin(s, &cs, &sn);
-      const Candidate c =
-          MakeCandidate(nv, core_r, s, cs, sn, i,
-                        s == iv[i].lo ? CandidateKind::kLowEnd : CandidateKind::kHighEnd);
+    CosSin(iv[i].lo, &cos_lo[i], &sin_lo[i]);
+    CosSin(iv[i].hi, &cos_hi[i], &sin_hi[i]);
+    for (int end = 0; end < 2; ++end) {
+      const Candidate c = end == 0 ? MakeCandidate(nv, core_r, iv[i].lo, cos_lo[i], sin_lo[i], i,
+                                                   CandidateKind::kLowEnd)
+                                   : MakeCandidate(nv, core_r, iv[i].hi, cos_hi[i], sin_hi[i], i,
+                                                   CandidateKind::kHighEnd);
       deep = deep || IsDeep(c.f, core_r);
       cand[n_cand++] = c;
     }
@@ -687,8 +818,16 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   for (int round = 0; round < rounds; ++round) {
     ++diag.certify_passes;
     const double t = std::max(std::sqrt(best.f), kMinCertifyRel * core_r);
+    LiftedConic level;
+    LiftLevelTorus(nv, core_r, t, &level);
+    if (opt.quick_certificate && level.ok &&
+        ProveNoFartherPoint(nv, level, iv, n_iv, cos_lo, sin_lo, cos_hi, sin_hi, best.cos_s,
+                            best.sin_s, kCertifyPhiRel * level.phi_size)) {
+      ++diag.certify_quick;
+      break;
+    }
     SpPass cert;
-    RunSpPass(nv, core_r, t, iv, n_iv, opt, false, -kCertifyPhiRel, &cert);
+    RunSpPassOnConic(nv, level, iv, n_iv, opt, false, -kCertifyPhiRel, &cert);
     int n_start = 0;
     Candidate starts[kMaxCandidates];
     if (cert.ok) {

@@ -42,7 +42,12 @@ struct SpOptions {
   // With the certificate, run the thesis's pass against the tube wall first (as the thesis
   // does; always run when diagnostics are requested or without the certificate). Off, the
   // level-set search starts at the arc ends: the same answer, usually one pass less.
-  bool wall_pass_first = false;  // stop at a Newton step below this: f is then off by O(step²)
+  bool wall_pass_first = false;
+  // Each certificate round first tries the quick test (README_sp.md, "Certificate"): with the
+  // level torus through the deepest point, the conic deflated there proves "no farther point"
+  // without the quartic (4.26); the full pass runs only when it cannot. Off: always the full
+  // pass (the same answer, for comparison).
+  bool quick_certificate = true;
 };
 
 // What the SP path did for one query (tests, benchmark, telemetry). Optional output.
@@ -53,6 +58,7 @@ struct SpDiagnostics {
   bool deep_fallback = false;     // a point ≥ R from the core circle: exact method answered
   int certify_passes = 0;         // SP passes against level tori
   int certify_improvements = 0;   // of which found a farther point than the ascent had
+  int certify_quick = 0;          // of which settled by the quick test (no quartic)
   int num_extrema = 0;            // critical points of φ found on the whole lifted circle
   int num_intervals = 0;          // pieces of the arc inside the segment's azimuth range
   int num_sign_changes = 0;       // sign changes of φ along the clipped arc (§4.2.4)

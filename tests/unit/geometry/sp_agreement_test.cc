@@ -309,6 +309,45 @@ TEST(SpAgreementTest, EverySettingClassifiesLikeTheExactMethod) {
   EXPECT_GT(checked, kSmallSetCases * 8 / 10);
 }
 
+// The certificate's quick test (no quartic) only proves what the full pass would confirm:
+// with it and without it the answer is the same, also where the full pass finds a farther
+// point than the ascent (a second local maximum), and the quick test is what settles most
+// training-like queries.
+TEST(SpAgreementTest, QuickCertificateAgreesWithTheFullPass) {
+  SpOptions full;
+  full.quick_certificate = false;
+  std::mt19937_64 rng(4242);
+  long ok = 0, settled_quick = 0, near_core = 0, farther_found = 0;
+  double max_diff_rel = 0;
+  for (int i = 0; i < kSmallSetCases; ++i) {
+    const RandomArcTorus c =
+        i % 3 == 0 ? MakeNearIdeal(rng)
+                   : (i % 3 == 1 ? MakeCrossing(rng) : testing::MakeNearCoreArcTorus(rng));
+    const ArcTorusClearance quick = CalcArcTorusClearanceSP(c.arc, c.torus);
+    const ArcTorusClearance slow = CalcArcTorusClearanceSP(c.arc, c.torus, full);
+    ASSERT_EQ(quick.status, slow.status) << Stats::Describe(c);
+    if (quick.status != ClearanceStatus::kOk) continue;
+    ++ok;
+    const double diff = std::abs(quick.clearance_m - slow.clearance_m) / c.torus.core_radius_m;
+    EXPECT_LE(diff, 1e-13) << Stats::Describe(c);
+    max_diff_rel = std::max(max_diff_rel, diff);
+    SpDiagnostics dq, ds;
+    CalcArcTorusClearanceSP(c.arc, c.torus, SpOptions{}, &dq);
+    CalcArcTorusClearanceSP(c.arc, c.torus, full, &ds);
+    farther_found += ds.certify_improvements > 0;
+    if (i % 3 != 1) {
+      ++near_core;
+      settled_quick += dq.certify_quick > 0;
+    }
+    if (::testing::Test::HasFailure()) break;
+  }
+  std::printf(
+      "[ quick certificate ] cases %ld, max |quick - full| = %.3g R, full pass found a farther "
+      "point in %ld, quick test settled %ld of %ld near-core\n",
+      ok, max_diff_rel, farther_found, settled_quick, near_core);
+  EXPECT_GT(settled_quick, near_core / 2);
+}
+
 TEST(SpAgreementTest, InvariantUnderRigidMotionAndUniformScaling) {
   std::mt19937_64 rng(99);
   double max_rigid = 0, max_scale = 0;
