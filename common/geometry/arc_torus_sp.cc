@@ -273,46 +273,82 @@ int FindInterval(const Interval* iv, int n, double s) {
 
 }  // namespace
 
-LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
-                              const Eigen::Vector3d& e2, double rho) {
+namespace {
+
+// The lifted circle with its axes scaled by its radius, a_x = R̂ b_x and a_y = R̂ b_y: all that
+// the conic (4.15) and the map back (4.13) need, formed with three divisions and one square
+// root (unit axes cost three more of each, on the critical path of every pass).
+struct ScaledLiftedCircle {
+  Eigen::Vector4d center, ax, ay;
+  double radius_sq = 0;  // R̂²
+};
+
+ScaledLiftedCircle LiftCircleScaled(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                                    const Eigen::Vector3d& e2, double rho) {
   // The needle circle is its plane n·x = n·o cut by its sphere |x − o|² = ρ². Through P (4.2)
   // each becomes a hyperplane of R⁴: (n, n·o)·X = n·o and (−2o, 1 − k)·X = −(1 + k) with
   // k = |o|² − ρ² (substitute x = (l, m, p)/(1 − q), |x|² = (1 + q)/(1 − q)). Their
   // intersection is the plane π of (4.7); its point nearest the origin is the centre c (4.8).
-  // This replaces the triple cross products of (4.7) by Gram–Schmidt on two normals: the
-  // same c, without subtracting nearly equal lifted points.
+  // This replaces the triple cross products of (4.7) by Gram–Schmidt on two normals (kept
+  // unnormalised: c is a combination of them): the same c, without subtracting nearly equal
+  // lifted points.
   const Eigen::Vector3d n = e1.cross(e2);  // unit: e1, e2 are orthonormal
   const double h1 = n.dot(o);
   const double k = o.squaredNorm() - rho * rho;
   const Eigen::Vector4d n1(n.x(), n.y(), n.z(), h1);
   const Eigen::Vector4d n2(-2 * o.x(), -2 * o.y(), -2 * o.z(), 1 - k);
   const double h2 = -(1 + k);
-  const double inv1 = 1 / std::sqrt(1 + h1 * h1);  // |n1| = √(1 + h1²)
-  const Eigen::Vector4d u1 = n1 * inv1;
-  const double c1 = h1 * inv1;  // component of c along u1
-  const double n2u1 = n2.dot(u1);
-  const Eigen::Vector4d n2p = n2 - n2u1 * u1;
-  const double inv2 = 1 / n2p.norm();
-  const double c2 = (h2 - n2u1 * c1) * inv2;
-  LiftedCircle lc;
-  lc.center = c1 * u1 + (c2 * inv2) * n2p;
+  const double inv_n1_sq = 1 / (1 + h1 * h1);  // 1/|n1|²
+  const double n2n1 = n2.dot(n1);
+  const Eigen::Vector4d n2p = n2 - (n2n1 * inv_n1_sq) * n1;  // n2 ⊥ n1
+  const double inv_n2p_sq = 1 / n2p.squaredNorm();
+  ScaledLiftedCircle lc;
+  lc.center = (h1 * inv_n1_sq) * n1 + ((h2 - n2n1 * h1 * inv_n1_sq) * inv_n2p_sq) * n2p;
   // (4.9)–(4.10): radius and first axis through the lift of the needle's s = 0 point.
   const Eigen::Vector3d x0 = o + rho * e1;
   const double rho2 = x0.squaredNorm();
   const double inv = 1 / (rho2 + 1);
   const Eigen::Vector4d lifted0(2 * x0.x() * inv, 2 * x0.y() * inv, 2 * x0.z() * inv,
                                 (rho2 - 1) * inv);  // (4.3)
-  const Eigen::Vector4d r0 = lifted0 - lc.center;
-  lc.radius = r0.norm();
-  lc.bx = r0 * (1 / lc.radius);
+  lc.ax = lifted0 - lc.center;
+  lc.radius_sq = lc.ax.squaredNorm();
   // (4.11)–(4.12): the second axis, here the lifted tangent at s = 0 (in π and ⊥ b_x), which
-  // also orients θ with s.
+  // also orients θ with s; (|x0|² + 1)/2 times dP⁻¹(x0)·ρe2, the scale being irrelevant.
   const Eigen::Vector3d v = rho * e2;
-  const double xv = x0.dot(v);
-  const Eigen::Vector3d t3 = 2 * inv * v - 4 * inv * inv * xv * x0;
-  Eigen::Vector4d t(t3.x(), t3.y(), t3.z(), 4 * inv * inv * xv);
-  t -= t.dot(lc.bx) * lc.bx;
-  lc.by = t * (1 / t.norm());
+  const double two_inv_xv = 2 * inv * x0.dot(v);
+  const Eigen::Vector3d t3 = v - two_inv_xv * x0;
+  Eigen::Vector4d t(t3.x(), t3.y(), t3.z(), two_inv_xv);
+  t -= (t.dot(lc.ax) / lc.radius_sq) * lc.ax;
+  lc.ay = t * std::sqrt(lc.radius_sq / t.squaredNorm());
+  return lc;
+}
+
+// (4.15): G = α²(l² + m²) − (p² + q²) at c + cos θ a_x + sin θ a_y.
+CircleConic CalcScaledCircleConic(double alpha, const ScaledLiftedCircle& lc) {
+  const double a2 = alpha * alpha;
+  const auto q = [a2](const Eigen::Vector4d& u, const Eigen::Vector4d& v) {
+    return a2 * (u[0] * v[0] + u[1] * v[1]) - u[2] * v[2] - u[3] * v[3];
+  };
+  CircleConic k;
+  k.a = q(lc.ax, lc.ax);
+  k.b = 2 * q(lc.ax, lc.ay);
+  k.c = q(lc.ay, lc.ay);
+  k.d = 2 * q(lc.center, lc.ax);
+  k.e = 2 * q(lc.center, lc.ay);
+  k.f = q(lc.center, lc.center);
+  return k;
+}
+
+}  // namespace
+
+LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                              const Eigen::Vector3d& e2, double rho) {
+  const ScaledLiftedCircle scaled = LiftCircleScaled(o, e1, e2, rho);
+  LiftedCircle lc;
+  lc.center = scaled.center;
+  lc.radius = std::sqrt(scaled.radius_sq);
+  lc.bx = scaled.ax * (1 / lc.radius);
+  lc.by = scaled.ay * (1 / lc.radius);
   return lc;
 }
 
@@ -423,7 +459,8 @@ namespace {
 struct LiftedConic {
   bool ok = false;  // false: lifted circle too ill-conditioned (README_sp.md, "Fallbacks")
   double lambda = 1, alpha = 0;
-  LiftedCircle lc;
+  ScaledLiftedCircle lc;
+  double radius = 0;  // R̂
   CircleConic conic;
   double phi_size = 0;  // |A| + … + |F|: the scale of φ's values and of their rounding
 };
@@ -434,14 +471,15 @@ void LiftLevelTorus(const NeedleInV& nv, double core_r, double tube_t, LiftedCon
   const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_t);
   k.lambda = scale.lambda;
   k.alpha = scale.alpha;
-  k.lc = CalcLiftedCircle(k.lambda * nv.o, nv.e1, nv.e2, k.lambda * nv.rho);
-  const LiftedCircle& lc = k.lc;
-  k.ok = lc.center.allFinite() && lc.bx.allFinite() && lc.by.allFinite() &&
-         lc.radius > kMinLiftedRadius &&
-         std::abs(lc.center.squaredNorm() + lc.radius * lc.radius - 1) <= kLiftedConsistencyTol;
+  k.lc = LiftCircleScaled(k.lambda * nv.o, nv.e1, nv.e2, k.lambda * nv.rho);
+  const ScaledLiftedCircle& lc = k.lc;
+  k.radius = std::sqrt(lc.radius_sq);
+  k.ok = lc.center.allFinite() && lc.ax.allFinite() && lc.ay.allFinite() &&
+         k.radius > kMinLiftedRadius &&
+         std::abs(lc.center.squaredNorm() + lc.radius_sq - 1) <= kLiftedConsistencyTol;
   if (!k.ok) return;
   // (4.15), (4.28): the conic on the lifted circle.
-  k.conic = CalcCircleConic(k.alpha, lc);
+  k.conic = CalcScaledCircleConic(k.alpha, lc);
   k.phi_size = std::abs(k.conic.a) + std::abs(k.conic.b) + std::abs(k.conic.c) +
                std::abs(k.conic.d) + std::abs(k.conic.e) + std::abs(k.conic.f);
 }
@@ -470,10 +508,10 @@ void RunSpPassOnConic(const NeedleInV& nv, const LiftedConic& k, const Interval*
   SpPass& r = *out;
   r.ok = false;
   r.n = 0;
-  r.lifted_radius = k.lc.radius;
+  r.lifted_radius = k.radius;
   r.lift_ok = k.ok;
   if (!r.lift_ok) return;
-  const LiftedCircle& lc = k.lc;
+  const ScaledLiftedCircle& lc = k.lc;
   const CircleConic& conic = k.conic;
   r.phi_size = k.phi_size;
   // (4.17)–(4.26): the extrema of φ on the lifted circle.
@@ -495,7 +533,7 @@ void RunSpPassOnConic(const NeedleInV& nv, const LiftedConic& k, const Interval*
     const double phi = conic.Eval(c, sn);
     if (!(phi < phi_below * r.phi_size)) continue;
     // Back to R³ through (4.13) and P (4.2), then to the needle parameter s.
-    const Eigen::Vector4d X = lc.center + lc.radius * (c * lc.bx + sn * lc.by);
+    const Eigen::Vector4d X = lc.center + (c * lc.ax + sn * lc.ay);
     const Eigen::Vector3d rel = ProjectFromS3(X) / k.lambda - nv.o;
     const double rx = rel.dot(nv.e1), ry = rel.dot(nv.e2);
     const double s = WrapTo2Pi(std::atan2(ry, rx));
@@ -531,7 +569,7 @@ bool CalcLiftedAngle(const NeedleInV& nv, const LiftedConic& k, double cs, doubl
                      double* sin_t) {
   const Eigen::Vector3d x = k.lambda * (nv.o + nv.rho * (cs * nv.e1 + sn * nv.e2));
   const Eigen::Vector4d rel = LiftToS3(x) - k.lc.center;
-  const double a = rel.dot(k.lc.bx), b = rel.dot(k.lc.by);
+  const double a = rel.dot(k.lc.ax), b = rel.dot(k.lc.ay);  // R̂ (cos θ, sin θ)
   const double n2 = a * a + b * b;
   if (!(n2 > 0)) return false;
   const double inv = 1 / std::sqrt(n2);
