@@ -563,19 +563,39 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
   RunSpPassOnConic(nv, k, iv, n_iv, opt, all, phi_below, out);
 }
 
-// The position (cos θ, sin θ) on the lifted circle of the needle point with parameter s given
-// by (cos s, sin s): (4.3), then the coordinates on (b_x, b_y). False when it is not defined.
-bool CalcLiftedAngle(const NeedleInV& nv, const LiftedConic& k, double cs, double sn, double* cos_t,
-                     double* sin_t) {
+// The direction (a, b) ∝ (cos θ, sin θ), with a positive factor, of the lifted needle point
+// with parameter s given by (cos s, sin s) on the lifted circle: (N (X − c))·(a_x, a_y) with
+// X = P⁻¹(x) (4.3) and N = |x|² + 1, so no division.
+void CalcLiftedDirection(const NeedleInV& nv, const LiftedConic& k, double cs, double sn, double* a,
+                         double* b) {
   const Eigen::Vector3d x = k.lambda * (nv.o + nv.rho * (cs * nv.e1 + sn * nv.e2));
-  const Eigen::Vector4d rel = LiftToS3(x) - k.lc.center;
-  const double a = rel.dot(k.lc.ax), b = rel.dot(k.lc.ay);  // R̂ (cos θ, sin θ)
-  const double n2 = a * a + b * b;
-  if (!(n2 > 0)) return false;
-  const double inv = 1 / std::sqrt(n2);
-  *cos_t = a * inv;
-  *sin_t = b * inv;
-  return true;
+  const double x2 = x.squaredNorm();
+  const Eigen::Vector4d rel =
+      Eigen::Vector4d(2 * x.x(), 2 * x.y(), 2 * x.z(), x2 - 1) - (x2 + 1) * k.lc.center;
+  *a = rel.dot(k.lc.ax);
+  *b = rel.dot(k.lc.ay);
+}
+
+// The minimum of c₁ + c₂τ + c₃τ² + c₄τ³ over [lo, hi]: at an end or at a root of the
+// derivative c₂ + 2c₃τ + 3c₄τ² inside (stable quadratic formula).
+double CubicMinimum(double c1, double c2, double c3, double c4, double lo, double hi) {
+  const auto cubic = [&](double tau) { return c1 + tau * (c2 + tau * (c3 + tau * c4)); };
+  double v = std::min(cubic(lo), cubic(hi));
+  const double qa = 3 * c4, qb = 2 * c3, qc = c2;
+  if (qa == 0) {
+    if (qb != 0) {
+      const double t = -qc / qb;
+      if (t > lo && t < hi) v = std::min(v, cubic(t));
+    }
+    return v;
+  }
+  const double disc = qb * qb - 4 * qa * qc;
+  if (disc < 0) return v;
+  const double w = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+  for (const double t : {w / qa, w != 0 ? qc / w : 0.0}) {
+    if (t > lo && t < hi) v = std::min(v, cubic(t));
+  }
+  return v;
 }
 
 // The certificate's quick test (README_sp.md, "Certificate"). The level torus goes through
@@ -589,7 +609,15 @@ bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interv
                          const double* cos_lo, const double* sin_lo, const double* cos_hi,
                          const double* sin_hi, double cos_best, double sin_best, double eps) {
   double ca, sa;
-  if (!CalcLiftedAngle(nv, k, cos_best, sin_best, &ca, &sa)) return false;
+  {
+    double a, b;
+    CalcLiftedDirection(nv, k, cos_best, sin_best, &a, &b);
+    const double n2 = a * a + b * b;
+    if (!(n2 > 0)) return false;
+    const double inv = 1 / std::sqrt(n2);
+    ca = a * inv;
+    sa = b * inv;
+  }
   // The conic rotated to θ*: φ = A'cos²Δ + B'cosΔ sinΔ + C'sin²Δ + D'cosΔ + E'sinΔ + F.
   const CircleConic& q = k.conic;
   const double cc = ca * ca, ss = sa * sa, cs = ca * sa;
@@ -622,21 +650,23 @@ bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interv
     double ta, tb;
     bool whole = iv[i].hi - iv[i].lo >= kTwoPi;
     if (!whole) {
-      double c_lo, s_lo, c_hi, s_hi;
-      if (!CalcLiftedAngle(nv, k, cos_lo[i], sin_lo[i], &c_lo, &s_lo) ||
-          !CalcLiftedAngle(nv, k, cos_hi[i], sin_hi[i], &c_hi, &s_hi)) {
-        return false;
-      }
-      // Δ of the ends relative to θ*, as τ = tan(Δ/2) = sin Δ / (1 + cos Δ).
-      const double cl = c_lo * ca + s_lo * sa, sl = s_lo * ca - c_lo * sa;
-      const double ch = c_hi * ca + s_hi * sa, sh = s_hi * ca - c_hi * sa;
+      // Δ of the ends relative to θ*, as τ = tan(Δ/2) = sin Δ / (1 + cos Δ), from the ends'
+      // directions (a, b) = n (cos θ, sin θ): τ = (b ca − a sa) / (n + a ca + b sa).
+      // θ(0) = 0: b_x goes through the lift of s = 0.
+      double a_lo = 1, b_lo = 0, a_hi, b_hi;
+      if (iv[i].lo != 0) CalcLiftedDirection(nv, k, cos_lo[i], sin_lo[i], &a_lo, &b_lo);
+      CalcLiftedDirection(nv, k, cos_hi[i], sin_hi[i], &a_hi, &b_hi);
+      const double n_lo = std::sqrt(a_lo * a_lo + b_lo * b_lo);
+      const double n_hi = std::sqrt(a_hi * a_hi + b_hi * b_hi);
+      const double cl = a_lo * ca + b_lo * sa, sl = b_lo * ca - a_lo * sa;
+      const double ch = a_hi * ca + b_hi * sa, sh = b_hi * ca - a_hi * sa;
       // Near Δ = π the piece is treated as wrapping (whole circle: conservative).
       constexpr double kNearAntipode = 1e-6;
-      if (cl <= -1 + kNearAntipode || ch <= -1 + kNearAntipode) {
+      if (!(cl > (-1 + kNearAntipode) * n_lo) || !(ch > (-1 + kNearAntipode) * n_hi)) {
         whole = true;
       } else {
-        ta = sl / (1 + cl);
-        tb = sh / (1 + ch);
+        ta = sl / (n_lo + cl);
+        tb = sh / (n_hi + ch);
         // θ grows with s, so the piece runs counter-clockwise from θ(lo) to θ(hi); τ grows
         // with Δ on (−π, π): ta > tb means the piece passes Δ = π.
         whole = ta > tb;
@@ -658,7 +688,21 @@ bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interv
       const double tv = -k3 / (2 * k4);
       if (tv > ta && tv < tb) m = std::min(m, h(tv));
     }
-    if (!(m >= 0) || !lower_ok(m, ta, tb)) return false;
+    if (m >= 0 && lower_ok(m, ta, tb)) continue;
+    // A piece on one side of θ* (θ* at its end, or outside it): q = q₀ + τ c(τ) with the
+    // cubic c = q₁ + q₂τ + q₃τ² + q₄τ³, so c ≥ 0 on τ ≥ 0 (c ≤ 0 on τ ≤ 0) proves q ≥ q₀.
+    // An end that rounding puts just across θ* adds a sliver |τ| ≤ 1 where |τ c| ≤ |τ| Σ|qᵢ|:
+    // q₀ minus that ≥ −ε/2 there; on the main part c may dip below 0 by rounding as long as
+    // τ_max·min c ≥ −(q₀ + ε)/2, which keeps q ≥ (q₀ − ε)/2 ≥ −ε.
+    const double sum_k = std::abs(k1) + std::abs(k2) + std::abs(k3) + std::abs(k4);
+    const bool above = ta > -1 && tb > 0 && k0 - std::max(0.0, -ta) * sum_k >= -0.5 * eps &&
+                       tb * std::min(0.0, CubicMinimum(k1, k2, k3, k4, std::max(ta, 0.0), tb)) >=
+                           -0.5 * (k0 + eps);
+    const bool below =
+        !above && tb < 1 && ta < 0 && k0 - std::max(0.0, tb) * sum_k >= -0.5 * eps &&
+        -ta * std::min(0.0, CubicMinimum(-k1, k2, -k3, k4, std::max(-tb, 0.0), -ta)) >=
+            -0.5 * (k0 + eps);
+    if (!above && !below) return false;
   }
   return true;
 }
@@ -668,14 +712,19 @@ struct Best {
   double f = -1, s = 0, cos_s = 1, sin_s = 0;
 };
 
+// A piece end where the distance grows into the piece (the ascent starts there).
+bool PointsInward(const Candidate& c) {
+  return (c.kind == CandidateKind::kLowEnd && c.df > 0) ||
+         (c.kind == CandidateKind::kHighEnd && c.df < 0);
+}
+
 // Distance ascent from one candidate, keeping the best. Returns the f it reached.
 double TryCandidate(const NeedleInV& nv, double core_r, const Interval* iv, const Candidate& c,
                     const SpOptions& opt, Best* best) {
   double s = c.s, cs = c.cos_s, sn = c.sin_s;
   double f = c.f;
-  bool ascend = opt.polish_max_iters > 0;
-  if (c.kind == CandidateKind::kLowEnd) ascend = ascend && c.df > 0;
-  if (c.kind == CandidateKind::kHighEnd) ascend = ascend && c.df < 0;
+  const bool ascend =
+      opt.polish_max_iters > 0 && (c.kind == CandidateKind::kInterior || PointsInward(c));
   if (ascend) {
     f = AscendCoreDistSq(nv, core_r, iv[c.interval], s, cs, sn, c.e(), opt, &s, &cs, &sn);
   }
