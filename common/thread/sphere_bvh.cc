@@ -2,43 +2,183 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/base/check.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace microdex::thread {
 namespace {
 
-// Fixed traversal stack: FindCollision pushes two pairs per split and a pair's depth is at most
-// height(left) + height(right), so 2 * (2 * 32) covers any tree of up to 2^32 leaves.
+// Fall-back stack: FindCollision pushes two pairs per split and a pair's depth is at most
+// height(p) + height(q), so 2 * (2 * 32) covers any tree of up to 2^32 leaves.
 constexpr int kStackCapacity = 128;
-constexpr double kRelativeSlack = 1e-12;
+// Smallest traversal queue; it holds at least four pending pairs per tree node.
+constexpr size_t kMinQueue = 256;
 
-struct PendingPair {
-  int p;
-  int q;
+// Rounding margins of the single-precision spheres (float epsilon is 2^-23, unit roundoff
+// 2^-24). A radius is grown by 2^-18 of itself (32 epsilon: the few roundings of the radius,
+// of the centre's offset w (b - a) <= 2 r, and of the overlap test itself) plus 2^-21 of the
+// L1 norms of the two points or centres it is built from (the centre's rounding, at most
+// 2^-24 of their size per operation and coordinate). Checked by the containment test in
+// double precision.
+constexpr float kGrow = 1.0f + 0x1p-18f;
+constexpr float kSlack = 0x1p-21f;
+
+// Four floats: SSE2 where available, a plain loop otherwise. Both perform the same IEEE
+// operations in the same order, so the scalar paths give the same spheres and tests.
+#if defined(__SSE2__)
+struct F4 {
+  __m128 v;
 };
+inline F4 Splat(float a) { return {_mm_set1_ps(a)}; }
+inline F4 Load(const float* p) { return {_mm_load_ps(p)}; }  // 16-byte aligned
+inline F4 LoadU(const float* p) { return {_mm_loadu_ps(p)}; }
+inline void Store(float* p, F4 a) { _mm_store_ps(p, a.v); }
+inline F4 operator+(F4 a, F4 b) { return {_mm_add_ps(a.v, b.v)}; }
+inline F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
+inline F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+inline F4 operator/(F4 a, F4 b) { return {_mm_div_ps(a.v, b.v)}; }
+inline F4 Sqrt(F4 a) { return {_mm_sqrt_ps(a.v)}; }
+inline F4 Max(F4 a, F4 b) { return {_mm_max_ps(a.v, b.v)}; }
+inline F4 Min(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }
+inline F4 Abs(F4 a) { return {_mm_andnot_ps(_mm_set1_ps(-0.0f), a.v)}; }
+inline void Transpose(F4& a, F4& b, F4& c, F4& d) { _MM_TRANSPOSE4_PS(a.v, b.v, c.v, d.v); }
+// (u0, u2, w0, w2) and (u1, u3, w1, w3).
+inline void Deinterleave(F4 u, F4 w, F4& even, F4& odd) {
+  even.v = _mm_shuffle_ps(u.v, w.v, _MM_SHUFFLE(2, 0, 2, 0));
+  odd.v = _mm_shuffle_ps(u.v, w.v, _MM_SHUFFLE(3, 1, 3, 1));
+}
+// Spheres a = (x, y, z, r) and b overlap: ((dx² + dz²) + (dy² - (ra + rb)²)) <= 0.
+inline bool Overlap(const float* a, const float* b) {
+  const __m128 va = _mm_load_ps(a);
+  const __m128 vb = _mm_load_ps(b);
+  const __m128 d = _mm_sub_ps(va, vb);
+  const __m128 rs = _mm_add_ps(va, vb);
+  const __m128 xyz = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+  const __m128 v =
+      _mm_sub_ps(_mm_and_ps(_mm_mul_ps(d, d), xyz), _mm_andnot_ps(xyz, _mm_mul_ps(rs, rs)));
+  const __m128 h = _mm_add_ps(v, _mm_movehl_ps(v, v));
+  const __m128 sum = _mm_add_ss(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(1, 1, 1, 1)));
+  return _mm_cvtss_f32(sum) <= 0.0f;
+}
+#else
+struct F4 {
+  float v[4];
+};
+template <class Op>
+inline F4 Lanes(F4 a, F4 b, Op op) {
+  F4 c;
+  for (int k = 0; k < 4; ++k) c.v[k] = op(a.v[k], b.v[k]);
+  return c;
+}
+inline F4 Splat(float a) { return {{a, a, a, a}}; }
+inline F4 Load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+inline F4 LoadU(const float* p) { return Load(p); }
+inline void Store(float* p, F4 a) { std::copy(a.v, a.v + 4, p); }
+inline F4 operator+(F4 a, F4 b) {
+  return Lanes(a, b, [](float x, float y) { return x + y; });
+}
+inline F4 operator-(F4 a, F4 b) {
+  return Lanes(a, b, [](float x, float y) { return x - y; });
+}
+inline F4 operator*(F4 a, F4 b) {
+  return Lanes(a, b, [](float x, float y) { return x * y; });
+}
+inline F4 operator/(F4 a, F4 b) {
+  return Lanes(a, b, [](float x, float y) { return x / y; });
+}
+inline F4 Sqrt(F4 a) {
+  return Lanes(a, a, [](float x, float) { return std::sqrt(x); });
+}
+// As maxps / minps: the second operand unless the comparison holds.
+inline F4 Max(F4 a, F4 b) {
+  return Lanes(a, b, [](float x, float y) { return x > y ? x : y; });
+}
+inline F4 Min(F4 a, F4 b) {
+  return Lanes(a, b, [](float x, float y) { return x < y ? x : y; });
+}
+inline F4 Abs(F4 a) {
+  return Lanes(a, a, [](float x, float) { return std::fabs(x); });
+}
+inline void Transpose(F4& a, F4& b, F4& c, F4& d) {
+  F4* rows[4] = {&a, &b, &c, &d};
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) std::swap(rows[i]->v[j], rows[j]->v[i]);
+  }
+}
+inline void Deinterleave(F4 u, F4 w, F4& even, F4& odd) {
+  even = {{u.v[0], u.v[2], w.v[0], w.v[2]}};
+  odd = {{u.v[1], u.v[3], w.v[1], w.v[3]}};
+}
+inline bool Overlap(const float* a, const float* b) {
+  const float dx = a[0] - b[0];
+  const float dy = a[1] - b[1];
+  const float dz = a[2] - b[2];
+  const float rs = a[3] + b[3];
+  return (dx * dx + dz * dz) + (dy * dy - rs * rs) <= 0.0f;
+}
+#endif
 
-inline bool Overlap(const double* s, int i, int j) {
-  const double* a = s + 4 * i;
-  const double* b = s + 4 * j;
-  const double dx = a[0] - b[0];
-  const double dy = a[1] - b[1];
-  const double dz = a[2] - b[2];
-  const double r = a[3] + b[3];
-  return dx * dx + dy * dy + dz * dz <= r * r;
+// The scalar twins of the lane operations (same semantics as the SSE instructions).
+inline float Splat1(float a) { return a; }
+inline float Sqrt(float a) { return std::sqrt(a); }
+inline float Max(float a, float b) { return a > b ? a : b; }
+inline float Min(float a, float b) { return a < b ? a : b; }
+inline float Abs(float a) { return std::fabs(a); }
+
+template <class T>
+T Constant(float a) {
+  if constexpr (std::is_same_v<T, float>) {
+    return Splat1(a);
+  } else {
+    return Splat(a);
+  }
 }
 
-inline void FitLeaf(const double* x, int link, double inflate_m, double* out) {
-  const double* a = x + 3 * link;
-  const double* b = a + 3;
-  const double dx = b[0] - a[0];
-  const double dy = b[1] - a[1];
-  const double dz = b[2] - a[2];
-  out[0] = 0.5 * (a[0] + b[0]);
-  out[1] = 0.5 * (a[1] + b[1]);
-  out[2] = 0.5 * (a[2] + b[2]);
-  out[3] = 0.5 * std::sqrt(dx * dx + dy * dy + dz * dz) + inflate_m;
+// Minimal sphere of the link a-b grown by inflate, plus the rounding margin.
+template <class T>
+inline void FitLeaf(T ax, T ay, T az, T bx, T by, T bz, T inflate, T& cx, T& cy, T& cz, T& cr) {
+  const T half = Constant<T>(0.5f);
+  const T dx = bx - ax;
+  const T dy = by - ay;
+  const T dz = bz - az;
+  const T len = Sqrt(dx * dx + dy * dy + dz * dz);
+  cx = half * (ax + bx);
+  cy = half * (ay + by);
+  cz = half * (az + bz);
+  cr = (half * len + inflate) * Constant<T>(kGrow) +
+       Constant<T>(kSlack) * (Abs(ax) + Abs(ay) + Abs(az) + Abs(bx) + Abs(by) + Abs(bz));
 }
+
+// Minimal sphere enclosing the spheres a and b, plus the rounding margin. Branch free: the
+// radius max(ra, rb, (|b - a| + ra + rb) / 2) and the centre a + w (b - a) with w clamped to
+// [0, 1] also cover one sphere inside the other (w = 0 or 1) and coincident centres.
+template <class T>
+inline void FitParent(T ax, T ay, T az, T ar, T bx, T by, T bz, T br, T& cx, T& cy, T& cz, T& cr) {
+  const T dx = bx - ax;
+  const T dy = by - ay;
+  const T dz = bz - az;
+  const T dist = Sqrt(dx * dx + dy * dy + dz * dz);
+  const T r = Max(Constant<T>(0.5f) * (dist + ar + br), Max(ar, br));
+  const T w = Min(
+      Max((r - ar) / Max(dist, Constant<T>(std::numeric_limits<float>::min())), Constant<T>(0.0f)),
+      Constant<T>(1.0f));
+  cx = ax + w * dx;
+  cy = ay + w * dy;
+  cz = az + w * dz;
+  cr = r * Constant<T>(kGrow) +
+       Constant<T>(kSlack) * (Abs(ax) + Abs(ay) + Abs(az) + Abs(bx) + Abs(by) + Abs(bz));
+}
+
+// The sphere test of both the traversal and the all-pairs reference.
+inline bool Overlap(const float* s, int i, int j) { return Overlap(s + 4 * i, s + 4 * j); }
+
+// FindCollision's "level higher" rule: split the pair's larger node, the second on a tie.
+inline bool DescendFirst(int size_p, int size_q) { return size_p > size_q; }
 
 }  // namespace
 
@@ -57,106 +197,270 @@ SphereBvhTopology BuildSphereBvhTopology(int num_links) {
   // Pair successive spheres level by level (thesis §5.3); an odd last one moves up unchanged.
   while (level.size() > 1) {
     std::vector<int> up;
+    SphereBvhLevel lv;
+    lv.begin = static_cast<int>(t.nodes.size());
+    lv.first_child = level[0];
     for (size_t k = 0; k + 1 < level.size(); k += 2) {
       const int a = level[k];
       const int b = level[k + 1];
+      if (a == lv.first_child + static_cast<int>(k) && b == a + 1 && lv.regular == lv.count) {
+        ++lv.regular;
+      }
+      ++lv.count;
       t.nodes.push_back({a, b, t.nodes[a].lo, t.nodes[b].hi});
       t.height.push_back(std::max(t.height[a], t.height[b]) + 1);
       up.push_back(static_cast<int>(t.nodes.size()) - 1);
     }
+    t.levels.push_back(lv);
     if (level.size() % 2 == 1) up.push_back(level.back());
     level.swap(up);
   }
   t.root = level[0];
   MICRODEX_CHECK(static_cast<int>(t.nodes.size()) == 2 * num_links - 1);
+  for (const SphereBvhNode& node : t.nodes) {
+    const bool leaf = node.left < 0;
+    t.traversal.push_back({leaf ? 0u : 16u * static_cast<std::uint32_t>(node.left),
+                           leaf ? 0u : 16u * static_cast<std::uint32_t>(node.right),
+                           node.hi - node.lo, 0});
+  }
   t.max_stack = 2 * (2 * t.height[t.root] + 1);
   MICRODEX_CHECK(t.max_stack <= kStackCapacity);
+  // Self(T) contributes FindCollision(left, right) for every inner node T. Two chain-adjacent
+  // nodes (the first one's last link is followed by the second one's first link) both contain
+  // the chain node their links share, so their spheres always overlap: FindCollision's descent
+  // along that boundary does not depend on the positions and is unrolled here, down to the
+  // adjacent leaves (excluded neighbours). What remains to test are the pairs it branches
+  // into, which are never adjacent, so every pair of links below them is a candidate. At the
+  // bottom of each boundary these are a node of two leaves against the next leaf but one,
+  // which nearly always overlap (on a straight thread too): that test is skipped and its two
+  // leaf pairs are tested directly (the same pairs are found; a test is saved).
+  auto add_start = [&](int p, int q) {
+    const SphereBvhNode& np = t.nodes[p];
+    const SphereBvhNode& nq = t.nodes[q];
+    if ((np.hi - np.lo) * (nq.hi - nq.lo) > 2) {
+      t.self_pairs.push_back(PackNodePair(p, q));
+      return;
+    }
+    for (int a = np.lo; a < np.hi; ++a) {
+      for (int b = nq.lo; b < nq.hi; ++b) t.self_leaf_pairs.push_back(PackNodePair(a, b));
+    }
+  };
+  for (int i = num_links; i < static_cast<int>(t.nodes.size()); ++i) {
+    int p = t.nodes[i].left;
+    int q = t.nodes[i].right;
+    while (!(t.IsLeaf(p) && t.IsLeaf(q))) {
+      const SphereBvhNode& np = t.nodes[p];
+      const SphereBvhNode& nq = t.nodes[q];
+      if (DescendFirst(t.traversal[p].size, t.traversal[q].size)) {
+        add_start(np.left, q);
+        p = np.right;
+      } else {
+        add_start(p, nq.right);
+        q = nq.left;
+      }
+    }
+  }
   return t;
 }
 
 SphereBvhSpheres MakeSphereBvhSpheres(const SphereBvhTopology& topology) {
   SphereBvhSpheres s;
-  s.xyzr = Eigen::Matrix4Xd::Zero(4, static_cast<Eigen::Index>(topology.nodes.size()));
+  s.xyzr.setZero(4, static_cast<Eigen::Index>(topology.nodes.size()));
+  s.nodes_W.setZero(topology.num_leaves + 1, 3);
+  size_t size = kMinQueue;
+  while (size < 4 * topology.nodes.size()) size *= 2;
+  s.queue.resize(size);
   return s;
 }
 
 int RefitSphereBvhLeaves(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
                          SphereBvhSpheres& s) {
-  const double* x = x_W.data();
-  double* out = s.xyzr.data();
-  for (int l = 0; l < t.num_leaves; ++l) FitLeaf(x, l, inflate_m, out + 4 * l);
-  return t.num_leaves;
+  const int n = t.num_leaves;
+  MICRODEX_CHECK(x_W.cols() == n + 1);
+  s.nodes_W = x_W.transpose().cast<float>();
+  const float* px = s.nodes_W.col(0).data();
+  const float* py = s.nodes_W.col(1).data();
+  const float* pz = s.nodes_W.col(2).data();
+  float* out = s.xyzr.data();
+  const float inflate = static_cast<float>(inflate_m);
+  int l = 0;
+  for (; l + 4 <= n; l += 4) {  // four links at a time, then one sphere per column
+    F4 x, y, z, r;
+    FitLeaf(LoadU(px + l), LoadU(py + l), LoadU(pz + l), LoadU(px + l + 1), LoadU(py + l + 1),
+            LoadU(pz + l + 1), Splat(inflate), x, y, z, r);
+    Transpose(x, y, z, r);
+    Store(out + 4 * l, x);
+    Store(out + 4 * l + 4, y);
+    Store(out + 4 * l + 8, z);
+    Store(out + 4 * l + 12, r);
+  }
+  for (; l < n; ++l) {
+    float* c = out + 4 * l;
+    FitLeaf(px[l], py[l], pz[l], px[l + 1], py[l + 1], pz[l + 1], inflate, c[0], c[1], c[2], c[3]);
+  }
+  return n;
 }
 
 int RefitSphereBvh(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
                    SphereBvhSpheres& s) {
   RefitSphereBvhLeaves(t, x_W, inflate_m, s);
-  double* out = s.xyzr.data();
-  const int n = static_cast<int>(t.nodes.size());
-  for (int i = t.num_leaves; i < n; ++i) {  // children precede their parent
-    const SphereBvhNode& node = t.nodes[i];
-    const double* a = out + 4 * node.left;
-    const double* b = out + 4 * node.right;
-    double* c = out + 4 * i;
-    const double dx = b[0] - a[0];
-    const double dy = b[1] - a[1];
-    const double dz = b[2] - a[2];
-    const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double ra = a[3];
-    const double rb = b[3];
-    if (dist + rb <= ra) {
-      std::copy(a, a + 4, c);
-    } else if (dist + ra <= rb) {
-      std::copy(b, b + 4, c);
-    } else {
-      const double r = 0.5 * (dist + ra + rb);
-      const double w = (r - ra) / dist;
-      c[0] = a[0] + w * dx;
-      c[1] = a[1] + w * dy;
-      c[2] = a[2] + w * dz;
-      // Rounding of the centre must not let a child stick out: a pair of leaves that just
-      // touch has to be reached through their ancestors.
-      c[3] = r * (1.0 + kRelativeSlack);
+  float* out = s.xyzr.data();
+  // Level by level (a level's children are all in the levels below): four parents at a time
+  // from eight successive children, the rest one by one.
+  for (const SphereBvhLevel& lv : t.levels) {
+    int k = 0;
+    for (; k + 4 <= lv.regular; k += 4) {
+      const float* c = out + 4 * (lv.first_child + 2 * k);
+      F4 x01 = Load(c), y01 = Load(c + 4), z01 = Load(c + 8), r01 = Load(c + 12);
+      F4 x23 = Load(c + 16), y23 = Load(c + 20), z23 = Load(c + 24), r23 = Load(c + 28);
+      Transpose(x01, y01, z01, r01);  // now x01 = (a0.x, b0.x, a1.x, b1.x), ...
+      Transpose(x23, y23, z23, r23);
+      F4 ax, ay, az, ar, bx, by, bz, br;
+      Deinterleave(x01, x23, ax, bx);
+      Deinterleave(y01, y23, ay, by);
+      Deinterleave(z01, z23, az, bz);
+      Deinterleave(r01, r23, ar, br);
+      F4 x, y, z, r;
+      FitParent(ax, ay, az, ar, bx, by, bz, br, x, y, z, r);
+      Transpose(x, y, z, r);
+      float* p = out + 4 * (lv.begin + k);
+      Store(p, x);
+      Store(p + 4, y);
+      Store(p + 8, z);
+      Store(p + 12, r);
+    }
+    for (; k < lv.count; ++k) {
+      const int i = lv.begin + k;
+      const float* a = out + 4 * t.nodes[i].left;
+      const float* b = out + 4 * t.nodes[i].right;
+      float* c = out + 4 * i;
+      FitParent(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0], c[1], c[2], c[3]);
     }
   }
-  return n;
+  return static_cast<int>(t.nodes.size());
 }
 
-int FindSelfCollisions(const SphereBvhTopology& t, const SphereBvhSpheres& spheres, LinkPair* pairs,
-                       int capacity) {
-  const double* s = spheres.xyzr.data();
-  const SphereBvhNode* nodes = t.nodes.data();
-  PendingPair stack[kStackCapacity];
-  int count = 0;
-  const int n = static_cast<int>(t.nodes.size());
-  // Self(T) for every inner node T: FindCollision(left, right). Links under `p` always precede
-  // the links under `q`, so a pair of leaves is (p's link, q's link) in increasing order.
-  for (int i = t.num_leaves; i < n; ++i) {
-    int top = 0;
-    stack[top++] = {nodes[i].left, nodes[i].right};
-    while (top > 0) {
-      const PendingPair pq = stack[--top];
-      const SphereBvhNode& p = nodes[pq.p];
-      const SphereBvhNode& q = nodes[pq.q];
-      // All links of q within one of all links of p: only the same or neighbouring links.
-      if (q.hi - 1 - p.lo <= 1) continue;
-      if (!Overlap(s, pq.p, pq.q)) continue;
-      const bool p_leaf = p.left < 0;
-      const bool q_leaf = q.left < 0;
-      if (p_leaf && q_leaf) {
-        if (count < capacity) pairs[count] = {p.lo, q.lo};
-        ++count;
-        continue;
-      }
-      // Descend into the larger of the two (FindCollision's "level higher" rule).
-      if (q_leaf || (!p_leaf && p.hi - p.lo > q.hi - q.lo)) {
-        stack[top++] = {p.right, pq.q};
-        stack[top++] = {p.left, pq.q};
-      } else {
-        stack[top++] = {pq.p, q.right};
-        stack[top++] = {pq.p, q.left};
-      }
+namespace {
+
+// FindCollision(start) depth first on the fixed stack, for a pair the queue has no room for.
+// The pair is not chain-adjacent, so neither is any pair below it.
+int FindCollisionOnStack(const SphereBvhTopology& t, const float* s, SphereBvhNodePair start,
+                         LinkPair* pairs, int capacity, int count) {
+  SphereBvhNodePair stack[kStackCapacity];
+  int top = 0;
+  stack[top++] = start;
+  while (top > 0) {
+    const SphereBvhNodePair pq = stack[--top];
+    const int ip = NodePairFirst(pq);
+    const int iq = NodePairSecond(pq);
+    if (!Overlap(s, ip, iq)) continue;
+    const SphereBvhNode& p = t.nodes[ip];
+    const SphereBvhNode& q = t.nodes[iq];
+    if (p.left < 0 && q.left < 0) {
+      if (count < capacity) pairs[count] = {ip, iq};
+      ++count;
+      continue;
     }
+    if (DescendFirst(t.traversal[ip].size, t.traversal[iq].size)) {
+      stack[top++] = PackNodePair(p.right, iq);
+      stack[top++] = PackNodePair(p.left, iq);
+    } else {
+      stack[top++] = PackNodePair(ip, q.right);
+      stack[top++] = PackNodePair(ip, q.left);
+    }
+  }
+  return count;
+}
+
+}  // namespace
+
+int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, LinkPair* pairs,
+                       int capacity) {
+  const char* sphere_bytes = reinterpret_cast<const char*>(spheres.xyzr.data());
+  const char* node_bytes = reinterpret_cast<const char*>(t.traversal.data());
+  const std::uint32_t leaf_bytes = 16u * static_cast<std::uint32_t>(t.num_leaves);
+  SphereBvhNodePair* ring = spheres.queue.data();
+  const unsigned ring_size = static_cast<unsigned>(spheres.queue.size());
+  const unsigned mask = ring_size - 1;
+  unsigned head = 0;
+  unsigned tail = 0;
+  int count = 0;
+  // One FindCollision step: test the pair; a leaf pair is written (and counted on a hit); an
+  // inner pair pushes its two children (kept on a hit). No branch depends on the test, so
+  // successive tests overlap in the processor. Needs two free slots in the ring and one in
+  // `pairs`.
+  auto step = [&](SphereBvhNodePair pq) {
+    const std::uint32_t p = static_cast<std::uint32_t>(pq);
+    const std::uint32_t q = static_cast<std::uint32_t>(pq >> 32);
+    const unsigned hit = Overlap(reinterpret_cast<const float*>(sphere_bytes + p),
+                                 reinterpret_cast<const float*>(sphere_bytes + q))
+                             ? 1u
+                             : 0u;
+    // Leaves are the nodes 0..n-1 and leaf i is link i.
+    const unsigned leaves = std::max(p, q) < leaf_bytes ? 1u : 0u;
+    pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
+    count += static_cast<int>(hit & leaves);
+    const auto& np = *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + p);
+    const auto& nq = *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + q);
+    if (DescendFirst(np.size, nq.size)) {
+      const std::uint64_t keep = pq & 0xffffffff00000000u;
+      ring[tail & mask] = keep | np.left_offset;
+      ring[(tail + 1) & mask] = keep | np.right_offset;
+    } else {
+      const std::uint64_t keep = pq & 0xffffffffu;
+      ring[tail & mask] = keep | static_cast<std::uint64_t>(nq.left_offset) << 32;
+      ring[(tail + 1) & mask] = keep | static_cast<std::uint64_t>(nq.right_offset) << 32;
+    }
+    tail += 2 * (hit & (leaves ^ 1u));
+  };
+  // The starting leaf pairs: test and write.
+  const SphereBvhNodePair* leaf_pairs = t.self_leaf_pairs.data();
+  const unsigned num_leaf_pairs = static_cast<unsigned>(t.self_leaf_pairs.size());
+  for (unsigned k = 0; k < num_leaf_pairs;) {
+    const unsigned run =
+        std::min(num_leaf_pairs - k, static_cast<unsigned>(std::max(capacity - count, 0)));
+    for (const unsigned end = k + run; k < end; ++k) {
+      const std::uint32_t p = static_cast<std::uint32_t>(leaf_pairs[k]);
+      const std::uint32_t q = static_cast<std::uint32_t>(leaf_pairs[k] >> 32);
+      pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
+      count += Overlap(reinterpret_cast<const float*>(sphere_bytes + p),
+                       reinterpret_cast<const float*>(sphere_bytes + q))
+                   ? 1
+                   : 0;
+    }
+    if (run == 0) {  // `pairs` is full: count only
+      count +=
+          Overlap(spheres.xyzr.data(), NodePairFirst(leaf_pairs[k]), NodePairSecond(leaf_pairs[k]))
+              ? 1
+              : 0;
+      ++k;
+    }
+  }
+  // Breadth first, in runs that can overflow neither the ring nor `pairs`: first the starting
+  // pairs, then the queue. Otherwise one pair is finished depth first on the stack.
+  auto run_length = [&](unsigned available) {
+    const unsigned free_ring = (ring_size - (tail - head)) / 2;
+    const unsigned free_pairs = static_cast<unsigned>(std::max(capacity - count, 0));
+    return std::min(available, std::min(free_ring, free_pairs));
+  };
+  const SphereBvhNodePair* start = t.self_pairs.data();
+  const unsigned num_start = static_cast<unsigned>(t.self_pairs.size());
+  for (unsigned k = 0; k < num_start;) {
+    const unsigned run = run_length(num_start - k);
+    if (run == 0) {
+      count = FindCollisionOnStack(t, spheres.xyzr.data(), start[k++], pairs, capacity, count);
+      continue;
+    }
+    for (const unsigned end = k + run; k < end; ++k) step(start[k]);
+  }
+  while (head != tail) {
+    const unsigned run = run_length(tail - head);
+    if (run == 0) {
+      count =
+          FindCollisionOnStack(t, spheres.xyzr.data(), ring[head++ & mask], pairs, capacity, count);
+      continue;
+    }
+    for (const unsigned end = head + run; head != end; ++head) step(ring[head & mask]);
   }
   return count;
 }
@@ -164,7 +468,7 @@ int FindSelfCollisions(const SphereBvhTopology& t, const SphereBvhSpheres& spher
 int FindSelfCollisionsAllPairs(const SphereBvhTopology& t, const SphereBvhSpheres& spheres,
                                LinkPair* pairs, int capacity) {
   const int n = t.num_leaves;
-  const double* s = spheres.xyzr.data();
+  const float* s = spheres.xyzr.data();
   int count = 0;
   for (int la = 0; la < n; ++la) {
     for (int lb = la + 2; lb < n; ++lb) {

@@ -7,10 +7,14 @@
 // 2 n - 1 spheres, then the FindCollision traversal.
 //
 // Layout: tree nodes 0..n-1 are the leaves in link order (leaf i bounds link i), inner nodes
-// follow level by level, so children always precede their parent and the root is last. The
-// spheres are packed as (x, y, z, r) per node.
+// follow level by level, so children always precede their parent and the root is last.
+//
+// Precision: the spheres are single precision (x, y, z, r: one SSE register per sphere), each
+// grown by a margin that covers the rounding, so a leaf still encloses its link (exact double
+// positions) grown by the inflation, and a parent still encloses its children.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 namespace microdex::thread {
@@ -28,22 +32,61 @@ struct SphereBvhNode {
   int hi = 0;
 };
 
+// What the traversal reads of a node: its children as byte offsets (16 per node; 0 for a
+// leaf) and the number of links under it.
+struct SphereBvhTraversalNode {
+  std::uint32_t left_offset = 0;
+  std::uint32_t right_offset = 0;
+  std::int32_t size = 0;
+  std::int32_t unused = 0;
+};
+
+// Two tree nodes p, q whose spheres are to be tested (all links of p precede all links of q),
+// packed as byte offsets 16 p | 16 q << 32: a sphere and a traversal record are 16 bytes each.
+using SphereBvhNodePair = std::uint64_t;
+inline SphereBvhNodePair PackNodePair(int p, int q) {
+  return (static_cast<std::uint64_t>(q) << 36) | (static_cast<std::uint64_t>(p) << 4);
+}
+inline int NodePairFirst(SphereBvhNodePair pq) { return static_cast<int>((pq & 0xffffffffu) >> 4); }
+inline int NodePairSecond(SphereBvhNodePair pq) { return static_cast<int>(pq >> 36); }
+
+// One level of inner nodes [begin, begin + count). The first `regular` of them have the
+// children first_child + 2 k and first_child + 2 k + 1 (successive nodes of the level below);
+// the others (at most one, next to a carried-up node) are refitted one by one.
+struct SphereBvhLevel {
+  int begin = 0;
+  int count = 0;
+  int regular = 0;
+  int first_child = 0;
+};
+
 struct SphereBvhTopology {
   int num_leaves = 0;
   int root = -1;
-  std::vector<SphereBvhNode> nodes;  // 2 n - 1, children before parents
-  std::vector<int> height;           // per node, 0 for leaves
-  // Largest pending-pair count of the traversal's stack (fixed at build, checked in use).
+  std::vector<SphereBvhNode> nodes;               // 2 n - 1, children before parents
+  std::vector<int> height;                        // per node, 0 for leaves
+  std::vector<SphereBvhTraversalNode> traversal;  // per node
+  std::vector<SphereBvhLevel> levels;             // inner levels, bottom up
+  // The traversal's starting pairs: FindCollision(left, right) of every inner node, with its
+  // descent along the chain boundary unrolled (see BuildSphereBvhTopology); the pairs of two
+  // leaves among them are kept apart (their test has nothing to push).
+  std::vector<SphereBvhNodePair> self_pairs;
+  std::vector<SphereBvhNodePair> self_leaf_pairs;
+  // Largest pending-pair count of the fall-back stack traversal (checked in use).
   int max_stack = 0;
 
   bool IsLeaf(int node) const { return nodes[node].left < 0; }
 };
 
-// Per-step sphere data (sized at build, refitted in place).
+// Per-step sphere data (sized at build, refitted in place) and the traversal's queue.
 struct SphereBvhSpheres {
-  Eigen::Matrix4Xd xyzr;  // per tree node: centre (world, m) and radius (m)
+  Eigen::Matrix4Xf xyzr;  // per tree node: centre (world, m) and radius (m)
+  // Chain node positions in single precision (columns x, y, z), refit scratch.
+  Eigen::Matrix<float, Eigen::Dynamic, 3> nodes_W;
+  // Node pairs still to test, a ring of a power-of-two size.
+  std::vector<SphereBvhNodePair> queue;
 
-  Eigen::Vector3d center_W(int node) const { return xyzr.col(node).head<3>(); }
+  Eigen::Vector3d center_W(int node) const { return xyzr.col(node).head<3>().cast<double>(); }
   double radius_m(int node) const { return xyzr(3, node); }
 };
 
@@ -61,13 +104,15 @@ int RefitSphereBvhLeaves(const SphereBvhTopology& topology, const Eigen::Matrix3
 
 // Self-collision pairs by the FindCollision traversal: FindCollision(T, T) is split as
 // Self(T) = Self(left) + Self(right) + FindCollision(left, right), so every pair is found
-// once; Self is a flat pass over the inner nodes and FindCollision runs on a fixed stack.
-// Writes at most capacity pairs; returns the number found (which may exceed capacity: the
-// excess is dropped and the caller records it). Never allocates.
-int FindSelfCollisions(const SphereBvhTopology& topology, const SphereBvhSpheres& spheres,
+// once. The pairs are tested breadth first from a queue (the tests are independent, so they
+// overlap in the processor); a full queue falls back to a fixed stack. Writes at most capacity
+// pairs; returns the number found (which may exceed capacity: the excess is dropped and the
+// caller records it). Never allocates.
+int FindSelfCollisions(const SphereBvhTopology& topology, SphereBvhSpheres& spheres,
                        LinkPair* pairs, int capacity);
 
-// Reference: every pair of non-adjacent leaf spheres tested directly, O(n^2).
+// Reference: every pair of non-adjacent leaf spheres tested directly, O(n^2), with the same
+// sphere test.
 int FindSelfCollisionsAllPairs(const SphereBvhTopology& topology, const SphereBvhSpheres& spheres,
                                LinkPair* pairs, int capacity);
 
