@@ -43,7 +43,7 @@ struct Interval {
 
 // The needle circle x(s) = o + ρ(cos s e1 + sin s e2) in the vessel frame V [m].
 struct NeedleInV {
-  Eigen::Vector3d o, e1, e2;
+  Eigen::Vector3d o, e1, e2, e3;  // e3 = e1 × e2
   double rho = 0;
   Eigen::Vector3d PointAt(double s) const {
     return o + rho * (std::cos(s) * e1 + std::sin(s) * e2);
@@ -142,7 +142,7 @@ inline CoreDistSq EvalCoreDistSq(const NeedleInV& nv, double core_radius, double
     // On the z axis the distance has a ridge (every core point is equally far): no slope.
     return r;
   }
-  const double iw = 1 / w;
+  const double iw = w * (1 / w2);  // the division runs beside the square root
   const double dw = (x * dx + y * dy) * iw;
   const double d2w = (dx * dx + dy * dy - x * ux - y * uy - dw * dw) * iw;
   r.df = 2 * (e * dw + z * dz);
@@ -152,29 +152,24 @@ inline CoreDistSq EvalCoreDistSq(const NeedleInV& nv, double core_radius, double
 
 // (cos, sin) of s + h from those of s: a rotation by h, with h's cosine and sine from their
 // Taylor series (through h¹⁴ and h¹⁵: truncation < 1e-18 for |h| ≤ 0.5, the largest ascent
-// step), so that the ascent calls no libm.
+// step), so that the ascent calls no libm. Both series are polynomials in u = h², evaluated
+// by Estrin's scheme (u, u², u⁴ and independent pairs) rather than Horner's: the same terms
+// with a third of the dependent multiplications, as this sits on the ascent's critical path.
 void AdvanceAngle(double s_new, double h, double* cs, double* sn) {
   if (std::abs(h) <= kMaxPolishStep_rad) {
-    const double h2 = h * h;
+    // cos h = Σ c_k u^k, sin h / h = Σ d_k u^k, k = 0…7 (c_7 = −1/14!, d_7 = −1/15!).
+    constexpr double c0 = 1, c1 = -1.0 / 2, c2 = 1.0 / 24, c3 = -1.0 / 720, c4 = 1.0 / 40320,
+                     c5 = -1.0 / 3628800, c6 = 1.0 / 479001600, c7 = -1.0 / 87178291200;
+    constexpr double d0 = 1, d1 = -1.0 / 6, d2 = 1.0 / 120, d3 = -1.0 / 5040, d4 = 1.0 / 362880,
+                     d5 = -1.0 / 39916800, d6 = 1.0 / 6227020800, d7 = -1.0 / 1307674368000;
+    const double u = h * h, u2 = u * u, u4 = u2 * u2;
     const double ch =
-        1 -
-        h2 * (1.0 / 2) *
-            (1 - h2 * (1.0 / 12) *
-                     (1 - h2 * (1.0 / 30) *
-                              (1 - h2 * (1.0 / 56) *
-                                       (1 - h2 * (1.0 / 90) *
-                                                (1 - h2 * (1.0 / 132) * (1 - h2 * (1.0 / 182)))))));
+        ((c0 + c1 * u) + u2 * (c2 + c3 * u)) + u4 * ((c4 + c5 * u) + u2 * (c6 + c7 * u));
     const double sh =
-        h * (1 - h2 * (1.0 / 6) *
-                     (1 - h2 * (1.0 / 20) *
-                              (1 - h2 * (1.0 / 42) *
-                                       (1 - h2 * (1.0 / 72) *
-                                                (1 - h2 * (1.0 / 110) *
-                                                         (1 - h2 * (1.0 / 156) *
-                                                                  (1 - h2 * (1.0 / 210))))))));
-    const double c0 = *cs, s0 = *sn;
-    *cs = c0 * ch - s0 * sh;
-    *sn = s0 * ch + c0 * sh;
+        h * (((d0 + d1 * u) + u2 * (d2 + d3 * u)) + u4 * ((d4 + d5 * u) + u2 * (d6 + d7 * u)));
+    const double c_old = *cs, s_old = *sn;
+    *cs = c_old * ch - s_old * sh;
+    *sn = s_old * ch + c_old * sh;
   } else {
     *cs = std::cos(s_new);
     *sn = std::sin(s_new);
@@ -284,42 +279,45 @@ struct ScaledLiftedCircle {
 };
 
 ScaledLiftedCircle LiftCircleScaled(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
-                                    const Eigen::Vector3d& e2, double rho) {
-  // The needle circle is its plane n·x = n·o cut by its sphere |x − o|² = ρ². Through P (4.2)
-  // each becomes a hyperplane of R⁴: (n, n·o)·X = n·o and (−2o, 1 − k)·X = −(1 + k) with
-  // k = |o|² − ρ² (substitute x = (l, m, p)/(1 − q), |x|² = (1 + q)/(1 − q)). Their
-  // intersection is the plane π of (4.7); its point nearest the origin is the centre c (4.8).
-  // This replaces the triple cross products of (4.7) by Gram–Schmidt on two normals (kept
-  // unnormalised: c is a combination of them): the same c, without subtracting nearly equal
-  // lifted points.
-  const Eigen::Vector3d n = e1.cross(e2);  // unit: e1, e2 are orthonormal
+                                    const Eigen::Vector3d& e2, const Eigen::Vector3d& n,
+                                    double rho) {
+  // The needle circle is its plane n·x = n·o (n = e1 × e2) cut by its sphere |x − o|² = ρ².
+  // Through P (4.2) each becomes a hyperplane of R⁴: n₁·X = h₁ with n₁ = (n, h₁), h₁ = n·o,
+  // and n₂·X = h₂ with n₂ = (−2o, 1 − k), h₂ = −(1 + k), k = |o|² − ρ² (substitute
+  // x = (l, m, p)/(1 − q), |x|² = (1 + q)/(1 − q)). Their intersection is the plane π of
+  // (4.7); its point nearest the origin is the centre c (4.8) = a n₁ + b n₂, from the 2×2
+  // Gram system. Here |n₁|² = 1 + h₁², n₁·n₂ = −h₁(1 + k), |n₂|² = 4|o|² + (1 − k)², so its
+  // determinant is 4|o|² + (1 − k)² + 4h₁²ρ² (a sum of squares: no cancellation), a = 4h₁ρ²/det
+  // and b = −(1 + k)/det. This replaces the triple cross products of (4.7) (no subtraction of
+  // nearly equal lifted points) and needs one division (checked against the Gram–Schmidt form
+  // and against lifted needle points in arc_torus_sp_test.cc).
   const double h1 = n.dot(o);
-  const double k = o.squaredNorm() - rho * rho;
-  const Eigen::Vector4d n1(n.x(), n.y(), n.z(), h1);
-  const Eigen::Vector4d n2(-2 * o.x(), -2 * o.y(), -2 * o.z(), 1 - k);
-  const double h2 = -(1 + k);
-  const double inv_n1_sq = 1 / (1 + h1 * h1);  // 1/|n1|²
-  const double n2n1 = n2.dot(n1);
-  const Eigen::Vector4d n2p = n2 - (n2n1 * inv_n1_sq) * n1;  // n2 ⊥ n1
-  const double inv_n2p_sq = 1 / n2p.squaredNorm();
-  ScaledLiftedCircle lc;
-  lc.center = (h1 * inv_n1_sq) * n1 + ((h2 - n2n1 * h1 * inv_n1_sq) * inv_n2p_sq) * n2p;
-  // (4.9)–(4.10): radius and first axis through the lift of the needle's s = 0 point.
+  const double o2 = o.squaredNorm(), rho2 = rho * rho;
+  const double k = o2 - rho2;
+  const double det = 4 * o2 + (1 - k) * (1 - k) + 4 * h1 * h1 * rho2;
+  const double a = 4 * h1 * rho2, b = -(1 + k);
+  // det · c = a n₁ + b n₂.
+  const Eigen::Vector4d c_det(a * n.x() - 2 * b * o.x(), a * n.y() - 2 * b * o.y(),
+                              a * n.z() - 2 * b * o.z(), a * h1 + b * (1 - k));
+  // (4.9)–(4.10): the first axis through the lift (4.3) of the needle's s = 0 point,
+  // X₀ = (2x₀, |x₀|² − 1)/N₀ with N₀ = |x₀|² + 1.
   const Eigen::Vector3d x0 = o + rho * e1;
-  const double rho2 = x0.squaredNorm();
-  const double inv = 1 / (rho2 + 1);
-  const Eigen::Vector4d lifted0(2 * x0.x() * inv, 2 * x0.y() * inv, 2 * x0.z() * inv,
-                                (rho2 - 1) * inv);  // (4.3)
-  lc.ax = lifted0 - lc.center;
+  const double x0_sq = x0.squaredNorm();
+  const double n0 = x0_sq + 1;
+  const double inv = 1 / (n0 * det);
+  ScaledLiftedCircle lc;
+  lc.center = c_det * (n0 * inv);
+  const Eigen::Vector4d lifted0(2 * x0.x(), 2 * x0.y(), 2 * x0.z(), x0_sq - 1);
+  lc.ax = lifted0 * (det * inv) - lc.center;
   lc.radius_sq = lc.ax.squaredNorm();
-  // (4.11)–(4.12): the second axis, here the lifted tangent at s = 0 (in π and ⊥ b_x), which
-  // also orients θ with s; (|x0|² + 1)/2 times dP⁻¹(x0)·ρe2, the scale being irrelevant.
+  // (4.11)–(4.12): the second axis, the lifted tangent at s = 0, which also orients θ with s.
+  // N₀ dP⁻¹(x₀)·ρe₂ = 2(N₀ρe₂ − 2(x₀·ρe₂)x₀, 2x₀·ρe₂)/N₀ has length 2ρ (P⁻¹ is conformal with
+  // factor 2/N₀), and it is ⊥ a_x (a tangent of the circle at X₀): scaled to length R̂ it is a_y.
   const Eigen::Vector3d v = rho * e2;
-  const double two_inv_xv = 2 * inv * x0.dot(v);
-  const Eigen::Vector3d t3 = v - two_inv_xv * x0;
-  Eigen::Vector4d t(t3.x(), t3.y(), t3.z(), two_inv_xv);
-  t -= (t.dot(lc.ax) / lc.radius_sq) * lc.ax;
-  lc.ay = t * std::sqrt(lc.radius_sq / t.squaredNorm());
+  const double xv = x0.dot(v);
+  const Eigen::Vector3d t3 = n0 * v - 2 * xv * x0;  // length N₀ρ together with t's last entry
+  const Eigen::Vector4d t(t3.x(), t3.y(), t3.z(), 2 * xv);
+  lc.ay = t * (std::sqrt(lc.radius_sq) * det * inv / rho);
   return lc;
 }
 
@@ -343,7 +341,7 @@ CircleConic CalcScaledCircleConic(double alpha, const ScaledLiftedCircle& lc) {
 
 LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                               const Eigen::Vector3d& e2, double rho) {
-  const ScaledLiftedCircle scaled = LiftCircleScaled(o, e1, e2, rho);
+  const ScaledLiftedCircle scaled = LiftCircleScaled(o, e1, e2, e1.cross(e2), rho);
   LiftedCircle lc;
   lc.center = scaled.center;
   lc.radius = std::sqrt(scaled.radius_sq);
@@ -471,7 +469,7 @@ void LiftLevelTorus(const NeedleInV& nv, double core_r, double tube_t, LiftedCon
   const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_t);
   k.lambda = scale.lambda;
   k.alpha = scale.alpha;
-  k.lc = LiftCircleScaled(k.lambda * nv.o, nv.e1, nv.e2, k.lambda * nv.rho);
+  k.lc = LiftCircleScaled(k.lambda * nv.o, nv.e1, nv.e2, nv.e3, k.lambda * nv.rho);
   const ScaledLiftedCircle& lc = k.lc;
   k.radius = std::sqrt(lc.radius_sq);
   k.ok = lc.center.allFinite() && lc.ax.allFinite() && lc.ay.allFinite() &&
@@ -807,6 +805,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   nv.e1 = (R_VW * arc.X_WN.linear().col(0)).normalized();
   nv.e2 = R_VW * arc.X_WN.linear().col(1);
   nv.e2 = (nv.e2 - nv.e2.dot(nv.e1) * nv.e1).normalized();
+  nv.e3 = nv.e1.cross(nv.e2);
   nv.rho = arc.radius_m;
 
   // §4.2.4: clip the arc to the segment.
