@@ -114,13 +114,6 @@ inline void Deinterleave(F4 u, F4 w, F4& even, F4& odd) {
   even = {{u.v[0], u.v[2], w.v[0], w.v[2]}};
   odd = {{u.v[1], u.v[3], w.v[1], w.v[3]}};
 }
-inline bool Overlap(const float* a, const float* b) {
-  const float dx = a[0] - b[0];
-  const float dy = a[1] - b[1];
-  const float dz = a[2] - b[2];
-  const float rs = a[3] + b[3];
-  return (dx * dx + dz * dz) + (dy * dy - rs * rs) <= 0.0f;
-}
 #endif
 
 // The scalar twins of the lane operations (same semantics as the SSE instructions).
@@ -154,9 +147,9 @@ inline void FitLeaf(T ax, T ay, T az, T bx, T by, T bz, T inflate, T& cx, T& cy,
        Constant<T>(kSlack) * (Abs(ax) + Abs(ay) + Abs(az) + Abs(bx) + Abs(by) + Abs(bz));
 }
 
-// Minimal sphere enclosing the spheres a and b, plus the rounding margin. Branch free: the
-// radius max(ra, rb, (|b - a| + ra + rb) / 2) and the centre a + w (b - a) with w clamped to
-// [0, 1] also cover one sphere inside the other (w = 0 or 1) and coincident centres.
+// Minimal sphere enclosing the spheres a and b, plus the rounding margin. Branch free: the radius
+// max(ra, rb, (|b - a| + ra + rb) / 2) and the centre a + w (b - a) with w clamped to [0, 1] also
+// cover one sphere inside the other (w = 0 or 1) and coincident centres.
 template <class T>
 inline void FitParent(T ax, T ay, T az, T ar, T bx, T by, T bz, T br, T& cx, T& cy, T& cz, T& cr) {
   const T dx = bx - ax;
@@ -173,6 +166,18 @@ inline void FitParent(T ax, T ay, T az, T ar, T bx, T by, T bz, T br, T& cx, T& 
   cr = r * Constant<T>(kGrow) +
        Constant<T>(kSlack) * (Abs(ax) + Abs(ay) + Abs(az) + Abs(bx) + Abs(by) + Abs(bz));
 }
+
+// The same test lane by lane: the same operations in the same order, so the same outcome.
+inline bool OverlapScalar(const float* a, const float* b) {
+  const float dx = a[0] - b[0];
+  const float dy = a[1] - b[1];
+  const float dz = a[2] - b[2];
+  const float rs = a[3] + b[3];
+  return (dx * dx + dz * dz) + (dy * dy - rs * rs) <= 0.0f;
+}
+#if !defined(__SSE2__)
+inline bool Overlap(const float* a, const float* b) { return OverlapScalar(a, b); }
+#endif
 
 // The sphere test of both the traversal and the all-pairs reference.
 inline bool Overlap(const float* s, int i, int j) { return Overlap(s + 4 * i, s + 4 * j); }
@@ -400,17 +405,17 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     const unsigned leaves = std::max(p, q) < leaf_bytes ? 1u : 0u;
     pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
     count += static_cast<int>(hit & leaves);
+    // Split p (first) or q; the other keeps its half of the packed pair. Arithmetic, not a
+    // branch: which one is split follows no pattern the processor could predict.
     const auto& np = *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + p);
     const auto& nq = *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + q);
-    if (DescendFirst(np.size, nq.size)) {
-      const std::uint64_t keep = pq & 0xffffffff00000000u;
-      ring[tail & mask] = keep | np.left_offset;
-      ring[(tail + 1) & mask] = keep | np.right_offset;
-    } else {
-      const std::uint64_t keep = pq & 0xffffffffu;
-      ring[tail & mask] = keep | static_cast<std::uint64_t>(nq.left_offset) << 32;
-      ring[(tail + 1) & mask] = keep | static_cast<std::uint64_t>(nq.right_offset) << 32;
-    }
+    const unsigned first = DescendFirst(np.size, nq.size) ? 1u : 0u;
+    const unsigned child_shift = 32 * (first ^ 1u);
+    const std::uint64_t keep = pq & (std::uint64_t{0xffffffffu} << (32 * first));
+    const auto& split = *reinterpret_cast<const SphereBvhTraversalNode*>(
+        node_bytes + static_cast<std::uint32_t>(pq >> child_shift));
+    ring[tail & mask] = keep | static_cast<std::uint64_t>(split.left_offset) << child_shift;
+    ring[(tail + 1) & mask] = keep | static_cast<std::uint64_t>(split.right_offset) << child_shift;
     tail += 2 * (hit & (leaves ^ 1u));
   };
   // The starting leaf pairs: test and write.
@@ -472,7 +477,7 @@ int FindSelfCollisionsAllPairs(const SphereBvhTopology& t, const SphereBvhSphere
   int count = 0;
   for (int la = 0; la < n; ++la) {
     for (int lb = la + 2; lb < n; ++lb) {
-      if (!Overlap(s, la, lb)) continue;
+      if (!OverlapScalar(s + 4 * la, s + 4 * lb)) continue;
       if (count < capacity) pairs[count] = {la, lb};
       ++count;
     }
