@@ -37,14 +37,16 @@ constexpr int kRobustSamples = 24;
 constexpr int kMaxIntervals = 6;
 constexpr int kMaxCandidates = 16 + kMaxIntervals * (kRobustSamples + 2);
 
+// A piece [lo, hi] of the needle parameter, with the cosine and sine of its ends.
 struct Interval {
   double lo = 0, hi = 0;
+  double cos_lo = 1, sin_lo = 0, cos_hi = 1, sin_hi = 0;
 };
 
 // The needle circle x(s) = o + ρ(cos s e1 + sin s e2) in the vessel frame V [m].
 struct NeedleInV {
   Eigen::Vector3d o, e1, e2, e3;  // e3 = e1 × e2
-  double rho = 0;
+  double rho = 0, inv_rho = 0;
   Eigen::Vector3d PointAt(double s) const {
     return o + rho * (std::cos(s) * e1 + std::sin(s) * e2);
   }
@@ -77,43 +79,74 @@ bool InSegment(const Eigen::Vector3d& p, double omega, double cos_omega, double 
 // §4.2.4, last paragraph: the pieces of the arc s ∈ [0, S] whose azimuth lies in [0, Ω]. The
 // arc crosses the boundary half-planes (azimuth 0 and Ω) where it crosses their planes through
 // the z axis, A cos s + B sin s + C = 0; between consecutive crossings the azimuth test of
-// one point decides the whole piece.
-int ClipArcToSegment(const NeedleInV& nv, double sweep, double omega, Interval out[]) {
+// one point decides the whole piece. Every cut carries its (cos s, sin s), from the same
+// algebra as s itself, so that neither the test points nor the piece ends need libm.
+int ClipArcToSegment(const NeedleInV& nv, double sweep, double cos_sweep, double sin_sweep,
+                     double omega, Interval out[]) {
   if (omega >= kTwoPi) {
-    out[0] = {0, sweep};
+    out[0] = {0, sweep, 1, 0, cos_sweep, sin_sweep};
     return 1;
   }
-  double cuts[8];
+  struct Cut {
+    double s, cs, sn;
+  };
+  Cut cuts[6];
   int nc = 0;
-  cuts[nc++] = 0;
+  cuts[nc++] = {0, 1, 0};
   const auto add_plane = [&](double nx, double ny) {
     const double a = nv.rho * (nx * nv.e1.x() + ny * nv.e1.y());
     const double b = nv.rho * (nx * nv.e2.x() + ny * nv.e2.y());
     const double c = nx * nv.o.x() + ny * nv.o.y();
     const double m = std::sqrt(a * a + b * b);
     if (!(m > 0) || std::abs(c) > m) return;
+    // s = β ± η with (cos β, sin β) = (A, B)/m and (cos η, sin η) = (−C, √(m² − C²))/m; η by
+    // atan2 rather than acos: accurate where −C/m is near ±1.
+    const double root = std::sqrt(std::max(0.0, (m - c) * (m + c)));
     const double base = std::atan2(b, a);
-    const double half = std::acos(std::clamp(-c / m, -1.0, 1.0));
-    for (const double s : {WrapTo2Pi(base - half), WrapTo2Pi(base + half)}) {
-      if (s > 0 && s < sweep) cuts[nc++] = s;
+    const double half = std::atan2(root, -c);
+    const double inv_m2 = 1 / (m * m);
+    const double ch = -c, sh = root;  // m (cos η, sin η)
+    const Cut minus = {WrapTo2Pi(base - half), (a * ch + b * sh) * inv_m2,
+                       (b * ch - a * sh) * inv_m2};
+    const Cut plus = {WrapTo2Pi(base + half), (a * ch - b * sh) * inv_m2,
+                      (b * ch + a * sh) * inv_m2};
+    for (const Cut& cut : {minus, plus}) {
+      if (cut.s > 0 && cut.s < sweep) cuts[nc++] = cut;
     }
   };
   const double cos_omega = std::cos(omega), sin_omega = std::sin(omega);
   add_plane(0, 1);                   // azimuth 0 (and π)
   add_plane(sin_omega, -cos_omega);  // azimuth Ω (and Ω + π)
-  cuts[nc++] = sweep;
+  cuts[nc++] = {sweep, cos_sweep, sin_sweep};
   for (int a = 1; a < nc; ++a) {  // insertion sort, nc ≤ 6
-    for (int b = a; b > 0 && cuts[b] < cuts[b - 1]; --b) std::swap(cuts[b], cuts[b - 1]);
+    for (int b = a; b > 0 && cuts[b].s < cuts[b - 1].s; --b) std::swap(cuts[b], cuts[b - 1]);
   }
   int n = 0;
   for (int i = 0; i + 1 < nc; ++i) {
-    const double lo = cuts[i], hi = cuts[i + 1];
-    if (!(hi > lo)) continue;
-    if (!InSegment(nv.PointAt(0.5 * (lo + hi)), omega, cos_omega, sin_omega)) continue;
-    if (n > 0 && out[n - 1].hi == lo) {
-      out[n - 1].hi = hi;
+    const Cut& lo = cuts[i];
+    const Cut& hi = cuts[i + 1];
+    if (!(hi.s > lo.s)) continue;
+    // The midpoint: the bisector of the ends' directions while the piece is shorter than π
+    // with a margin (|sum| ≥ 2 cos 1.25 > 0.6), else libm.
+    double cm, sm;
+    if (hi.s - lo.s <= 2.5) {
+      const double x = lo.cs + hi.cs, y = lo.sn + hi.sn;
+      const double inv = 1 / std::sqrt(x * x + y * y);
+      cm = x * inv;
+      sm = y * inv;
     } else {
-      out[n++] = {lo, hi};
+      cm = std::cos(0.5 * (lo.s + hi.s));
+      sm = std::sin(0.5 * (lo.s + hi.s));
+    }
+    if (!InSegment(nv.o + nv.rho * (cm * nv.e1 + sm * nv.e2), omega, cos_omega, sin_omega)) {
+      continue;
+    }
+    if (n > 0 && out[n - 1].hi == lo.s) {
+      out[n - 1].hi = hi.s;
+      out[n - 1].cos_hi = hi.cs;
+      out[n - 1].sin_hi = hi.sn;
+    } else {
+      out[n++] = {lo.s, hi.s, lo.cs, lo.sn, hi.cs, hi.sn};
     }
   }
   return n;
@@ -279,8 +312,8 @@ struct ScaledLiftedCircle {
 };
 
 ScaledLiftedCircle LiftCircleScaled(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
-                                    const Eigen::Vector3d& e2, const Eigen::Vector3d& n,
-                                    double rho) {
+                                    const Eigen::Vector3d& e2, const Eigen::Vector3d& n, double rho,
+                                    double inv_rho) {
   // The needle circle is its plane n·x = n·o (n = e1 × e2) cut by its sphere |x − o|² = ρ².
   // Through P (4.2) each becomes a hyperplane of R⁴: n₁·X = h₁ with n₁ = (n, h₁), h₁ = n·o,
   // and n₂·X = h₂ with n₂ = (−2o, 1 − k), h₂ = −(1 + k), k = |o|² − ρ² (substitute
@@ -317,7 +350,7 @@ ScaledLiftedCircle LiftCircleScaled(const Eigen::Vector3d& o, const Eigen::Vecto
   const double xv = x0.dot(v);
   const Eigen::Vector3d t3 = n0 * v - 2 * xv * x0;  // length N₀ρ together with t's last entry
   const Eigen::Vector4d t(t3.x(), t3.y(), t3.z(), 2 * xv);
-  lc.ay = t * (std::sqrt(lc.radius_sq) * det * inv / rho);
+  lc.ay = t * (std::sqrt(lc.radius_sq) * det * inv * inv_rho);
   return lc;
 }
 
@@ -341,7 +374,7 @@ CircleConic CalcScaledCircleConic(double alpha, const ScaledLiftedCircle& lc) {
 
 LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                               const Eigen::Vector3d& e2, double rho) {
-  const ScaledLiftedCircle scaled = LiftCircleScaled(o, e1, e2, e1.cross(e2), rho);
+  const ScaledLiftedCircle scaled = LiftCircleScaled(o, e1, e2, e1.cross(e2), rho, 1 / rho);
   LiftedCircle lc;
   lc.center = scaled.center;
   lc.radius = std::sqrt(scaled.radius_sq);
@@ -463,13 +496,15 @@ struct LiftedConic {
   double phi_size = 0;  // |A| + … + |F|: the scale of φ's values and of their rounding
 };
 
-void LiftLevelTorus(const NeedleInV& nv, double core_r, double tube_t, LiftedConic* out) {
+// d2 = R² − t², formed by the caller as accurately as its inputs allow.
+void LiftLevelTorus(const NeedleInV& nv, double tube_t, double d2, LiftedConic* out) {
   LiftedConic& k = *out;
-  // Appendix B, then §4.2.3: lift the torus and the needle circle to S³.
-  const TorusLiftScale scale = CalcTorusLiftScale(core_r, tube_t);
-  k.lambda = scale.lambda;
-  k.alpha = scale.alpha;
-  k.lc = LiftCircleScaled(k.lambda * nv.o, nv.e1, nv.e2, nv.e3, k.lambda * nv.rho);
+  // Appendix B (as CalcTorusLiftScale), then §4.2.3: lift the torus and the needle circle to
+  // S³. The square roots of d2 and of t² run side by side.
+  const double sd = std::sqrt(d2);  // 1/λ
+  k.lambda = 1 / sd;
+  k.alpha = tube_t * k.lambda;
+  k.lc = LiftCircleScaled(k.lambda * nv.o, nv.e1, nv.e2, nv.e3, k.lambda * nv.rho, sd * nv.inv_rho);
   const ScaledLiftedCircle& lc = k.lc;
   k.radius = std::sqrt(lc.radius_sq);
   k.ok = lc.center.allFinite() && lc.ax.allFinite() && lc.ay.allFinite() &&
@@ -557,7 +592,7 @@ void RunSpPassOnConic(const NeedleInV& nv, const LiftedConic& k, const Interval*
 void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval* iv, int n_iv,
                const SpOptions& opt, bool all, double phi_below, SpPass* out) {
   LiftedConic k;
-  LiftLevelTorus(nv, core_r, tube_t, &k);
+  LiftLevelTorus(nv, tube_t, (core_r - tube_t) * (core_r + tube_t), &k);
   RunSpPassOnConic(nv, k, iv, n_iv, opt, all, phi_below, out);
 }
 
@@ -604,32 +639,30 @@ double CubicMinimum(double c1, double c2, double c3, double c4, double lo, doubl
 // arc: no point farther than t, without the quartic (4.26). Only sufficient: when it fails,
 // the full pass answers.
 bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interval* iv, int n_iv,
-                         const double* cos_lo, const double* sin_lo, const double* cos_hi,
-                         const double* sin_hi, double cos_best, double sin_best, double eps) {
+                         double cos_best, double sin_best, double eps) {
+  // θ*'s direction (ca, sa) = n (cos θ*, sin θ*), not normalised: the rotated conic below is
+  // n² times the one at the unit direction, and every test is homogeneous in it and ε.
   double ca, sa;
-  {
-    double a, b;
-    CalcLiftedDirection(nv, k, cos_best, sin_best, &a, &b);
-    const double n2 = a * a + b * b;
-    if (!(n2 > 0)) return false;
-    const double inv = 1 / std::sqrt(n2);
-    ca = a * inv;
-    sa = b * inv;
-  }
+  CalcLiftedDirection(nv, k, cos_best, sin_best, &ca, &sa);
+  const double n_sq = ca * ca + sa * sa;
+  if (!(n_sq > 0)) return false;
+  const double n = std::sqrt(n_sq);
+  eps *= n_sq;
   // The conic rotated to θ*: φ = A'cos²Δ + B'cosΔ sinΔ + C'sin²Δ + D'cosΔ + E'sinΔ + F.
   const CircleConic& q = k.conic;
   const double cc = ca * ca, ss = sa * sa, cs = ca * sa;
   const double a1 = q.a * cc + q.b * cs + q.c * ss;
   const double c1 = q.a * ss - q.b * cs + q.c * cc;
   const double b1 = 2 * (q.c - q.a) * cs + q.b * (cc - ss);
-  const double d1 = q.d * ca + q.e * sa;
-  const double e1 = q.e * ca - q.d * sa;
+  const double d1 = (q.d * ca + q.e * sa) * n;
+  const double e1 = (q.e * ca - q.d * sa) * n;
+  const double f1 = q.f * n_sq;
   // cos Δ = (1 − τ²)/(1 + τ²), sin Δ = 2τ/(1 + τ²).
-  const double k0 = a1 + d1 + q.f;
+  const double k0 = a1 + d1 + f1;
   const double k1 = 2 * (b1 + e1);
-  const double k2 = -2 * a1 + 4 * c1 + 2 * q.f;
+  const double k2 = -2 * a1 + 4 * c1 + 2 * f1;
   const double k3 = 2 * (e1 - b1);
-  const double k4 = a1 - d1 + q.f;
+  const double k4 = a1 - d1 + f1;
   const auto h = [&](double tau) { return k2 + tau * (k3 + tau * k4); };
   // Minimum of k0 + k1 τ + m τ² over [lo, hi] (infinite ends allowed when m > 0).
   const auto lower_ok = [&](double m, double lo, double hi) {
@@ -652,19 +685,20 @@ bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interv
       // directions (a, b) = n (cos θ, sin θ): τ = (b ca − a sa) / (n + a ca + b sa).
       // θ(0) = 0: b_x goes through the lift of s = 0.
       double a_lo = 1, b_lo = 0, a_hi, b_hi;
-      if (iv[i].lo != 0) CalcLiftedDirection(nv, k, cos_lo[i], sin_lo[i], &a_lo, &b_lo);
-      CalcLiftedDirection(nv, k, cos_hi[i], sin_hi[i], &a_hi, &b_hi);
+      if (iv[i].lo != 0) CalcLiftedDirection(nv, k, iv[i].cos_lo, iv[i].sin_lo, &a_lo, &b_lo);
+      CalcLiftedDirection(nv, k, iv[i].cos_hi, iv[i].sin_hi, &a_hi, &b_hi);
       const double n_lo = std::sqrt(a_lo * a_lo + b_lo * b_lo);
       const double n_hi = std::sqrt(a_hi * a_hi + b_hi * b_hi);
+      // (cl, sl) = n n_lo (cos Δ_lo, sin Δ_lo), the same for the high end.
       const double cl = a_lo * ca + b_lo * sa, sl = b_lo * ca - a_lo * sa;
       const double ch = a_hi * ca + b_hi * sa, sh = b_hi * ca - a_hi * sa;
       // Near Δ = π the piece is treated as wrapping (whole circle: conservative).
       constexpr double kNearAntipode = 1e-6;
-      if (!(cl > (-1 + kNearAntipode) * n_lo) || !(ch > (-1 + kNearAntipode) * n_hi)) {
+      if (!(cl > (-1 + kNearAntipode) * n_lo * n) || !(ch > (-1 + kNearAntipode) * n_hi * n)) {
         whole = true;
       } else {
-        ta = sl / (n_lo + cl);
-        tb = sh / (n_hi + ch);
+        ta = sl / (n_lo * n + cl);
+        tb = sh / (n_hi * n + ch);
         // θ grows with s, so the piece runs counter-clockwise from θ(lo) to θ(hi); τ grows
         // with Δ on (−π, π): ta > tb means the piece passes Δ = π.
         whole = ta > tb;
@@ -807,10 +841,14 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   nv.e2 = (nv.e2 - nv.e2.dot(nv.e1) * nv.e1).normalized();
   nv.e3 = nv.e1.cross(nv.e2);
   nv.rho = arc.radius_m;
+  nv.inv_rho = 1 / arc.radius_m;
 
   // §4.2.4: clip the arc to the segment.
   Interval iv[kMaxIntervals];
-  const int n_iv = ClipArcToSegment(nv, arc.sweep_rad, torus.segment_angle_rad, iv);
+  double cos_sweep, sin_sweep;
+  CosSin(arc.sweep_rad, &cos_sweep, &sin_sweep);
+  const int n_iv =
+      ClipArcToSegment(nv, arc.sweep_rad, cos_sweep, sin_sweep, torus.segment_angle_rad, iv);
   diag.num_intervals = n_iv;
   if (n_iv == 0) {
     out.status = ClearanceStatus::kEmptyRange;
@@ -820,15 +858,12 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   Candidate cand[kMaxCandidates];
   int n_cand = 0;
   bool deep = false;
-  double cos_lo[kMaxIntervals], sin_lo[kMaxIntervals], cos_hi[kMaxIntervals], sin_hi[kMaxIntervals];
   for (int i = 0; i < n_iv; ++i) {
-    CosSin(iv[i].lo, &cos_lo[i], &sin_lo[i]);
-    CosSin(iv[i].hi, &cos_hi[i], &sin_hi[i]);
     for (int end = 0; end < 2; ++end) {
-      const Candidate c = end == 0 ? MakeCandidate(nv, core_r, iv[i].lo, cos_lo[i], sin_lo[i], i,
-                                                   CandidateKind::kLowEnd)
-                                   : MakeCandidate(nv, core_r, iv[i].hi, cos_hi[i], sin_hi[i], i,
-                                                   CandidateKind::kHighEnd);
+      const Candidate c = end == 0 ? MakeCandidate(nv, core_r, iv[i].lo, iv[i].cos_lo, iv[i].sin_lo,
+                                                   i, CandidateKind::kLowEnd)
+                                   : MakeCandidate(nv, core_r, iv[i].hi, iv[i].cos_hi, iv[i].sin_hi,
+                                                   i, CandidateKind::kHighEnd);
       deep = deep || IsDeep(c.f, core_r);
       cand[n_cand++] = c;
     }
@@ -903,12 +938,12 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   }
   for (int round = 0; round < rounds; ++round) {
     ++diag.certify_passes;
-    const double t = std::max(std::sqrt(best.f), kMinCertifyRel * core_r);
+    const double t_sq = std::max(best.f, kMinCertifyRel * kMinCertifyRel * core_r * core_r);
     LiftedConic level;
-    LiftLevelTorus(nv, core_r, t, &level);
+    LiftLevelTorus(nv, std::sqrt(t_sq), core_r * core_r - t_sq, &level);
     if (opt.quick_certificate && level.ok &&
-        ProveNoFartherPoint(nv, level, iv, n_iv, cos_lo, sin_lo, cos_hi, sin_hi, best.cos_s,
-                            best.sin_s, kCertifyPhiRel * level.phi_size)) {
+        ProveNoFartherPoint(nv, level, iv, n_iv, best.cos_s, best.sin_s,
+                            kCertifyPhiRel * level.phi_size)) {
       ++diag.certify_quick;
       break;
     }
@@ -951,12 +986,13 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   out.p_WN = torus.X_WV * p_VN;
   // Nearest wall point: along the ray from the nearest core point through the needle point.
   const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());
+  const double inv_w = 1 / w;
   const Eigen::Vector3d radial =
-      w > 0 ? Eigen::Vector3d(p_VN.x() / w, p_VN.y() / w, 0) : Eigen::Vector3d::UnitX();
+      w > 0 ? Eigen::Vector3d(p_VN.x() * inv_w, p_VN.y() * inv_w, 0) : Eigen::Vector3d::UnitX();
   const Eigen::Vector3d core_pt = core_r * radial;
   const Eigen::Vector3d off = p_VN - core_pt;
   const double off_len = off.norm();
-  const Eigen::Vector3d dir = off_len > 0 ? Eigen::Vector3d(off / off_len) : radial;
+  const Eigen::Vector3d dir = off_len > 0 ? Eigen::Vector3d(off * (1 / off_len)) : radial;
   out.p_WW = torus.X_WV * Eigen::Vector3d(core_pt + tube_r * dir);
   return out;
 }
