@@ -31,6 +31,9 @@ constexpr double kMaxPolishStep_rad = 0.5;
 constexpr double kDeepRel = 1e-6;
 constexpr double kMinCertifyRel = 1e-6;
 constexpr double kCertifyPhiRel = 1e-12;
+// The quick test proves G̃_t ≥ −this·(the size of G̃_t's terms): ten times inside the full
+// pass's threshold, and far above the rounding of G̃_t's coefficients (~10 ε of that size).
+constexpr double kQuickCertifyRel = 1e-13;
 // Uniform starting points per in-range piece on the robust path.
 constexpr int kRobustSamples = 24;
 
@@ -383,6 +386,39 @@ LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e
   return lc;
 }
 
+CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                                      const Eigen::Vector3d& e2, double rho,
+                                      double rho_sq_minus_one, double t_sq, double* size) {
+  // x(s) = o + cos s u + sin s v, u = ρe₁, v = ρe₂, and with L = |x|² − 1 + t² (of degree one
+  // in cos s, sin s on a circle: |u|² = |v|² = ρ², u·v = 0),
+  // G̃ = 4t²(x² + y²) − 4(1 − t²)z² − L², term by term in cos², cos sin, sin², cos, sin, 1.
+  const Eigen::Vector3d u = rho * e1, v = rho * e2;
+  const double w[6] = {u.x() * u.x() + u.y() * u.y(),       2 * (u.x() * v.x() + u.y() * v.y()),
+                       v.x() * v.x() + v.y() * v.y(),       2 * (o.x() * u.x() + o.y() * u.y()),
+                       2 * (o.x() * v.x() + o.y() * v.y()), o.x() * o.x() + o.y() * o.y()};
+  const double z[6] = {u.z() * u.z(),     2 * u.z() * v.z(), v.z() * v.z(),
+                       2 * o.z() * u.z(), 2 * o.z() * v.z(), o.z() * o.z()};
+  const double kk = o.squaredNorm() + rho_sq_minus_one + t_sq;
+  const double p = 2 * o.dot(u), q = 2 * o.dot(v);
+  const double l2[6] = {p * p, 2 * p * q, q * q, 2 * kk * p, 2 * kk * q, kk * kk};
+  const double a4 = 4 * t_sq, b4 = 4 * (1 - t_sq);
+  double c[6];
+  double total = 0;
+  for (int i = 0; i < 6; ++i) {
+    c[i] = a4 * w[i] - b4 * z[i] - l2[i];
+    total += std::abs(a4 * w[i]) + std::abs(b4 * z[i]) + std::abs(l2[i]);
+  }
+  if (size != nullptr) *size = total;
+  CircleConic k;
+  k.a = c[0];
+  k.b = c[1];
+  k.c = c[2];
+  k.d = c[3];
+  k.e = c[4];
+  k.f = c[5];
+  return k;
+}
+
 CircleConic CalcCircleConic(double alpha, const LiftedCircle& lc) {
   // (4.15): G = α²(l² + m²) − (p² + q²) at c + x b_x + y b_y, with x = R̂ cos θ, y = R̂ sin θ.
   const double a2 = alpha * alpha;
@@ -486,7 +522,7 @@ int FindConicExtremaOnCircle(const CircleConic& k, const SpOptions& opt, double 
 namespace {
 
 // The lifted needle circle and the conic of the torus of tube radius t on it (appendix B,
-// §4.2.3, (4.15)): shared by the certificate's quick test and its full pass.
+// §4.2.3, (4.15)).
 struct LiftedConic {
   bool ok = false;  // false: lifted circle too ill-conditioned (README_sp.md, "Fallbacks")
   double lambda = 1, alpha = 0;
@@ -596,19 +632,6 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
   RunSpPassOnConic(nv, k, iv, n_iv, opt, all, phi_below, out);
 }
 
-// The direction (a, b) ∝ (cos θ, sin θ), with a positive factor, of the lifted needle point
-// with parameter s given by (cos s, sin s) on the lifted circle: (N (X − c))·(a_x, a_y) with
-// X = P⁻¹(x) (4.3) and N = |x|² + 1, so no division.
-void CalcLiftedDirection(const NeedleInV& nv, const LiftedConic& k, double cs, double sn, double* a,
-                         double* b) {
-  const Eigen::Vector3d x = k.lambda * (nv.o + nv.rho * (cs * nv.e1 + sn * nv.e2));
-  const double x2 = x.squaredNorm();
-  const Eigen::Vector4d rel =
-      Eigen::Vector4d(2 * x.x(), 2 * x.y(), 2 * x.z(), x2 - 1) - (x2 + 1) * k.lc.center;
-  *a = rel.dot(k.lc.ax);
-  *b = rel.dot(k.lc.ay);
-}
-
 // The minimum of c₁ + c₂τ + c₃τ² + c₄τ³ over [lo, hi]: at an end or at a root of the
 // derivative c₂ + 2c₃τ + 3c₄τ² inside (stable quadratic formula).
 double CubicMinimum(double c1, double c2, double c3, double c4, double lo, double hi) {
@@ -631,38 +654,30 @@ double CubicMinimum(double c1, double c2, double c3, double c4, double lo, doubl
   return v;
 }
 
-// The certificate's quick test (README_sp.md, "Certificate"). The level torus goes through
-// the deepest point found, θ*, so φ_t(θ*) ≈ 0, and φ_t'(θ*) ≈ 0 when the ascent stopped
-// inside a piece. With τ = tan((θ − θ*)/2), q(τ) = (1 + τ²)² φ_t(θ* + Δ) is a quartic
+// The certificate's quick test (README_sp.md, "Certificate"). The level torus of tube radius
+// t goes through the deepest point found, s*, so G̃_t(s*) ≈ 0 (G̃_t = the lifted torus G_t along
+// the needle, CalcLevelTorusAlongNeedle), and G̃_t'(s*) ≈ 0 when the ascent stopped inside a
+// piece. With τ = tan((s − s*)/2), q(τ) = (1 + τ²)² G̃_t(s* + Δ) is a quartic
 // q₀ + q₁τ + τ² h(τ), h = q₂ + q₃τ + q₄τ². If h ≥ m ≥ 0 on the τ-range of every piece, then
-// q ≥ q₀ + q₁τ + mτ² there, and that quadratic's minimum ≥ −ε proves φ_t ≥ −ε on the clipped
+// q ≥ q₀ + q₁τ + mτ² there, and that quadratic's minimum ≥ −ε proves G̃_t ≥ −ε on the clipped
 // arc: no point farther than t, without the quartic (4.26). Only sufficient: when it fails,
 // the full pass answers.
-bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interval* iv, int n_iv,
-                         double cos_best, double sin_best, double eps) {
-  // θ*'s direction (ca, sa) = n (cos θ*, sin θ*), not normalised: the rotated conic below is
-  // n² times the one at the unit direction, and every test is homogeneous in it and ε.
-  double ca, sa;
-  CalcLiftedDirection(nv, k, cos_best, sin_best, &ca, &sa);
-  const double n_sq = ca * ca + sa * sa;
-  if (!(n_sq > 0)) return false;
-  const double n = std::sqrt(n_sq);
-  eps *= n_sq;
-  // The conic rotated to θ*: φ = A'cos²Δ + B'cosΔ sinΔ + C'sin²Δ + D'cosΔ + E'sinΔ + F.
-  const CircleConic& q = k.conic;
+bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, double s_best,
+                         double ca, double sa, double eps) {
+  // The trigonometric polynomial rotated to s*: G̃ = A'cos²Δ + B'cosΔ sinΔ + C'sin²Δ + D'cosΔ
+  // + E'sinΔ + F.
   const double cc = ca * ca, ss = sa * sa, cs = ca * sa;
   const double a1 = q.a * cc + q.b * cs + q.c * ss;
   const double c1 = q.a * ss - q.b * cs + q.c * cc;
   const double b1 = 2 * (q.c - q.a) * cs + q.b * (cc - ss);
-  const double d1 = (q.d * ca + q.e * sa) * n;
-  const double e1 = (q.e * ca - q.d * sa) * n;
-  const double f1 = q.f * n_sq;
+  const double d1 = q.d * ca + q.e * sa;
+  const double e1 = q.e * ca - q.d * sa;
   // cos Δ = (1 − τ²)/(1 + τ²), sin Δ = 2τ/(1 + τ²).
-  const double k0 = a1 + d1 + f1;
+  const double k0 = a1 + d1 + q.f;
   const double k1 = 2 * (b1 + e1);
-  const double k2 = -2 * a1 + 4 * c1 + 2 * f1;
+  const double k2 = -2 * a1 + 4 * c1 + 2 * q.f;
   const double k3 = 2 * (e1 - b1);
-  const double k4 = a1 - d1 + f1;
+  const double k4 = a1 - d1 + q.f;
   const auto h = [&](double tau) { return k2 + tau * (k3 + tau * k4); };
   // Minimum of k0 + k1 τ + m τ² over [lo, hi] (infinite ends allowed when m > 0).
   const auto lower_ok = [&](double m, double lo, double hi) {
@@ -677,35 +692,14 @@ bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interv
     }
     return v >= -eps;
   };
+  // Pieces reaching within this of Δ = ±π are treated as wrapping (whole circle: conservative).
+  constexpr double kNearAntipode_rad = 1e-3;
   for (int i = 0; i < n_iv; ++i) {
-    double ta, tb;
-    bool whole = iv[i].hi - iv[i].lo >= kTwoPi;
-    if (!whole) {
-      // Δ of the ends relative to θ*, as τ = tan(Δ/2) = sin Δ / (1 + cos Δ), from the ends'
-      // directions (a, b) = n (cos θ, sin θ): τ = (b ca − a sa) / (n + a ca + b sa).
-      // θ(0) = 0: b_x goes through the lift of s = 0.
-      double a_lo = 1, b_lo = 0, a_hi, b_hi;
-      if (iv[i].lo != 0) CalcLiftedDirection(nv, k, iv[i].cos_lo, iv[i].sin_lo, &a_lo, &b_lo);
-      CalcLiftedDirection(nv, k, iv[i].cos_hi, iv[i].sin_hi, &a_hi, &b_hi);
-      const double n_lo = std::sqrt(a_lo * a_lo + b_lo * b_lo);
-      const double n_hi = std::sqrt(a_hi * a_hi + b_hi * b_hi);
-      // (cl, sl) = n n_lo (cos Δ_lo, sin Δ_lo), the same for the high end.
-      const double cl = a_lo * ca + b_lo * sa, sl = b_lo * ca - a_lo * sa;
-      const double ch = a_hi * ca + b_hi * sa, sh = b_hi * ca - a_hi * sa;
-      // Near Δ = π the piece is treated as wrapping (whole circle: conservative).
-      constexpr double kNearAntipode = 1e-6;
-      if (!(cl > (-1 + kNearAntipode) * n_lo * n) || !(ch > (-1 + kNearAntipode) * n_hi * n)) {
-        whole = true;
-      } else {
-        ta = sl / (n_lo * n + cl);
-        tb = sh / (n_hi * n + ch);
-        // θ grows with s, so the piece runs counter-clockwise from θ(lo) to θ(hi); τ grows
-        // with Δ on (−π, π): ta > tb means the piece passes Δ = π.
-        whole = ta > tb;
-      }
-    }
+    double ta = 0, tb = 0;
+    const bool whole = iv[i].lo - s_best <= -kPi + kNearAntipode_rad ||
+                       iv[i].hi - s_best >= kPi - kNearAntipode_rad;
     if (whole) {
-      // Every τ, and Δ = π (τ = ∞), where φ = k₄.
+      // Every τ, and Δ = π (τ = ∞), where G̃ = k₄.
       if (!(k4 > 0)) return false;
       const double m = k2 - 0.25 * k3 * k3 / k4;
       if (!(m >= 0)) return false;
@@ -715,15 +709,18 @@ bool ProveNoFartherPoint(const NeedleInV& nv, const LiftedConic& k, const Interv
       }
       continue;
     }
+    // τ = tan(Δ/2) = sin Δ / (1 + cos Δ) of the ends, Δ ∈ (−π, π) here.
+    ta = (iv[i].sin_lo * ca - iv[i].cos_lo * sa) / (1 + iv[i].cos_lo * ca + iv[i].sin_lo * sa);
+    tb = (iv[i].sin_hi * ca - iv[i].cos_hi * sa) / (1 + iv[i].cos_hi * ca + iv[i].sin_hi * sa);
     double m = std::min(h(ta), h(tb));
     if (k4 > 0) {
       const double tv = -k3 / (2 * k4);
       if (tv > ta && tv < tb) m = std::min(m, h(tv));
     }
     if (m >= 0 && lower_ok(m, ta, tb)) continue;
-    // A piece on one side of θ* (θ* at its end, or outside it): q = q₀ + τ c(τ) with the
+    // A piece on one side of s* (s* at its end, or outside it): q = q₀ + τ c(τ) with the
     // cubic c = q₁ + q₂τ + q₃τ² + q₄τ³, so c ≥ 0 on τ ≥ 0 (c ≤ 0 on τ ≤ 0) proves q ≥ q₀.
-    // An end that rounding puts just across θ* adds a sliver |τ| ≤ 1 where |τ c| ≤ |τ| Σ|qᵢ|:
+    // An end that rounding puts just across s* adds a sliver |τ| ≤ 1 where |τ c| ≤ |τ| Σ|qᵢ|:
     // q₀ minus that ≥ −ε/2 there; on the main part c may dip below 0 by rounding as long as
     // τ_max·min c ≥ −(q₀ + ε)/2, which keeps q ≥ (q₀ − ε)/2 ≥ −ε.
     const double sum_k = std::abs(k1) + std::abs(k2) + std::abs(k3) + std::abs(k4);
@@ -936,17 +933,25 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
+  const double inv_r = 1 / core_r;
+  // (ρ/R)² − 1, without cancellation for the needle of the vessel's radius.
+  const double rho_sq_minus_one = (nv.rho - core_r) * (nv.rho + core_r) * inv_r * inv_r;
   for (int round = 0; round < rounds; ++round) {
     ++diag.certify_passes;
     const double t_sq = std::max(best.f, kMinCertifyRel * kMinCertifyRel * core_r * core_r);
+    if (opt.quick_certificate) {
+      double size;
+      const CircleConic level_trig =
+          CalcLevelTorusAlongNeedle(inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one,
+                                    t_sq * inv_r * inv_r, &size);
+      if (ProveNoFartherPoint(level_trig, iv, n_iv, best.s, best.cos_s, best.sin_s,
+                              kQuickCertifyRel * size)) {
+        ++diag.certify_quick;
+        break;
+      }
+    }
     LiftedConic level;
     LiftLevelTorus(nv, std::sqrt(t_sq), core_r * core_r - t_sq, &level);
-    if (opt.quick_certificate && level.ok &&
-        ProveNoFartherPoint(nv, level, iv, n_iv, best.cos_s, best.sin_s,
-                            kCertifyPhiRel * level.phi_size)) {
-      ++diag.certify_quick;
-      break;
-    }
     SpPass cert;
     RunSpPassOnConic(nv, level, iv, n_iv, opt, false, -kCertifyPhiRel, &cert);
     int n_start = 0;

@@ -98,6 +98,18 @@ struct CircleConic {
 };
 CircleConic CalcCircleConic(double alpha, const LiftedCircle& circle);
 
+// The lifted torus along the needle, for the quick certificate (README_sp.md): in units of R,
+// with x(s) = o + ρ(cos s e1 + sin s e2) and λ of appendix B for tube radius t,
+// G̃(s) = (λ²|x|² + 1)² G(P⁻¹(λx)) / λ⁴ = 4t²(x² + y²) − 4(1 − t²)z² − (|x|² − 1 + t²)²,
+// a trigonometric polynomial of degree 2 in s with the sign of G: positive where the needle
+// point is closer than t to the core circle. It is the torus equation (4.1) arranged so that
+// every term is of the size of t² near the tube (no cancellation of terms of size R⁴).
+// rho_sq_minus_one = ρ² − 1 formed by the caller; *size (optional) = Σ|terms|, the scale of
+// the coefficients' rounding.
+CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                                      const Eigen::Vector3d& e2, double rho,
+                                      double rho_sq_minus_one, double t_sq, double* size);
+
 // The rotation ψ of (4.19)–(4.21) that removes the u² − v² term of φ'(θ) = 0 (4.17)–(4.18),
 // and the coefficients of the rotated condition β uv + γ u + δ v = 0 (4.23).
 struct ExtremaCondition {

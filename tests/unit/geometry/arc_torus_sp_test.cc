@@ -212,6 +212,40 @@ TEST(ArcTorusSpTest, ConicOnTheCircleIsTheLiftedTorus) {
   }
 }
 
+// The lifted torus along the needle (the quick certificate's form) is G on the lifted needle
+// point times the positive factor (λ²|x|² + 1)²/λ⁴, so its sign is that of t − distance;
+// checked against LiftToS3 and EvalLiftedTorus directly, on random needles and level tori.
+TEST(ArcTorusSpTest, LevelTorusAlongNeedleIsTheLiftedTorus) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1, 1), unit(0, 1);
+  for (int i = 0; i < 500; ++i) {
+    const Eigen::Vector3d o(1.5 * u(rng), 1.5 * u(rng), 0.5 * u(rng));
+    const Eigen::Matrix3d R = Rot(3 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const double rho = 0.2 + 1.5 * unit(rng);
+    const double t = 0.01 + 0.9 * unit(rng);
+    double size = 0;
+    const CircleConic g =
+        CalcLevelTorusAlongNeedle(o, R.col(0), R.col(1), rho, rho * rho - 1, t * t, &size);
+    ASSERT_GT(size, 0);
+    const TorusLiftScale scale = CalcTorusLiftScale(1.0, t);
+    const double lambda2 = scale.lambda * scale.lambda;
+    for (int j = 0; j < 12; ++j) {
+      const double s = 2 * kPi * unit(rng);
+      const Eigen::Vector3d x = o + rho * (std::cos(s) * R.col(0) + std::sin(s) * R.col(1));
+      const double factor =
+          (lambda2 * x.squaredNorm() + 1) * (lambda2 * x.squaredNorm() + 1) / (lambda2 * lambda2);
+      const double lifted =
+          factor * EvalLiftedTorus(scale.alpha, LiftToS3(scale.lambda * x));  // (4.3), (4.4)
+      EXPECT_NEAR(g.Eval(std::cos(s), std::sin(s)), lifted, 1e-13 * size) << i << " " << j;
+      // Its sign: inside the level torus (distance < t) exactly where it is positive.
+      const double d = std::hypot(std::hypot(x.x(), x.y()) - 1, x.z());
+      if (std::abs(d - t) > 1e-9) {
+        EXPECT_EQ(g.Eval(std::cos(s), std::sin(s)) > 0, d < t) << i << " " << j;
+      }
+    }
+  }
+}
+
 CircleConic RandomConic(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(-1, 1);
   CircleConic k;
