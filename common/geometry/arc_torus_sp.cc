@@ -102,19 +102,20 @@ int ClipArcToSegment(const NeedleInV& nv, double sweep, double cos_sweep, double
     const double c = nx * nv.o.x() + ny * nv.o.y();
     const double m = std::sqrt(a * a + b * b);
     if (!(m > 0) || std::abs(c) > m) return;
-    // s = β ± η with (cos β, sin β) = (A, B)/m and (cos η, sin η) = (−C, √(m² − C²))/m; η by
-    // atan2 rather than acos: accurate where −C/m is near ±1.
+    // s = β ± η with (cos β, sin β) = (A, B)/m and (cos η, sin η) = (−C, √(m² − C²))/m, by
+    // angle addition; s itself (atan2) only for the crossings inside (0, S), which the signs
+    // of sin s and of sin(S − s) tell without it.
     const double root = std::sqrt(std::max(0.0, (m - c) * (m + c)));
-    const double base = std::atan2(b, a);
-    const double half = std::atan2(root, -c);
     const double inv_m2 = 1 / (m * m);
     const double ch = -c, sh = root;  // m (cos η, sin η)
-    const Cut minus = {WrapTo2Pi(base - half), (a * ch + b * sh) * inv_m2,
-                       (b * ch - a * sh) * inv_m2};
-    const Cut plus = {WrapTo2Pi(base + half), (a * ch - b * sh) * inv_m2,
-                      (b * ch + a * sh) * inv_m2};
-    for (const Cut& cut : {minus, plus}) {
-      if (cut.s > 0 && cut.s < sweep) cuts[nc++] = cut;
+    const double crossings[2][2] = {{(a * ch + b * sh) * inv_m2, (b * ch - a * sh) * inv_m2},
+                                    {(a * ch - b * sh) * inv_m2, (b * ch + a * sh) * inv_m2}};
+    for (const auto& cs : crossings) {
+      const bool inside = sweep <= kPi ? cs[1] > 0 && sin_sweep * cs[0] - cos_sweep * cs[1] > 0
+                                       : cs[1] > 0 || sin_sweep * cs[0] - cos_sweep * cs[1] > 0;
+      if (!inside) continue;
+      const double s = std::clamp(WrapTo2Pi(std::atan2(cs[1], cs[0])), 0.0, sweep);
+      cuts[nc++] = {s, cs[0], cs[1]};
     }
   };
   const double cos_omega = std::cos(omega), sin_omega = std::sin(omega);
@@ -833,9 +834,14 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   const Eigen::Matrix3d R_VW = torus.X_WV.linear().transpose();
   NeedleInV nv;
   nv.o = R_VW * (arc.X_WN.translation() - torus.X_WV.translation());
-  nv.e1 = (R_VW * arc.X_WN.linear().col(0)).normalized();
-  nv.e2 = R_VW * arc.X_WN.linear().col(1);
-  nv.e2 = (nv.e2 - nv.e2.dot(nv.e1) * nv.e1).normalized();
+  // Gram–Schmidt against the unnormalised first axis, so that both normalisations run side by
+  // side.
+  const Eigen::Vector3d a1 = R_VW * arc.X_WN.linear().col(0);
+  const Eigen::Vector3d a2 = R_VW * arc.X_WN.linear().col(1);
+  const double a1_sq = a1.squaredNorm();
+  nv.e1 = a1 * (1 / std::sqrt(a1_sq));
+  nv.e2 = a2 - (a2.dot(a1) / a1_sq) * a1;
+  nv.e2 *= 1 / nv.e2.norm();
   nv.e3 = nv.e1.cross(nv.e2);
   nv.rho = arc.radius_m;
   nv.inv_rho = 1 / arc.radius_m;
@@ -977,7 +983,8 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     }
   }
 
-  const double clearance = tube_r - std::sqrt(best.f);
+  const double dist = std::sqrt(best.f);
+  const double clearance = tube_r - dist;
   if (!std::isfinite(clearance)) {
     // Finite input whose squares overflow: report it as invalid rather than a NaN.
     out.status = ClearanceStatus::kInvalidInput;
@@ -989,15 +996,14 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   out.s_rad = best.s;
   const Eigen::Vector3d p_VN = nv.o + nv.rho * (best.cos_s * nv.e1 + best.sin_s * nv.e2);
   out.p_WN = torus.X_WV * p_VN;
-  // Nearest wall point: along the ray from the nearest core point through the needle point.
+  // Nearest wall point: along the ray from the nearest core point through the needle point,
+  // whose distance from it is dist (f was evaluated at this very point).
   const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());
-  const double inv_w = 1 / w;
+  const double inv_w = 1 / w, inv_dist = 1 / dist;
   const Eigen::Vector3d radial =
       w > 0 ? Eigen::Vector3d(p_VN.x() * inv_w, p_VN.y() * inv_w, 0) : Eigen::Vector3d::UnitX();
   const Eigen::Vector3d core_pt = core_r * radial;
-  const Eigen::Vector3d off = p_VN - core_pt;
-  const double off_len = off.norm();
-  const Eigen::Vector3d dir = off_len > 0 ? Eigen::Vector3d(off * (1 / off_len)) : radial;
+  const Eigen::Vector3d dir = dist > 0 ? Eigen::Vector3d((p_VN - core_pt) * inv_dist) : radial;
   out.p_WW = torus.X_WV * Eigen::Vector3d(core_pt + tube_r * dir);
   return out;
 }
