@@ -1,7 +1,9 @@
 #include "common/thread/sphere_bvh.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "common/base/check.h"
@@ -18,6 +20,8 @@ namespace {
 constexpr int kStackCapacity = 128;
 // Smallest traversal queue; it holds at least four pending pairs per tree node.
 constexpr size_t kMinQueue = 256;
+// Pairs of nodes of at most this many links are tested as their (up to four) leaf pairs.
+constexpr int kSmall = 2;
 
 // Rounding margins of the single-precision spheres (float epsilon is 2^-23, unit roundoff
 // 2^-24). A radius is grown by 2^-18 of itself (32 epsilon: the few roundings of the radius,
@@ -52,18 +56,30 @@ inline void Deinterleave(F4 u, F4 w, F4& even, F4& odd) {
   even.v = _mm_shuffle_ps(u.v, w.v, _MM_SHUFFLE(2, 0, 2, 0));
   odd.v = _mm_shuffle_ps(u.v, w.v, _MM_SHUFFLE(3, 1, 3, 1));
 }
-// Spheres a = (x, y, z, r) and b overlap: ((dx² + dz²) + (dy² - (ra + rb)²)) <= 0.
+// Spheres a = (x, y, z, r) and b overlap: ((dx² + dz²) + (dy² - (ra + rb)²)) <= 0. With rb
+// negated, a - b holds (dx, dy, dz, ra + rb); negating the last square gives the four terms.
 inline bool Overlap(const float* a, const float* b) {
-  const __m128 va = _mm_load_ps(a);
-  const __m128 vb = _mm_load_ps(b);
-  const __m128 d = _mm_sub_ps(va, vb);
-  const __m128 rs = _mm_add_ps(va, vb);
-  const __m128 xyz = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
-  const __m128 v =
-      _mm_sub_ps(_mm_and_ps(_mm_mul_ps(d, d), xyz), _mm_andnot_ps(xyz, _mm_mul_ps(rs, rs)));
+  const __m128 sign_w = _mm_castsi128_ps(_mm_set_epi32(INT32_MIN, 0, 0, 0));
+  const __m128 d = _mm_sub_ps(_mm_load_ps(a), _mm_xor_ps(_mm_load_ps(b), sign_w));
+  const __m128 v = _mm_xor_ps(_mm_mul_ps(d, d), sign_w);
   const __m128 h = _mm_add_ps(v, _mm_movehl_ps(v, v));
   const __m128 sum = _mm_add_ss(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(1, 1, 1, 1)));
   return _mm_cvtss_f32(sum) <= 0.0f;
+}
+// The same test for the four leaf pairs (a0, b0), (a0, b1), (a1, b0), (a1, b1): bit k set
+// when pair k overlaps.
+inline unsigned QuadOverlap(const float* a0, const float* a1, const float* b0, const float* b1) {
+  __m128 x = _mm_load_ps(a0), y = _mm_load_ps(a1), z = _mm_load_ps(b0), r = _mm_load_ps(b1);
+  _MM_TRANSPOSE4_PS(x, y, z, r);  // x = (a0.x, a1.x, b0.x, b1.x), ...
+  constexpr int kA = _MM_SHUFFLE(1, 1, 0, 0);
+  constexpr int kB = _MM_SHUFFLE(3, 2, 3, 2);
+  const __m128 dx = _mm_sub_ps(_mm_shuffle_ps(x, x, kA), _mm_shuffle_ps(x, x, kB));
+  const __m128 dy = _mm_sub_ps(_mm_shuffle_ps(y, y, kA), _mm_shuffle_ps(y, y, kB));
+  const __m128 dz = _mm_sub_ps(_mm_shuffle_ps(z, z, kA), _mm_shuffle_ps(z, z, kB));
+  const __m128 rs = _mm_add_ps(_mm_shuffle_ps(r, r, kA), _mm_shuffle_ps(r, r, kB));
+  const __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dz, dz)),
+                              _mm_sub_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(rs, rs)));
+  return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(v, _mm_setzero_ps())));
 }
 #else
 struct F4 {
@@ -177,6 +193,10 @@ inline bool OverlapScalar(const float* a, const float* b) {
 }
 #if !defined(__SSE2__)
 inline bool Overlap(const float* a, const float* b) { return OverlapScalar(a, b); }
+inline unsigned QuadOverlap(const float* a0, const float* a1, const float* b0, const float* b1) {
+  return (OverlapScalar(a0, b0) ? 1u : 0u) | (OverlapScalar(a0, b1) ? 2u : 0u) |
+         (OverlapScalar(a1, b0) ? 4u : 0u) | (OverlapScalar(a1, b1) ? 8u : 0u);
+}
 #endif
 
 // The sphere test of both the traversal and the all-pairs reference.
@@ -223,37 +243,46 @@ SphereBvhTopology BuildSphereBvhTopology(int num_links) {
   t.root = level[0];
   MICRODEX_CHECK(static_cast<int>(t.nodes.size()) == 2 * num_links - 1);
   for (const SphereBvhNode& node : t.nodes) {
+    auto offset = [&](int child) {
+      const SphereBvhNode& c = t.nodes[child];
+      return 16u * static_cast<std::uint32_t>(child) | (c.hi - c.lo <= kSmall ? 1u : 0u);
+    };
     const bool leaf = node.left < 0;
-    t.traversal.push_back({leaf ? 0u : 16u * static_cast<std::uint32_t>(node.left),
-                           leaf ? 0u : 16u * static_cast<std::uint32_t>(node.right),
-                           node.hi - node.lo, 0});
+    t.traversal.push_back({leaf ? 0u : offset(node.left), leaf ? 0u : offset(node.right),
+                           node.hi - node.lo, node.lo});
   }
   t.max_stack = 2 * (2 * t.height[t.root] + 1);
   MICRODEX_CHECK(t.max_stack <= kStackCapacity);
   // Self(T) contributes FindCollision(left, right) for every inner node T. Two chain-adjacent
   // nodes (the first one's last link is followed by the second one's first link) both contain
   // the chain node their links share, so their spheres always overlap: FindCollision's descent
-  // along that boundary does not depend on the positions and is unrolled here, down to the
-  // adjacent leaves (excluded neighbours). What remains to test are the pairs it branches
-  // into, which are never adjacent, so every pair of links below them is a candidate. At the
-  // bottom of each boundary these are a node of two leaves against the next leaf but one,
-  // which nearly always overlap (on a straight thread too): that test is skipped and its two
-  // leaf pairs are tested directly (the same pairs are found; a test is saved).
-  auto add_start = [&](int p, int q) {
+  // along that boundary does not depend on the positions and is unrolled here. What remains
+  // to test are the pairs it branches into, which are never adjacent, so every pair of links
+  // below them is a candidate; and at the bottom, the adjacent small pair, whose neighbour
+  // leaf pairs are skipped.
+  auto small = [&](int node) { return t.nodes[node].hi - t.nodes[node].lo <= kSmall; };
+  auto add_small = [&](int p, int q) {
     const SphereBvhNode& np = t.nodes[p];
     const SphereBvhNode& nq = t.nodes[q];
-    if ((np.hi - np.lo) * (nq.hi - nq.lo) > 2) {
-      t.self_pairs.push_back(PackNodePair(p, q));
-      return;
+    std::uint64_t lanes = 0;
+    for (int lane = 0; lane < 4; ++lane) {
+      const int a = np.lo + (lane >> 1);
+      const int b = nq.lo + (lane & 1);
+      if (a < np.hi && b < nq.hi && b - a >= 2) lanes |= 1u << lane;
     }
-    for (int a = np.lo; a < np.hi; ++a) {
-      for (int b = nq.lo; b < nq.hi; ++b) t.self_leaf_pairs.push_back(PackNodePair(a, b));
+    if (lanes != 0) t.self_small_pairs.push_back(PackNodePair(np.lo, nq.lo) | lanes);
+  };
+  auto add_start = [&](int p, int q) {
+    if (small(p) && small(q)) {
+      add_small(p, q);
+    } else {
+      t.self_pairs.push_back(PackNodePair(p, q));
     }
   };
   for (int i = num_links; i < static_cast<int>(t.nodes.size()); ++i) {
     int p = t.nodes[i].left;
     int q = t.nodes[i].right;
-    while (!(t.IsLeaf(p) && t.IsLeaf(q))) {
+    while (!(small(p) && small(q))) {
       const SphereBvhNode& np = t.nodes[p];
       const SphereBvhNode& nq = t.nodes[q];
       if (DescendFirst(t.traversal[p].size, t.traversal[q].size)) {
@@ -264,6 +293,7 @@ SphereBvhTopology BuildSphereBvhTopology(int num_links) {
         q = nq.left;
       }
     }
+    add_small(p, q);
   }
   return t;
 }
@@ -275,6 +305,7 @@ SphereBvhSpheres MakeSphereBvhSpheres(const SphereBvhTopology& topology) {
   size_t size = kMinQueue;
   while (size < 4 * topology.nodes.size()) size *= 2;
   s.queue.resize(size);
+  s.small_queue.resize(size);
   return s;
 }
 
@@ -381,19 +412,23 @@ int FindCollisionOnStack(const SphereBvhTopology& t, const float* s, SphereBvhNo
 
 int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, LinkPair* pairs,
                        int capacity) {
-  const char* sphere_bytes = reinterpret_cast<const char*>(spheres.xyzr.data());
+  const float* sphere = spheres.xyzr.data();
+  const char* sphere_bytes = reinterpret_cast<const char*>(sphere);
   const char* node_bytes = reinterpret_cast<const char*>(t.traversal.data());
-  const std::uint32_t leaf_bytes = 16u * static_cast<std::uint32_t>(t.num_leaves);
+  auto record = [&](std::uint32_t offset) -> const SphereBvhTraversalNode& {
+    return *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + offset);
+  };
   SphereBvhNodePair* ring = spheres.queue.data();
+  SphereBvhNodePair* small_ring = spheres.small_queue.data();
   const unsigned ring_size = static_cast<unsigned>(spheres.queue.size());
-  const unsigned mask = ring_size - 1;
-  unsigned head = 0;
-  unsigned tail = 0;
+  const unsigned small_size = static_cast<unsigned>(spheres.small_queue.size());
+  unsigned head = 0, tail = 0, small_head = 0, small_tail = 0;
   int count = 0;
-  // One FindCollision step: test the pair; a leaf pair is written (and counted on a hit); an
-  // inner pair pushes its two children (kept on a hit). No branch depends on the test, so
-  // successive tests overlap in the processor. Needs two free slots in the ring and one in
-  // `pairs`.
+
+  // One FindCollision step on a pair with a node of more than two links: test it and push its
+  // two children, to the small ring when both of their nodes are small; a miss keeps nothing.
+  // No branch depends on the test, so successive tests overlap in the processor. Needs two
+  // free slots in each ring.
   auto step = [&](SphereBvhNodePair pq) {
     const std::uint32_t p = static_cast<std::uint32_t>(pq);
     const std::uint32_t q = static_cast<std::uint32_t>(pq >> 32);
@@ -401,59 +436,81 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
                                  reinterpret_cast<const float*>(sphere_bytes + q))
                              ? 1u
                              : 0u;
-    // Leaves are the nodes 0..n-1 and leaf i is link i.
-    const unsigned leaves = std::max(p, q) < leaf_bytes ? 1u : 0u;
-    pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
-    count += static_cast<int>(hit & leaves);
     // Split p (first) or q; the other keeps its half of the packed pair. Arithmetic, not a
     // branch: which one is split follows no pattern the processor could predict.
-    const auto& np = *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + p);
-    const auto& nq = *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + q);
+    const SphereBvhTraversalNode& np = record(p);
+    const SphereBvhTraversalNode& nq = record(q);
     const unsigned first = DescendFirst(np.size, nq.size) ? 1u : 0u;
     const unsigned child_shift = 32 * (first ^ 1u);
     const std::uint64_t keep = pq & (std::uint64_t{0xffffffffu} << (32 * first));
-    const auto& split = *reinterpret_cast<const SphereBvhTraversalNode*>(
-        node_bytes + static_cast<std::uint32_t>(pq >> child_shift));
-    ring[tail & mask] = keep | static_cast<std::uint64_t>(split.left_offset) << child_shift;
-    ring[(tail + 1) & mask] = keep | static_cast<std::uint64_t>(split.right_offset) << child_shift;
-    tail += 2 * (hit & (leaves ^ 1u));
+    const unsigned keep_small = (first ? nq.size : np.size) <= kSmall ? 1u : 0u;
+    const SphereBvhTraversalNode& split = record(static_cast<std::uint32_t>(pq >> child_shift));
+    const std::uint64_t left = keep | static_cast<std::uint64_t>(split.left_offset & ~15u)
+                                          << child_shift;
+    const std::uint64_t right = keep | static_cast<std::uint64_t>(split.right_offset & ~15u)
+                                           << child_shift;
+    const unsigned left_small = keep_small & split.left_offset;
+    const unsigned right_small = keep_small & split.right_offset;
+    ring[tail & (ring_size - 1)] = left;
+    tail += hit & (left_small ^ 1u);
+    ring[tail & (ring_size - 1)] = right;
+    tail += hit & (right_small ^ 1u);
+    small_ring[small_tail & (small_size - 1)] = left;
+    small_tail += hit & left_small;
+    small_ring[small_tail & (small_size - 1)] = right;
+    small_tail += hit & right_small;
   };
-  // The starting leaf pairs: test and write.
-  const SphereBvhNodePair* leaf_pairs = t.self_leaf_pairs.data();
-  const unsigned num_leaf_pairs = static_cast<unsigned>(t.self_leaf_pairs.size());
-  for (unsigned k = 0; k < num_leaf_pairs;) {
-    const unsigned run =
-        std::min(num_leaf_pairs - k, static_cast<unsigned>(std::max(capacity - count, 0)));
-    for (const unsigned end = k + run; k < end; ++k) {
-      const std::uint32_t p = static_cast<std::uint32_t>(leaf_pairs[k]);
-      const std::uint32_t q = static_cast<std::uint32_t>(leaf_pairs[k] >> 32);
-      pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
-      count += Overlap(reinterpret_cast<const float*>(sphere_bytes + p),
-                       reinterpret_cast<const float*>(sphere_bytes + q))
-                   ? 1
-                   : 0;
+  // Up to four leaf pairs (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1) tested at once; those
+  // of `lanes` that overlap are written. Needs four free slots in `pairs` unless `checked`.
+  auto test_leaves = [&](int a, int b, unsigned lanes, bool checked) {
+    const float* sa = sphere + 4 * a;
+    const float* sb = sphere + 4 * b;
+    const unsigned hits = QuadOverlap(sa, sa + 4, sb, sb + 4) & lanes;
+    // Each pair as one 8-byte store: {a + i, b + j} is {a, b} plus the lane's {i, j}, and
+    // the two ints add without carry between them (link indices are far below 2^31).
+    static_assert(sizeof(LinkPair) == sizeof(std::uint64_t));
+    const std::uint64_t base = std::bit_cast<std::uint64_t>(LinkPair{a, b});
+    for (int lane = 0; lane < 4; ++lane) {
+      const std::uint64_t value =
+          base + std::bit_cast<std::uint64_t>(LinkPair{lane >> 1, lane & 1});
+      if (!checked || count < capacity) pairs[count] = std::bit_cast<LinkPair>(value);
+      count += static_cast<int>(hits >> lane) & 1;
     }
-    if (run == 0) {  // `pairs` is full: count only
-      count +=
-          Overlap(spheres.xyzr.data(), NodePairFirst(leaf_pairs[k]), NodePairSecond(leaf_pairs[k]))
-              ? 1
-              : 0;
-      ++k;
+  };
+  // A pushed small pair of nodes (at most two links each, not neighbours).
+  auto small_step = [&](SphereBvhNodePair pq, bool checked) {
+    const SphereBvhTraversalNode& np = record(static_cast<std::uint32_t>(pq));
+    const SphereBvhTraversalNode& nq = record(static_cast<std::uint32_t>(pq >> 32));
+    test_leaves(np.lo, nq.lo, (np.size == 2 ? 15u : 3u) & (nq.size == 2 ? 15u : 5u), checked);
+  };
+  auto drain_small = [&]() {
+    while (small_head != small_tail) {
+      const unsigned run = std::min(small_tail - small_head,
+                                    static_cast<unsigned>(std::max(capacity - count, 0)) / 4);
+      if (run == 0) {
+        small_step(small_ring[small_head++ & (small_size - 1)], true);
+        continue;
+      }
+      for (const unsigned end = small_head + run; small_head != end; ++small_head) {
+        small_step(small_ring[small_head & (small_size - 1)], false);
+      }
     }
-  }
-  // Breadth first, in runs that can overflow neither the ring nor `pairs`: first the starting
-  // pairs, then the queue. Otherwise one pair is finished depth first on the stack.
+  };
+  // Breadth first, in runs that cannot overflow either ring: the starting pairs, then the
+  // queue. A full small ring is drained; with the main ring full, one pair is finished depth
+  // first on the stack.
   auto run_length = [&](unsigned available) {
+    if (small_tail - small_head + 2 > small_size) drain_small();
     const unsigned free_ring = (ring_size - (tail - head)) / 2;
-    const unsigned free_pairs = static_cast<unsigned>(std::max(capacity - count, 0));
-    return std::min(available, std::min(free_ring, free_pairs));
+    const unsigned free_small = (small_size - (small_tail - small_head)) / 2;
+    return std::min(available, std::min(free_ring, free_small));
   };
   const SphereBvhNodePair* start = t.self_pairs.data();
   const unsigned num_start = static_cast<unsigned>(t.self_pairs.size());
   for (unsigned k = 0; k < num_start;) {
     const unsigned run = run_length(num_start - k);
     if (run == 0) {
-      count = FindCollisionOnStack(t, spheres.xyzr.data(), start[k++], pairs, capacity, count);
+      count = FindCollisionOnStack(t, sphere, start[k++], pairs, capacity, count);
       continue;
     }
     for (const unsigned end = k + run; k < end; ++k) step(start[k]);
@@ -462,11 +519,24 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     const unsigned run = run_length(tail - head);
     if (run == 0) {
       count =
-          FindCollisionOnStack(t, spheres.xyzr.data(), ring[head++ & mask], pairs, capacity, count);
+          FindCollisionOnStack(t, sphere, ring[head++ & (ring_size - 1)], pairs, capacity, count);
       continue;
     }
-    for (const unsigned end = head + run; head != end; ++head) step(ring[head & mask]);
+    for (const unsigned end = head + run; head != end; ++head) step(ring[head & (ring_size - 1)]);
   }
+  // The small pairs: the starting ones, then those pushed.
+  const SphereBvhNodePair* small_start = t.self_small_pairs.data();
+  const unsigned num_small_start = static_cast<unsigned>(t.self_small_pairs.size());
+  for (unsigned k = 0; k < num_small_start;) {
+    const unsigned run =
+        std::min(num_small_start - k, static_cast<unsigned>(std::max(capacity - count, 0)) / 4);
+    const bool checked = run == 0;
+    for (const unsigned end = k + std::max(run, 1u); k < end; ++k) {
+      const SphereBvhNodePair pq = small_start[k];
+      test_leaves(NodePairFirst(pq), NodePairSecond(pq), static_cast<unsigned>(pq) & 15u, checked);
+    }
+  }
+  drain_small();
   return count;
 }
 

@@ -33,12 +33,12 @@ struct SphereBvhNode {
 };
 
 // What the traversal reads of a node: its children as byte offsets (16 per node; 0 for a
-// leaf) and the number of links under it.
+// leaf; bit 0 set when that child has at most two links), its number of links and first link.
 struct SphereBvhTraversalNode {
   std::uint32_t left_offset = 0;
   std::uint32_t right_offset = 0;
   std::int32_t size = 0;
-  std::int32_t unused = 0;
+  std::int32_t lo = 0;
 };
 
 // Two tree nodes p, q whose spheres are to be tested (all links of p precede all links of q),
@@ -68,10 +68,13 @@ struct SphereBvhTopology {
   std::vector<SphereBvhTraversalNode> traversal;  // per node
   std::vector<SphereBvhLevel> levels;             // inner levels, bottom up
   // The traversal's starting pairs: FindCollision(left, right) of every inner node, with its
-  // descent along the chain boundary unrolled (see BuildSphereBvhTopology); the pairs of two
-  // leaves among them are kept apart (their test has nothing to push).
+  // descent along the chain boundary unrolled (see BuildSphereBvhTopology). Pairs of two
+  // nodes of at most two links each ("small") are kept apart: their up to four leaf pairs are
+  // tested at once: a starting small pair is kept as its first two links, with the lanes to
+  // test (of (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1): sizes, no neighbours) in the low
+  // four bits.
   std::vector<SphereBvhNodePair> self_pairs;
-  std::vector<SphereBvhNodePair> self_leaf_pairs;
+  std::vector<SphereBvhNodePair> self_small_pairs;
   // Largest pending-pair count of the fall-back stack traversal (checked in use).
   int max_stack = 0;
 
@@ -83,8 +86,10 @@ struct SphereBvhSpheres {
   Eigen::Matrix4Xf xyzr;  // per tree node: centre (world, m) and radius (m)
   // Chain node positions in single precision (columns x, y, z), refit scratch.
   Eigen::Matrix<float, Eigen::Dynamic, 3> nodes_W;
-  // Node pairs still to test, a ring of a power-of-two size.
+  // Node pairs still to test, rings of a power-of-two size: pairs with a node of more than
+  // two links, and small pairs.
   std::vector<SphereBvhNodePair> queue;
+  std::vector<SphereBvhNodePair> small_queue;
 
   Eigen::Vector3d center_W(int node) const { return xyzr.col(node).head<3>().cast<double>(); }
   double radius_m(int node) const { return xyzr(3, node); }

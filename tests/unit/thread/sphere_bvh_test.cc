@@ -102,8 +102,13 @@ TEST(SphereBvh, BalancedTreeWithTwoNMinusOneSpheres) {
       ASSERT_FALSE(t.IsLeaf(i));
       EXPECT_LT(node.left, i);
       EXPECT_LT(node.right, i);
-      EXPECT_EQ(t.traversal[i].left_offset, 16u * node.left);
-      EXPECT_EQ(t.traversal[i].right_offset, 16u * node.right);
+      EXPECT_EQ(t.traversal[i].lo, node.lo);
+      // Children as byte offsets, bit 0 flagging a child of at most two links.
+      for (auto [offset, child] : {std::pair{t.traversal[i].left_offset, node.left},
+                                   std::pair{t.traversal[i].right_offset, node.right}}) {
+        EXPECT_EQ(offset & ~15u, 16u * child);
+        EXPECT_EQ(offset & 15u, t.nodes[child].hi - t.nodes[child].lo <= 2 ? 1u : 0u);
+      }
       // A node covers exactly its two children's successive link ranges.
       EXPECT_EQ(node.lo, t.nodes[node.left].lo);
       EXPECT_EQ(t.nodes[node.left].hi, t.nodes[node.right].lo);
@@ -142,10 +147,18 @@ TEST(SphereBvh, StartingPairsCoverEveryCandidateOnce) {
         for (int b = q.lo; b < q.hi; ++b) ++covered[a * links + b];
       }
     };
-    for (SphereBvhNodePair pq : t.self_pairs) cover(pq);
-    for (SphereBvhNodePair pq : t.self_leaf_pairs) {
-      EXPECT_LT(NodePairSecond(pq), links);  // two leaves
+    for (SphereBvhNodePair pq : t.self_pairs) {
+      EXPECT_GT(std::max(t.traversal[NodePairFirst(pq)].size, t.traversal[NodePairSecond(pq)].size),
+                2);
       cover(pq);
+    }
+    // Small starting pairs: first links a, b and the lanes (a + i, b + j), lane 2 i + j.
+    for (SphereBvhNodePair pq : t.self_small_pairs) {
+      const int a = NodePairFirst(pq);
+      const int b = NodePairSecond(pq);
+      for (int lane = 0; lane < 4; ++lane) {
+        if ((pq >> lane) & 1) ++covered[(a + (lane >> 1)) * links + b + (lane & 1)];
+      }
     }
     for (int a = 0; a < links; ++a) {
       for (int b = 0; b < links; ++b) {
