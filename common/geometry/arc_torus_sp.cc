@@ -34,6 +34,9 @@ constexpr double kCertifyPhiRel = 1e-12;
 // The quick test proves G̃_t ≥ −this·(the size of G̃_t's terms): ten times inside the full
 // pass's threshold, and far above the rounding of G̃_t's coefficients (~10 ε of that size).
 constexpr double kQuickCertifyRel = 1e-13;
+// What the quick test must prove: no point farther than t + this·max(R, t) (the clearance
+// agreement asked of SP is 1e-10 R; the ascent, not this bound, sets the actual error).
+constexpr double kQuickCertifyTolRel = 1e-11;
 // Uniform starting points per in-range piece on the robust path.
 constexpr int kRobustSamples = 24;
 
@@ -389,7 +392,8 @@ LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e
 
 CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                                       const Eigen::Vector3d& e2, double rho,
-                                      double rho_sq_minus_one, double t_sq, double* size) {
+                                      double rho_sq_minus_one, double t_sq, double* size,
+                                      double* axis_dist_sq_min) {
   // x(s) = o + cos s u + sin s v, u = ρe₁, v = ρe₂, and with L = |x|² − 1 + t² (of degree one
   // in cos s, sin s on a circle: |u|² = |v|² = ρ², u·v = 0),
   // G̃ = 4t²(x² + y²) − 4(1 − t²)z² − L², term by term in cos², cos sin, sin², cos, sin, 1.
@@ -410,6 +414,12 @@ CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vec
     total += std::abs(a4 * w[i]) + std::abs(b4 * z[i]) + std::abs(l2[i]);
   }
   if (size != nullptr) *size = total;
+  if (axis_dist_sq_min != nullptr) {
+    // x² + y² ≥ its mean minus the amplitudes of its second and first harmonics.
+    const double h2 = 0.5 * (w[0] - w[2]);
+    *axis_dist_sq_min = w[5] + 0.5 * (w[0] + w[2]) - std::sqrt(h2 * h2 + 0.25 * w[1] * w[1]) -
+                        std::sqrt(w[3] * w[3] + w[4] * w[4]);
+  }
   CircleConic k;
   k.a = c[0];
   k.b = c[1];
@@ -894,8 +904,10 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
       CountSignChanges(nv, core_r, tube_r, iv, n_iv, pass, &diag);
     }
   }
-  if (deep) {
-    // A piece end lies beyond the horn torus (see below): the exact method answers.
+  // Beyond the horn torus (t ≥ R) the level sets are spindle tori, which (4.4) cannot express:
+  // there only the quick test can certify (see below), and the exact method answers when it
+  // cannot, or when the search runs the wall pass.
+  if (deep && (have_pass || rounds == 0 || !opt.quick_certificate)) {
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
@@ -933,9 +945,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   // stopped at a local maximum. The level set {distance = t} with t = the best distance so
   // far is itself a torus (tube radius t); an SP pass against it finds a point farther than
   // t wherever one exists (min φ < 0). Repeat from such a point until none is left.
-  if (IsDeep(best.f, core_r)) {
-    // Beyond the horn torus (t ≥ R) the level sets are spindle tori, which (4.4) cannot
-    // express: the exact method answers for these deep contacts.
+  if (IsDeep(best.f, core_r) && (rounds == 0 || !opt.quick_certificate)) {
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
@@ -946,15 +956,30 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     ++diag.certify_passes;
     const double t_sq = std::max(best.f, kMinCertifyRel * kMinCertifyRel * core_r * core_r);
     if (opt.quick_certificate) {
-      double size;
-      const CircleConic level_trig =
-          CalcLevelTorusAlongNeedle(inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one,
-                                    t_sq * inv_r * inv_r, &size);
-      if (ProveNoFartherPoint(level_trig, iv, n_iv, best.s, best.cos_s, best.sin_s,
-                              kQuickCertifyRel * size)) {
+      // G̃_t ≥ −ε on the arc bounds, for any point farther than t, (d² − t²)(d'² − t²) ≤ ε,
+      // d' the distance to the opposite core point, d'² − t² ≥ max(R² − t², 4Rw) (w the
+      // distance to the axis): the quick test is used where that bounds d − t by
+      // kQuickCertifyTol (thin level tori near the axis would not).
+      double size, w_sq_min;
+      const double t_sq_rel = t_sq * inv_r * inv_r;
+      const CircleConic level_trig = CalcLevelTorusAlongNeedle(
+          inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one, t_sq_rel, &size, &w_sq_min);
+      const double eps = kQuickCertifyRel * size;
+      // eps ≤ tol · max(1, t) · 2t · max(R² − t², 4Rw), squared (no square roots; t > 0).
+      const double lhs = eps * eps;
+      const double rhs =
+          4 * kQuickCertifyTolRel * kQuickCertifyTolRel * t_sq_rel * std::max(1.0, t_sq_rel);
+      const double near = 1 - t_sq_rel;
+      const bool tight =
+          (near > 0 && lhs <= rhs * near * near) || (w_sq_min > 0 && lhs <= rhs * 16 * w_sq_min);
+      if (tight && ProveNoFartherPoint(level_trig, iv, n_iv, best.s, best.cos_s, best.sin_s, eps)) {
         ++diag.certify_quick;
         break;
       }
+    }
+    if (IsDeep(best.f, core_r)) {
+      diag.deep_fallback = true;
+      return CalcArcTorusClearanceExact(arc, torus);
     }
     LiftedConic level;
     LiftLevelTorus(nv, std::sqrt(t_sq), core_r * core_r - t_sq, &level);
@@ -977,10 +1002,6 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     for (int j = 0; j < n_start; ++j) TryCandidate(nv, core_r, iv, starts[j], opt, &best);
     if (!(best.f > f_before)) break;
     ++diag.certify_improvements;
-    if (IsDeep(best.f, core_r)) {
-      diag.deep_fallback = true;
-      return CalcArcTorusClearanceExact(arc, torus);
-    }
   }
 
   const double dist = std::sqrt(best.f);

@@ -55,7 +55,8 @@ struct SpDiagnostics {
   bool fallback = false;          // the lifted circle was too ill-conditioned: robust path used
   bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
-  bool deep_fallback = false;     // a point ≥ R from the core circle: exact method answered
+  bool deep_fallback = false;     // a point ≥ R from the core circle that the quick test could
+                                  // not certify (or a wall pass ran): exact method answered
   int certify_passes = 0;         // SP passes against level tori
   int certify_improvements = 0;   // of which found a farther point than the ascent had
   int certify_quick = 0;          // of which settled by the quick test (no quartic)
@@ -105,10 +106,12 @@ CircleConic CalcCircleConic(double alpha, const LiftedCircle& circle);
 // point is closer than t to the core circle. It is the torus equation (4.1) arranged so that
 // every term is of the size of t² near the tube (no cancellation of terms of size R⁴).
 // rho_sq_minus_one = ρ² − 1 formed by the caller; *size (optional) = Σ|terms|, the scale of
-// the coefficients' rounding.
+// the coefficients' rounding; *axis_dist_sq_min (optional) = a lower bound of x² + y² on the
+// whole needle circle (possibly ≤ 0).
 CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                                       const Eigen::Vector3d& e2, double rho,
-                                      double rho_sq_minus_one, double t_sq, double* size);
+                                      double rho_sq_minus_one, double t_sq, double* size,
+                                      double* axis_dist_sq_min = nullptr);
 
 // The rotation ψ of (4.19)–(4.21) that removes the u² − v² term of φ'(θ) = 0 (4.17)–(4.18),
 // and the coefficients of the rotated condition β uv + γ u + δ v = 0 (4.23).
