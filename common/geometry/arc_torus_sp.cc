@@ -643,11 +643,16 @@ void RunSpPass(const NeedleInV& nv, double core_r, double tube_t, const Interval
   RunSpPassOnConic(nv, k, iv, n_iv, opt, all, phi_below, out);
 }
 
-// The minimum of c₁ + c₂τ + c₃τ² + c₄τ³ over [lo, hi]: at an end or at a root of the
-// derivative c₂ + 2c₃τ + 3c₄τ² inside (stable quadratic formula).
+// The minimum of c₁ + c₂τ + c₃τ² + c₄τ³ over [lo, hi] (hi may be +∞): at an end or at a root
+// of the derivative c₂ + 2c₃τ + 3c₄τ² inside (stable quadratic formula).
 double CubicMinimum(double c1, double c2, double c3, double c4, double lo, double hi) {
   const auto cubic = [&](double tau) { return c1 + tau * (c2 + tau * (c3 + tau * c4)); };
-  double v = std::min(cubic(lo), cubic(hi));
+  double v = cubic(lo);
+  if (std::isfinite(hi)) {
+    v = std::min(v, cubic(hi));
+  } else if (!(c4 > 0)) {
+    return -std::numeric_limits<double>::infinity();  // unbounded below on [lo, ∞)
+  }
   const double qa = 3 * c4, qb = 2 * c3, qc = c2;
   if (qa == 0) {
     if (qb != 0) {
@@ -703,46 +708,67 @@ bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, dou
     }
     return v >= -eps;
   };
-  // Pieces reaching within this of Δ = ±π are treated as wrapping (whole circle: conservative).
-  constexpr double kNearAntipode_rad = 1e-3;
-  for (int i = 0; i < n_iv; ++i) {
-    double ta = 0, tb = 0;
-    const bool whole = iv[i].lo - s_best <= -kPi + kNearAntipode_rad ||
-                       iv[i].hi - s_best >= kPi - kNearAntipode_rad;
-    if (whole) {
-      // Every τ, and Δ = π (τ = ∞), where G̃ = k₄.
-      if (!(k4 > 0)) return false;
-      const double m = k2 - 0.25 * k3 * k3 / k4;
-      if (!(m >= 0)) return false;
-      if (!lower_ok(m, -std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity())) {
-        return false;
-      }
-      continue;
-    }
-    // τ = tan(Δ/2) = sin Δ / (1 + cos Δ) of the ends, Δ ∈ (−π, π) here.
-    ta = (iv[i].sin_lo * ca - iv[i].cos_lo * sa) / (1 + iv[i].cos_lo * ca + iv[i].sin_lo * sa);
-    tb = (iv[i].sin_hi * ca - iv[i].cos_hi * sa) / (1 + iv[i].cos_hi * ca + iv[i].sin_hi * sa);
-    double m = std::min(h(ta), h(tb));
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  // G̃ ≥ −ε for τ ∈ [ta, tb] (either end may be infinite: the range then holds Δ = π, τ = ∞,
+  // where G̃ = k₄).
+  const auto range_ok = [&](double ta, double tb) {
+    if ((!std::isfinite(ta) || !std::isfinite(tb)) && !(k4 > 0)) return false;
+    double m = kInf;
+    if (std::isfinite(ta)) m = std::min(m, h(ta));
+    if (std::isfinite(tb)) m = std::min(m, h(tb));
     if (k4 > 0) {
       const double tv = -k3 / (2 * k4);
       if (tv > ta && tv < tb) m = std::min(m, h(tv));
     }
-    if (m >= 0 && lower_ok(m, ta, tb)) continue;
-    // A piece on one side of s* (s* at its end, or outside it): q = q₀ + τ c(τ) with the
+    if (m >= 0 && lower_ok(m, ta, tb)) return true;
+    // A range on one side of s* (s* at its end, or outside it): q = q₀ + τ c(τ) with the
     // cubic c = q₁ + q₂τ + q₃τ² + q₄τ³, so c ≥ 0 on τ ≥ 0 (c ≤ 0 on τ ≤ 0) proves q ≥ q₀.
     // An end that rounding puts just across s* adds a sliver |τ| ≤ 1 where |τ c| ≤ |τ| Σ|qᵢ|:
     // q₀ minus that ≥ −ε/2 there; on the main part c may dip below 0 by rounding as long as
     // τ_max·min c ≥ −(q₀ + ε)/2, which keeps q ≥ (q₀ − ε)/2 ≥ −ε.
     const double sum_k = std::abs(k1) + std::abs(k2) + std::abs(k3) + std::abs(k4);
-    const bool above = ta > -1 && tb > 0 && k0 - std::max(0.0, -ta) * sum_k >= -0.5 * eps &&
-                       tb * std::min(0.0, CubicMinimum(k1, k2, k3, k4, std::max(ta, 0.0), tb)) >=
-                           -0.5 * (k0 + eps);
-    const bool below =
-        !above && tb < 1 && ta < 0 && k0 - std::max(0.0, tb) * sum_k >= -0.5 * eps &&
-        -ta * std::min(0.0, CubicMinimum(-k1, k2, -k3, k4, std::max(-tb, 0.0), -ta)) >=
-            -0.5 * (k0 + eps);
-    if (!above && !below) return false;
+    if (ta > -1 && tb > 0 && k0 - std::max(0.0, -ta) * sum_k >= -0.5 * eps) {
+      const double cm = CubicMinimum(k1, k2, k3, k4, std::max(ta, 0.0), tb);
+      if (cm >= 0 || tb * cm >= -0.5 * (k0 + eps)) return true;
+    }
+    if (tb < 1 && ta < 0 && k0 - std::max(0.0, tb) * sum_k >= -0.5 * eps) {
+      const double cm = CubicMinimum(-k1, k2, -k3, k4, std::max(-tb, 0.0), -ta);
+      if (cm >= 0 || -ta * cm >= -0.5 * (k0 + eps)) return true;
+    }
+    return false;
+  };
+  // τ = tan(Δ/2) = sin Δ / (1 + cos Δ), Δ = s − s* taken in (−π, π).
+  const auto tau = [&](double c, double sn) { return (sn * ca - c * sa) / (1 + c * ca + sn * sa); };
+  // Ends within this of Δ = ±π are not given a τ (1 + cos Δ → 0): the range is extended past
+  // them, to ±∞ or to ±kFarTau (< cot(kNearAntipode_rad/2) ≈ 2000), which is conservative.
+  constexpr double kNearAntipode_rad = 1e-3;
+  constexpr double kLim = kPi - kNearAntipode_rad;
+  constexpr double kFarTau = 1000;
+  for (int i = 0; i < n_iv; ++i) {
+    // Δ of the ends, shifted by 2π so that d_lo < π and d_hi > −π (τ is 2π-periodic in Δ).
+    double d_lo = iv[i].lo - s_best, d_hi = iv[i].hi - s_best;
+    if (d_lo >= kPi) {
+      d_lo -= kTwoPi;
+      d_hi -= kTwoPi;
+    } else if (d_hi <= -kPi) {
+      d_lo += kTwoPi;
+      d_hi += kTwoPi;
+    }
+    const double t_lo = tau(iv[i].cos_lo, iv[i].sin_lo), t_hi = tau(iv[i].cos_hi, iv[i].sin_hi);
+    bool ok;
+    if (d_lo > -kLim && d_hi < kLim) {
+      ok = range_ok(t_lo, t_hi);  // Δ ∈ [d_lo, d_hi] ⊂ (−π, π)
+    } else if (d_lo > -kLim && d_hi - d_lo < kTwoPi) {
+      // Up to and past Δ = π: [τ_lo, ∞), then (past π, Δ − 2π ∈ (−π, d_hi − 2π]) from −∞.
+      ok = range_ok(t_lo, kInf) &&
+           (d_hi <= kPi || range_ok(-kInf, d_hi - kTwoPi > -kLim ? t_hi : -kFarTau));
+    } else if (d_hi < kLim && d_hi - d_lo < kTwoPi) {
+      ok = range_ok(-kInf, t_hi) &&
+           (d_lo >= -kPi || range_ok(d_lo + kTwoPi < kLim ? t_lo : kFarTau, kInf));
+    } else {
+      ok = range_ok(-kInf, kInf);  // (nearly) the whole circle
+    }
+    if (!ok) return false;
   }
   return true;
 }
