@@ -66,21 +66,6 @@ inline bool Overlap(const float* a, const float* b) {
   const __m128 sum = _mm_add_ss(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(1, 1, 1, 1)));
   return _mm_cvtss_f32(sum) <= 0.0f;
 }
-// The same test for the four leaf pairs (a0, b0), (a0, b1), (a1, b0), (a1, b1): bit k set
-// when pair k overlaps.
-inline unsigned QuadOverlap(const float* a0, const float* a1, const float* b0, const float* b1) {
-  __m128 x = _mm_load_ps(a0), y = _mm_load_ps(a1), z = _mm_load_ps(b0), r = _mm_load_ps(b1);
-  _MM_TRANSPOSE4_PS(x, y, z, r);  // x = (a0.x, a1.x, b0.x, b1.x), ...
-  constexpr int kA = _MM_SHUFFLE(1, 1, 0, 0);
-  constexpr int kB = _MM_SHUFFLE(3, 2, 3, 2);
-  const __m128 dx = _mm_sub_ps(_mm_shuffle_ps(x, x, kA), _mm_shuffle_ps(x, x, kB));
-  const __m128 dy = _mm_sub_ps(_mm_shuffle_ps(y, y, kA), _mm_shuffle_ps(y, y, kB));
-  const __m128 dz = _mm_sub_ps(_mm_shuffle_ps(z, z, kA), _mm_shuffle_ps(z, z, kB));
-  const __m128 rs = _mm_add_ps(_mm_shuffle_ps(r, r, kA), _mm_shuffle_ps(r, r, kB));
-  const __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dz, dz)),
-                              _mm_sub_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(rs, rs)));
-  return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(v, _mm_setzero_ps())));
-}
 #else
 struct F4 {
   float v[4];
@@ -193,10 +178,6 @@ inline bool OverlapScalar(const float* a, const float* b) {
 }
 #if !defined(__SSE2__)
 inline bool Overlap(const float* a, const float* b) { return OverlapScalar(a, b); }
-inline unsigned QuadOverlap(const float* a0, const float* a1, const float* b0, const float* b1) {
-  return (OverlapScalar(a0, b0) ? 1u : 0u) | (OverlapScalar(a0, b1) ? 2u : 0u) |
-         (OverlapScalar(a1, b0) ? 4u : 0u) | (OverlapScalar(a1, b1) ? 8u : 0u);
-}
 #endif
 
 // The sphere test of both the traversal and the all-pairs reference.
@@ -256,33 +237,27 @@ SphereBvhTopology BuildSphereBvhTopology(int num_links) {
   // Self(T) contributes FindCollision(left, right) for every inner node T. Two chain-adjacent
   // nodes (the first one's last link is followed by the second one's first link) both contain
   // the chain node their links share, so their spheres always overlap: FindCollision's descent
-  // along that boundary does not depend on the positions and is unrolled here. What remains
-  // to test are the pairs it branches into, which are never adjacent, so every pair of links
-  // below them is a candidate; and at the bottom, the adjacent small pair, whose neighbour
-  // leaf pairs are skipped.
-  auto small = [&](int node) { return t.nodes[node].hi - t.nodes[node].lo <= kSmall; };
-  auto add_small = [&](int p, int q) {
+  // along that boundary does not depend on the positions and is unrolled here, down to the
+  // adjacent leaves (excluded neighbours). What remains to test are the pairs it branches
+  // into, which are never adjacent, so every pair of links below them is a candidate. At the
+  // bottom of each boundary these are a node of two leaves against the next leaf but one,
+  // which nearly always overlap (on a straight thread too): that test is skipped and its two
+  // leaf pairs are tested directly (the same pairs are found; a test is saved).
+  auto add_start = [&](int p, int q) {
     const SphereBvhNode& np = t.nodes[p];
     const SphereBvhNode& nq = t.nodes[q];
-    std::uint64_t lanes = 0;
-    for (int lane = 0; lane < 4; ++lane) {
-      const int a = np.lo + (lane >> 1);
-      const int b = nq.lo + (lane & 1);
-      if (a < np.hi && b < nq.hi && b - a >= 2) lanes |= 1u << lane;
-    }
-    if (lanes != 0) t.self_small_pairs.push_back(PackNodePair(np.lo, nq.lo) | lanes);
-  };
-  auto add_start = [&](int p, int q) {
-    if (small(p) && small(q)) {
-      add_small(p, q);
-    } else {
+    if ((np.hi - np.lo) * (nq.hi - nq.lo) > 2) {
       t.self_pairs.push_back(PackNodePair(p, q));
+      return;
+    }
+    for (int a = np.lo; a < np.hi; ++a) {
+      for (int b = nq.lo; b < nq.hi; ++b) t.self_leaf_pairs.push_back(PackNodePair(a, b));
     }
   };
   for (int i = num_links; i < static_cast<int>(t.nodes.size()); ++i) {
     int p = t.nodes[i].left;
     int q = t.nodes[i].right;
-    while (!(small(p) && small(q))) {
+    while (!(t.IsLeaf(p) && t.IsLeaf(q))) {
       const SphereBvhNode& np = t.nodes[p];
       const SphereBvhNode& nq = t.nodes[q];
       if (DescendFirst(t.traversal[p].size, t.traversal[q].size)) {
@@ -293,7 +268,6 @@ SphereBvhTopology BuildSphereBvhTopology(int num_links) {
         q = nq.left;
       }
     }
-    add_small(p, q);
   }
   return t;
 }
@@ -443,7 +417,10 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     const unsigned first = DescendFirst(np.size, nq.size) ? 1u : 0u;
     const unsigned child_shift = 32 * (first ^ 1u);
     const std::uint64_t keep = pq & (std::uint64_t{0xffffffffu} << (32 * first));
-    const unsigned keep_small = (first ? nq.size : np.size) <= kSmall ? 1u : 0u;
+    const unsigned keep_size =
+        static_cast<unsigned>(np.size) ^
+        ((static_cast<unsigned>(np.size) ^ static_cast<unsigned>(nq.size)) & (0u - first));
+    const unsigned keep_small = keep_size <= kSmall ? 1u : 0u;
     const SphereBvhTraversalNode& split = record(static_cast<std::uint32_t>(pq >> child_shift));
     const std::uint64_t left = keep | static_cast<std::uint64_t>(split.left_offset & ~15u)
                                           << child_shift;
@@ -460,12 +437,15 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     small_ring[small_tail & (small_size - 1)] = right;
     small_tail += hit & right_small;
   };
-  // Up to four leaf pairs (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1) tested at once; those
-  // of `lanes` that overlap are written. Needs four free slots in `pairs` unless `checked`.
+  // The up to four leaf pairs (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1): those of `lanes`
+  // that overlap are written (the tests are the single-pair test, without branches). Needs four
+  // free slots in `pairs` unless `checked`.
   auto test_leaves = [&](int a, int b, unsigned lanes, bool checked) {
     const float* sa = sphere + 4 * a;
     const float* sb = sphere + 4 * b;
-    const unsigned hits = QuadOverlap(sa, sa + 4, sb, sb + 4) & lanes;
+    const unsigned hits = ((Overlap(sa, sb) ? 1u : 0u) | (Overlap(sa, sb + 4) ? 2u : 0u) |
+                           (Overlap(sa + 4, sb) ? 4u : 0u) | (Overlap(sa + 4, sb + 4) ? 8u : 0u)) &
+                          lanes;
     // Each pair as one 8-byte store: {a + i, b + j} is {a, b} plus the lane's {i, j}, and
     // the two ints add without carry between them (link indices are far below 2^31).
     static_assert(sizeof(LinkPair) == sizeof(std::uint64_t));
@@ -496,6 +476,29 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
       }
     }
   };
+  // The starting leaf pairs: test and write.
+  const SphereBvhNodePair* leaf_pairs = t.self_leaf_pairs.data();
+  const unsigned num_leaf_pairs = static_cast<unsigned>(t.self_leaf_pairs.size());
+  for (unsigned k = 0; k < num_leaf_pairs;) {
+    const unsigned run =
+        std::min(num_leaf_pairs - k, static_cast<unsigned>(std::max(capacity - count, 0)));
+    for (const unsigned end = k + run; k < end; ++k) {
+      const std::uint32_t p = static_cast<std::uint32_t>(leaf_pairs[k]);
+      const std::uint32_t q = static_cast<std::uint32_t>(leaf_pairs[k] >> 32);
+      pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
+      count += Overlap(reinterpret_cast<const float*>(sphere_bytes + p),
+                       reinterpret_cast<const float*>(sphere_bytes + q))
+                   ? 1
+                   : 0;
+    }
+    if (run == 0) {  // `pairs` is full: count only
+      count +=
+          Overlap(spheres.xyzr.data(), NodePairFirst(leaf_pairs[k]), NodePairSecond(leaf_pairs[k]))
+              ? 1
+              : 0;
+      ++k;
+    }
+  }
   // Breadth first, in runs that cannot overflow either ring: the starting pairs, then the
   // queue. A full small ring is drained; with the main ring full, one pair is finished depth
   // first on the stack.
@@ -524,18 +527,7 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     }
     for (const unsigned end = head + run; head != end; ++head) step(ring[head & (ring_size - 1)]);
   }
-  // The small pairs: the starting ones, then those pushed.
-  const SphereBvhNodePair* small_start = t.self_small_pairs.data();
-  const unsigned num_small_start = static_cast<unsigned>(t.self_small_pairs.size());
-  for (unsigned k = 0; k < num_small_start;) {
-    const unsigned run =
-        std::min(num_small_start - k, static_cast<unsigned>(std::max(capacity - count, 0)) / 4);
-    const bool checked = run == 0;
-    for (const unsigned end = k + std::max(run, 1u); k < end; ++k) {
-      const SphereBvhNodePair pq = small_start[k];
-      test_leaves(NodePairFirst(pq), NodePairSecond(pq), static_cast<unsigned>(pq) & 15u, checked);
-    }
-  }
+  // The small pairs pushed.
   drain_small();
   return count;
 }

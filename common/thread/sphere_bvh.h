@@ -68,13 +68,10 @@ struct SphereBvhTopology {
   std::vector<SphereBvhTraversalNode> traversal;  // per node
   std::vector<SphereBvhLevel> levels;             // inner levels, bottom up
   // The traversal's starting pairs: FindCollision(left, right) of every inner node, with its
-  // descent along the chain boundary unrolled (see BuildSphereBvhTopology). Pairs of two
-  // nodes of at most two links each ("small") are kept apart: their up to four leaf pairs are
-  // tested at once: a starting small pair is kept as its first two links, with the lanes to
-  // test (of (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1): sizes, no neighbours) in the low
-  // four bits.
+  // descent along the chain boundary unrolled (see BuildSphereBvhTopology); the pairs of two
+  // leaves among them are kept apart (their test has nothing to push).
   std::vector<SphereBvhNodePair> self_pairs;
-  std::vector<SphereBvhNodePair> self_small_pairs;
+  std::vector<SphereBvhNodePair> self_leaf_pairs;
   // Largest pending-pair count of the fall-back stack traversal (checked in use).
   int max_stack = 0;
 

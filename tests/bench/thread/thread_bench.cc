@@ -304,7 +304,19 @@ int RunSpeed(bool quick, const std::string& json) {
   bool first = true;
   std::printf("%-24s %6s %12s %14s %14s %7s %8s\n", "integrator", "nodes", "steps/s",
               "collision_ns", "all_pairs_ns", "ratio", "resets");
-  std::vector<LinkPair> scratch_pairs;
+  std::vector<LinkPair> bvh_pairs, all_pairs;
+  // The two queries must find the same set (checked outside the timed sections).
+  auto same_set = [](std::vector<LinkPair>& a, int na, std::vector<LinkPair>& b, int nb) {
+    auto less = [](const LinkPair& u, const LinkPair& v) {
+      return u.a != v.a ? u.a < v.a : u.b < v.b;
+    };
+    if (na != nb || na > static_cast<int>(a.size())) return false;
+    std::sort(a.begin(), a.begin() + na, less);
+    std::sort(b.begin(), b.begin() + nb, less);
+    return std::equal(
+        a.begin(), a.begin() + na, b.begin(),
+        [](const LinkPair& u, const LinkPair& v) { return u.a == v.a && u.b == v.b; });
+  };
   for (Integrator integ : kIntegrators) {
     for (int n : nodes) {
       ThreadDef def = KnotTyingDef(n);
@@ -318,8 +330,9 @@ int RunSpeed(bool quick, const std::string& json) {
       tie.speed_m_per_s = 0.01;  // a faster hand, to reach the knot within the timed steps
       KnotThrowScript script(model, state, hands, tie);
       SphereBvhSpheres spheres = MakeSphereBvhSpheres(model.bvh);
-      scratch_pairs.assign(4 * model.contact_capacity, LinkPair{});
-      const int cap = static_cast<int>(scratch_pairs.size());
+      bvh_pairs.assign(4 * model.contact_capacity, LinkPair{});
+      all_pairs.assign(4 * model.contact_capacity, LinkPair{});
+      const int cap = static_cast<int>(bvh_pairs.size());
       std::vector<double> step_s, bvh_s, all_s;
       for (int k = 0; k < max_steps && !script.done(); ++k) {
         const auto t0 = Clock::now();
@@ -331,14 +344,15 @@ int RunSpeed(bool quick, const std::string& json) {
           int found_bvh = 0, found_all = 0;
           auto c0 = Clock::now();
           RefitSphereBvh(model.bvh, state.x_W, model.bvh_inflate_m, spheres);
-          found_bvh = FindSelfCollisions(model.bvh, spheres, scratch_pairs.data(), cap);
+          found_bvh = FindSelfCollisions(model.bvh, spheres, bvh_pairs.data(), cap);
           bvh_s.push_back(Seconds(c0, Clock::now()));
           c0 = Clock::now();
           RefitSphereBvhLeaves(model.bvh, state.x_W, model.bvh_inflate_m, spheres);
-          found_all = FindSelfCollisionsAllPairs(model.bvh, spheres, scratch_pairs.data(), cap);
+          found_all = FindSelfCollisionsAllPairs(model.bvh, spheres, all_pairs.data(), cap);
           all_s.push_back(Seconds(c0, Clock::now()));
-          if (found_bvh != found_all) {
-            std::fprintf(stderr, "BVH found %d pairs, all pairs %d\n", found_bvh, found_all);
+          if (!same_set(bvh_pairs, found_bvh, all_pairs, found_all)) {
+            std::fprintf(stderr, "BVH found %d pairs, all pairs %d: not the same set\n", found_bvh,
+                         found_all);
             return 1;
           }
         }
@@ -371,19 +385,26 @@ int RunSpeed(bool quick, const std::string& json) {
                                pitch * i * dphi / (2.0 * M_PI));
   }
   SphereBvhSpheres spheres = MakeSphereBvhSpheres(model.bvh);
-  std::vector<LinkPair> pairs(model.contact_capacity * 4);
+  bvh_pairs.assign(model.contact_capacity * 4, LinkPair{});
+  all_pairs.assign(model.contact_capacity * 4, LinkPair{});
+  const int cap = static_cast<int>(bvh_pairs.size());
   const int reps = quick ? 50 : 2000;
   std::vector<double> bvh_s, all_s;
   int bvh_count = 0, all_count = 0;
   for (int r = 0; r < reps; ++r) {
     auto t0 = Clock::now();
     RefitSphereBvh(model.bvh, x, model.bvh_inflate_m, spheres);
-    bvh_count = FindSelfCollisions(model.bvh, spheres, pairs.data(), pairs.size());
+    bvh_count = FindSelfCollisions(model.bvh, spheres, bvh_pairs.data(), cap);
     bvh_s.push_back(Seconds(t0, Clock::now()));
     t0 = Clock::now();
     RefitSphereBvhLeaves(model.bvh, x, model.bvh_inflate_m, spheres);
-    all_count = FindSelfCollisionsAllPairs(model.bvh, spheres, pairs.data(), pairs.size());
+    all_count = FindSelfCollisionsAllPairs(model.bvh, spheres, all_pairs.data(), cap);
     all_s.push_back(Seconds(t0, Clock::now()));
+  }
+  if (!same_set(bvh_pairs, bvh_count, all_pairs, all_count)) {
+    std::fprintf(stderr, "helix: BVH found %d pairs, all pairs %d: not the same set\n", bvh_count,
+                 all_count);
+    return 1;
   }
   const double bvh_ns = Median(bvh_s) * 1e9;
   const double all_ns = Median(all_s) * 1e9;

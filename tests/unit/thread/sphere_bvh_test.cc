@@ -148,17 +148,13 @@ TEST(SphereBvh, StartingPairsCoverEveryCandidateOnce) {
       }
     };
     for (SphereBvhNodePair pq : t.self_pairs) {
-      EXPECT_GT(std::max(t.traversal[NodePairFirst(pq)].size, t.traversal[NodePairSecond(pq)].size),
-                2);
+      // More than two leaf pairs below (one or two are kept as leaf pairs).
+      EXPECT_GT(t.traversal[NodePairFirst(pq)].size * t.traversal[NodePairSecond(pq)].size, 2);
       cover(pq);
     }
-    // Small starting pairs: first links a, b and the lanes (a + i, b + j), lane 2 i + j.
-    for (SphereBvhNodePair pq : t.self_small_pairs) {
-      const int a = NodePairFirst(pq);
-      const int b = NodePairSecond(pq);
-      for (int lane = 0; lane < 4; ++lane) {
-        if ((pq >> lane) & 1) ++covered[(a + (lane >> 1)) * links + b + (lane & 1)];
-      }
+    for (SphereBvhNodePair pq : t.self_leaf_pairs) {
+      EXPECT_LT(NodePairSecond(pq), links);  // two leaves
+      cover(pq);
     }
     for (int a = 0; a < links; ++a) {
       for (int b = 0; b < links; ++b) {
@@ -241,6 +237,15 @@ TEST(SphereBvh, FullQueueFallsBackToTheStack) {
   const SphereBvhSpheres s = MakeSphereBvhSpheres(t);
   ASSERT_LT(s.queue.size(), 300u * 299u / 2u);
   EXPECT_EQ(ExpectSameAsAllPairs(x, 1e-3, "ball"), 300 * 299 / 2 - 299);  // all but neighbours
+}
+
+// A crumpled thread (each link near ~100 others): more pairs of two-link nodes than the
+// small-pair ring holds, so it is drained on the way.
+TEST(SphereBvh, FullSmallPairQueueIsDrained) {
+  const Eigen::Matrix3Xd x = RandomWalk(401, 1e-3, 11);
+  const SphereBvhTopology t = BuildSphereBvhTopology(400);
+  ASSERT_LE(MakeSphereBvhSpheres(t).small_queue.size(), 4096u);
+  EXPECT_GT(ExpectSameAsAllPairs(x, 3e-3, "crumpled"), 10000);
 }
 
 TEST(SphereBvh, OverflowIsCountedNotWritten) {
