@@ -8,8 +8,9 @@
 // the values of φ(θ) = T on the circle (4.28) at those extrema and at the arc ends decide
 // touch / no-touch exactly. The extrema of G are not those of the distance, so the clearance
 // (arc_torus.h) is evaluated at SP candidates refined by a Newton ascent of the true distance,
-// and certified by SP passes against the level torus {distance = t} through the deepest point
-// found, which is itself a torus of tube radius t (README_sp.md).
+// and certified against the level torus {distance = t} through the deepest point found, which
+// is itself a torus of tube radius t: first by a quick test on the lifted torus along the
+// needle, deflated at that point, and where it cannot prove, by a full SP pass (README_sp.md).
 //
 // Hot path: no allocation, no virtual call, no exception. Invalid input returns kInvalidInput.
 
