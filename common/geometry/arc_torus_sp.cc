@@ -67,6 +67,17 @@ double WrapTo2Pi(double s) {
   return s;
 }
 
+// cos s and sin s, free at s = 0 (the needle's first point, the usual first piece end).
+void CosSin(double s, double* cs, double* sn) {
+  if (s == 0) {
+    *cs = 1;
+    *sn = 0;
+    return;
+  }
+  *cs = std::cos(s);
+  *sn = std::sin(s);
+}
+
 // IsAzimuthInSegment without atan2 where the point is clearly off both boundary half-planes
 // (the sign of y and of the cross product with the direction of azimuth Ω decide); on or
 // near a boundary the shared definition answers.
@@ -214,17 +225,6 @@ void AdvanceAngle(double s_new, double h, double* cs, double* sn) {
     *cs = std::cos(s_new);
     *sn = std::sin(s_new);
   }
-}
-
-// cos s and sin s, free at s = 0 (the needle's first point, the usual first piece end).
-void CosSin(double s, double* cs, double* sn) {
-  if (s == 0) {
-    *cs = 1;
-    *sn = 0;
-    return;
-  }
-  *cs = std::cos(s);
-  *sn = std::sin(s);
 }
 
 // Safeguarded Newton ascent of the distance² on [iv.lo, iv.hi] from s (cos s = cs,
@@ -390,6 +390,30 @@ LiftedCircle CalcLiftedCircle(const Eigen::Vector3d& o, const Eigen::Vector3d& e
   return lc;
 }
 
+namespace {
+
+// x² + y² = w₀c² + w₁cs + w₂s² + w₃c + w₄s + w₅ on the circle x = o + cu + sv,
+// (c, s) = (cos s, sin s), as in CalcLevelTorusAlongNeedle.
+void AxisDistSqTerms(const Eigen::Vector3d& o, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
+                     double w[6]) {
+  w[0] = u.x() * u.x() + u.y() * u.y();
+  w[1] = 2 * (u.x() * v.x() + u.y() * v.y());
+  w[2] = v.x() * v.x() + v.y() * v.y();
+  w[3] = 2 * (o.x() * u.x() + o.y() * u.y());
+  w[4] = 2 * (o.x() * v.x() + o.y() * v.y());
+  w[5] = o.x() * o.x() + o.y() * o.y();
+}
+
+// A lower bound of x² + y² on the whole circle: its mean minus the amplitudes of its second
+// and first harmonics.
+double AxisDistSqLowerBound(const double w[6]) {
+  const double h2 = 0.5 * (w[0] - w[2]);
+  return w[5] + 0.5 * (w[0] + w[2]) - std::sqrt(h2 * h2 + 0.25 * w[1] * w[1]) -
+         std::sqrt(w[3] * w[3] + w[4] * w[4]);
+}
+
+}  // namespace
+
 CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                                       const Eigen::Vector3d& e2, double rho,
                                       double rho_sq_minus_one, double t_sq, double* size,
@@ -398,9 +422,8 @@ CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vec
   // in cos s, sin s on a circle: |u|² = |v|² = ρ², u·v = 0),
   // G̃ = 4t²(x² + y²) − 4(1 − t²)z² − L², term by term in cos², cos sin, sin², cos, sin, 1.
   const Eigen::Vector3d u = rho * e1, v = rho * e2;
-  const double w[6] = {u.x() * u.x() + u.y() * u.y(),       2 * (u.x() * v.x() + u.y() * v.y()),
-                       v.x() * v.x() + v.y() * v.y(),       2 * (o.x() * u.x() + o.y() * u.y()),
-                       2 * (o.x() * v.x() + o.y() * v.y()), o.x() * o.x() + o.y() * o.y()};
+  double w[6];
+  AxisDistSqTerms(o, u, v, w);
   const double z[6] = {u.z() * u.z(),     2 * u.z() * v.z(), v.z() * v.z(),
                        2 * o.z() * u.z(), 2 * o.z() * v.z(), o.z() * o.z()};
   const double kk = o.squaredNorm() + rho_sq_minus_one + t_sq;
@@ -414,12 +437,7 @@ CircleConic CalcLevelTorusAlongNeedle(const Eigen::Vector3d& o, const Eigen::Vec
     total += std::abs(a4 * w[i]) + std::abs(b4 * z[i]) + std::abs(l2[i]);
   }
   if (size != nullptr) *size = total;
-  if (axis_dist_sq_min != nullptr) {
-    // x² + y² ≥ its mean minus the amplitudes of its second and first harmonics.
-    const double h2 = 0.5 * (w[0] - w[2]);
-    *axis_dist_sq_min = w[5] + 0.5 * (w[0] + w[2]) - std::sqrt(h2 * h2 + 0.25 * w[1] * w[1]) -
-                        std::sqrt(w[3] * w[3] + w[4] * w[4]);
-  }
+  if (axis_dist_sq_min != nullptr) *axis_dist_sq_min = AxisDistSqLowerBound(w);
   CircleConic k;
   k.a = c[0];
   k.b = c[1];
@@ -985,19 +1003,24 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
       // G̃_t ≥ −ε on the arc bounds, for any point farther than t, (d² − t²)(d'² − t²) ≤ ε,
       // d' the distance to the opposite core point, d'² − t² ≥ max(R² − t², 4Rw) (w the
       // distance to the axis): the quick test is used where that bounds d − t by
-      // kQuickCertifyTol (thin level tori near the axis would not).
-      double size, w_sq_min;
+      // kQuickCertifyTolRel·max(R, t) (thin level tori near the axis would not).
+      double size;
       const double t_sq_rel = t_sq * inv_r * inv_r;
       const CircleConic level_trig = CalcLevelTorusAlongNeedle(
-          inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one, t_sq_rel, &size, &w_sq_min);
+          inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one, t_sq_rel, &size);
       const double eps = kQuickCertifyRel * size;
       // eps ≤ tol · max(1, t) · 2t · max(R² − t², 4Rw), squared (no square roots; t > 0).
       const double lhs = eps * eps;
       const double rhs =
           4 * kQuickCertifyTolRel * kQuickCertifyTolRel * t_sq_rel * std::max(1.0, t_sq_rel);
       const double near = 1 - t_sq_rel;
-      const bool tight =
-          (near > 0 && lhs <= rhs * near * near) || (w_sq_min > 0 && lhs <= rhs * 16 * w_sq_min);
+      bool tight = near > 0 && lhs <= rhs * near * near;
+      if (!tight) {  // deep, or t near R: the bound through the distance to the axis
+        double w[6];
+        AxisDistSqTerms(inv_r * nv.o, inv_r * nv.rho * nv.e1, inv_r * nv.rho * nv.e2, w);
+        const double w_sq_min = AxisDistSqLowerBound(w);
+        tight = w_sq_min > 0 && lhs <= rhs * 16 * w_sq_min;
+      }
       if (tight && ProveNoFartherPoint(level_trig, iv, n_iv, best.s, best.cos_s, best.sin_s, eps)) {
         ++diag.certify_quick;
         break;
