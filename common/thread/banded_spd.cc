@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "common/base/check.h"
 
@@ -67,6 +68,157 @@ void BandedSpd::Solve(Eigen::VectorXd& b) const {
     const int hi = std::min(size_ - 1, i + p_);
     for (int k = i + 1; k <= hi; ++k) sum -= band_(k - i, k) * b[k];
     b[i] = sum / band_(0, i);
+  }
+}
+
+void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols) const {
+  MICRODEX_CHECK(b.rows() == size_ && cols <= b.cols());
+  if (cols <= 0) return;
+  for (int i = 0; i < size_; ++i) {  // L Y = B
+    auto row = b.row(i).head(cols);
+    for (int k = std::max(0, i - p_); k < i; ++k) row -= band_(i - k, i) * b.row(k).head(cols);
+    row *= 1.0 / band_(0, i);
+  }
+  for (int i = size_ - 1; i >= 0; --i) {  // L^T X = Y
+    auto row = b.row(i).head(cols);
+    const int hi = std::min(size_ - 1, i + p_);
+    for (int k = i + 1; k <= hi; ++k) row -= band_(k - i, k) * b.row(k).head(cols);
+    row *= 1.0 / band_(0, i);
+  }
+}
+
+double NodeColumn::Dot(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  double sum = 0.0;
+  for (int k = 0; k < count; ++k) sum += weight[k] * dir.dot(x.segment<3>(3 * node[k]));
+  return sum;
+}
+
+void NodeColumn::AddTo(double scale, Eigen::Ref<Eigen::VectorXd> x) const {
+  for (int k = 0; k < count; ++k) x.segment<3>(3 * node[k]) += (scale * weight[k]) * dir;
+}
+
+namespace {
+
+// In place Cholesky of the leading m x m block (lower triangle); false if not SPD.
+bool CholeskyInPlace(Eigen::MatrixXd& s, int m) {
+  for (int j = 0; j < m; ++j) {
+    double d = s(j, j);
+    for (int k = 0; k < j; ++k) d -= s(j, k) * s(j, k);
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    s(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < m; ++i) {
+      double v = s(i, j);
+      for (int k = 0; k < j; ++k) v -= s(i, k) * s(j, k);
+      s(i, j) = v / s(j, j);
+    }
+  }
+  return true;
+}
+
+void ForwardSolve(const Eigen::MatrixXd& l, int m, double* x) {
+  for (int i = 0; i < m; ++i) {
+    double v = x[i];
+    for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
+    x[i] = v / l(i, i);
+  }
+}
+
+void BackSolve(const Eigen::MatrixXd& l, int m, double* x) {
+  for (int i = m - 1; i >= 0; --i) {
+    double v = x[i];
+    for (int k = i + 1; k < m; ++k) v -= l(k, i) * x[k];
+    x[i] = v / l(i, i);
+  }
+}
+
+}  // namespace
+
+LowRankSolver::LowRankSolver(int size, int max_columns)
+    : size_(size),
+      max_columns_(max_columns),
+      y_(BandedSpd::RowMajorMatrix::Zero(size, std::max(1, max_columns))),
+      h_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
+      x_ut_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
+      small_(Eigen::VectorXd::Zero(std::max(1, max_columns))) {
+  MICRODEX_CHECK(size >= 1 && max_columns >= 0);
+}
+
+bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn> columns, int num_u,
+                            const double* d) {
+  const int m = static_cast<int>(columns.size());
+  MICRODEX_CHECK(m <= max_columns_ && num_u >= 0 && num_u <= m && factor.size() == size_);
+  columns_ = columns;
+  num_u_ = num_u;
+  num_t_ = m - num_u;
+  if (m == 0) return true;
+  y_.leftCols(m).setZero();
+  for (int j = 0; j < m; ++j) {
+    const NodeColumn& c = columns[j];
+    for (int k = 0; k < c.count; ++k) {
+      for (int r = 0; r < 3; ++r) y_(3 * c.node[k] + r, j) += c.weight[k] * c.dir[r];
+    }
+  }
+  factor.SolveColumns(y_, m);
+  // H = V^T Y, symmetric: the lower triangle from the sparse columns.
+  for (int i = 0; i < m; ++i) {
+    const NodeColumn& c = columns[i];
+    for (int j = 0; j <= i; ++j) {
+      double sum = 0.0;
+      for (int k = 0; k < c.count; ++k) {
+        const int row = 3 * c.node[k];
+        sum += c.weight[k] *
+               (c.dir[0] * y_(row, j) + c.dir[1] * y_(row + 1, j) + c.dir[2] * y_(row + 2, j));
+      }
+      h_(i, j) = sum;
+    }
+  }
+  for (int i = 0; i < m; ++i) {
+    for (int j = i + 1; j < m; ++j) h_(i, j) = h_(j, i);
+  }
+  // S = D^-1 + H_UU in place (lower triangle), then X = L_S^-1 H_UT.
+  for (int i = 0; i < num_u_; ++i) {
+    if (!(d[i] > 0.0)) return false;
+    h_(i, i) += 1.0 / d[i];
+  }
+  if (!CholeskyInPlace(h_, num_u_)) return false;
+  for (int j = 0; j < num_t_; ++j) {
+    for (int i = 0; i < num_u_; ++i) small_[i] = h_(num_u_ + j, i);  // H_TU row = H_UT column
+    ForwardSolve(h_, num_u_, small_.data());
+    for (int i = 0; i < num_u_; ++i) x_ut_(i, j) = small_[i];
+  }
+  return true;
+}
+
+void LowRankSolver::CorrectSolution(Eigen::Ref<Eigen::VectorXd> x) {
+  if (num_u_ == 0) return;
+  // x -= Y_U S^-1 U^T x.
+  for (int i = 0; i < num_u_; ++i) small_[i] = columns_[i].Dot(x);
+  ForwardSolve(h_, num_u_, small_.data());
+  BackSolve(h_, num_u_, small_.data());
+  for (int i = 0; i < size_; ++i) x[i] -= y_.row(i).head(num_u_).dot(small_.head(num_u_));
+}
+
+void LowRankSolver::Delassus(Eigen::MatrixXd& g) {
+  // G = H_TT - X^T X, X = L_S^-1 H_UT.
+  for (int i = 0; i < num_t_; ++i) {
+    for (int j = 0; j <= i; ++j) {
+      double v = h_(num_u_ + i, num_u_ + j);
+      for (int k = 0; k < num_u_; ++k) v -= x_ut_(k, i) * x_ut_(k, j);
+      g(i, j) = v;
+      g(j, i) = v;
+    }
+  }
+}
+
+void LowRankSolver::AddResponse(const Eigen::Ref<const Eigen::VectorXd>& p,
+                                Eigen::Ref<Eigen::VectorXd> x) {
+  if (num_t_ == 0) return;
+  // (A + U D U^T)^-1 T p = Y_T p - Y_U S^-1 H_UT p, with S^-1 H_UT p = L_S^-T X p.
+  for (int k = 0; k < num_u_; ++k) small_[k] = x_ut_.row(k).head(num_t_).dot(p.head(num_t_));
+  BackSolve(h_, num_u_, small_.data());
+  for (int i = 0; i < size_; ++i) {
+    x[i] += y_.row(i).segment(num_u_, num_t_).dot(p.head(num_t_)) -
+            y_.row(i).head(num_u_).dot(small_.head(num_u_));
   }
 }
 

@@ -7,6 +7,7 @@
 // temporaries while factorising; this one works in storage sized once, O(N p^2) per solve.
 
 #include <Eigen/Core>
+#include <span>
 
 namespace microdex::thread {
 
@@ -33,11 +34,64 @@ class BandedSpd {
   bool Factorize();
   // Solves L L^T x = b in place, after Factorize().
   void Solve(Eigen::VectorXd& b) const;
+  // The same for the first `cols` columns of b at once (row-major: each row's columns are
+  // contiguous, so the substitutions run across them).
+  using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  void SolveColumns(RowMajorMatrix& b, int cols) const;
 
  private:
   int size_ = 0;
   int p_ = 0;
   Eigen::MatrixXd band_;  // band_(d, i) = A(i, i - d), d in [0, p]
+};
+
+// A column of a low-rank term over 3-vector node blocks (the matrix is 3N x 3N, node i owns rows
+// 3i..3i+2): u = sum_k weight[k] e_{node[k]} (x) dir. A contact's relative velocity along dir is
+// u^T v; a contact impulse p along dir acts on the nodes as u p.
+struct NodeColumn {
+  int count = 0;  // at most 4 nodes (two links)
+  int node[4] = {0, 0, 0, 0};
+  double weight[4] = {0.0, 0.0, 0.0, 0.0};
+  Eigen::Vector3d dir = Eigen::Vector3d::Zero();
+
+  double Dot(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  // x += scale * u
+  void AddTo(double scale, Eigen::Ref<Eigen::VectorXd> x) const;
+};
+
+// Solves with A + U D U^T (A a factorised BandedSpd, U = [u_1 .. u_m] NodeColumns, D = diag(d) > 0)
+// by Woodbury's identity, and gives the Delassus operator G = T^T (A + U D U^T)^-1 T of further
+// columns T (contact impulses of the same system). One multi-column banded solve Y = A^-1 [U T],
+// then small dense algebra: S = D^-1 + U^T A^-1 U (Cholesky), G = T^T Y_T - (U^T Y_T)^T S^-1
+// (U^T Y_T). Storage sized at construction; nothing allocates afterwards.
+class LowRankSolver {
+ public:
+  LowRankSolver() = default;
+  LowRankSolver(int size, int max_columns);
+  int max_columns() const { return max_columns_; }
+
+  // columns: the first num_u are U with weights d[0..num_u), the rest are T; they are kept by
+  // reference until the next Prepare. Returns false if the small system is not SPD (or a weight
+  // is not positive).
+  bool Prepare(const BandedSpd& factor, std::span<const NodeColumn> columns, int num_u,
+               const double* d);
+  // In place: x = A^-1 b on entry, (A + U D U^T)^-1 b on return.
+  void CorrectSolution(Eigen::Ref<Eigen::VectorXd> x);
+  // G = T^T (A + U D U^T)^-1 T into the leading num_t x num_t block of g.
+  void Delassus(Eigen::MatrixXd& g);
+  // x += (A + U D U^T)^-1 T p, p of length num_t.
+  void AddResponse(const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> x);
+
+ private:
+  int size_ = 0;
+  int max_columns_ = 0;
+  int num_u_ = 0;
+  int num_t_ = 0;
+  std::span<const NodeColumn> columns_;  // the caller's, from Prepare
+  BandedSpd::RowMajorMatrix y_;          // A^-1 [U T]
+  Eigen::MatrixXd h_;      // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
+  Eigen::MatrixXd x_ut_;   // L_S^-1 H_UT
+  Eigen::VectorXd small_;  // length max_columns
 };
 
 }  // namespace microdex::thread

@@ -103,7 +103,7 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
 }
 
 void AddContactForces(const ThreadModel& model, ThreadState& state, Eigen::Matrix3Xd& f_W,
-                      bool with_stiffness) {
+                      bool with_stiffness, int exact_pairs) {
   ThreadScratch& w = state.scratch;
   const ThreadDef& def = model.def;
   if (with_stiffness) {
@@ -113,7 +113,7 @@ void AddContactForces(const ThreadModel& model, ThreadState& state, Eigen::Matri
   auto add_node = [&](int node, double weight, double f, double k, const Eigen::Vector3d& n,
                       double bound_factor) {
     f_W.col(node) += (weight * f) * n;
-    if (!with_stiffness) return;
+    if (!with_stiffness || bound_factor == 0.0) return;
     const Eigen::Matrix3d nn = n * n.transpose();
     Eigen::Map<Eigen::Matrix3d>(w.k_contact.col(node).data()) +=
         (bound_factor * std::abs(weight) * k) * nn;
@@ -124,11 +124,13 @@ void AddContactForces(const ThreadModel& model, ThreadState& state, Eigen::Matri
     const double f = ContactForceMagnitude(def, sc.gap_m);  // (5.9) along the pair normal
     const double k = ContactStiffness(def, sc.gap_m);
     // Weights g = (1-s, s, -(1-t), -t) map node motion to gap change; g g^T <= 2 diag(|g|)
-    // because sum |g| = 2, hence the factor 2 in the diagonal bound.
-    add_node(sc.link_a, 1.0 - sc.s, f, k, sc.n_W, 2.0);
-    add_node(sc.link_a + 1, sc.s, f, k, sc.n_W, 2.0);
-    add_node(sc.link_b, -(1.0 - sc.t), f, k, sc.n_W, 2.0);
-    add_node(sc.link_b + 1, -sc.t, f, k, sc.n_W, 2.0);
+    // because sum |g| = 2, hence the factor 2 in the diagonal bound. A pair coupled exactly
+    // contributes its force only here: the step adds its k g g^T and damping itself.
+    const double factor = c < exact_pairs ? 0.0 : 2.0;
+    add_node(sc.link_a, 1.0 - sc.s, f, k, sc.n_W, factor);
+    add_node(sc.link_a + 1, sc.s, f, k, sc.n_W, factor);
+    add_node(sc.link_b, -(1.0 - sc.t), f, k, sc.n_W, factor);
+    add_node(sc.link_b + 1, -sc.t, f, k, sc.n_W, factor);
   }
   for (int c = 0; c < w.num_object_contacts; ++c) {
     const ObjectContact& oc = w.object_contacts[c];

@@ -21,11 +21,12 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
 double ContactForceMagnitude(const ThreadDef& def, double gap_m);
 double ContactStiffness(const ThreadDef& def, double gap_m);
 
-// Adds the contact forces of the found contacts to f_W; when k_contact is given, also per-node
-// 3x3 stiffness bounds (diagonal blocks dominating the true pair stiffness) and the extra
-// contact damping per node (5.8).
+// Adds the contact forces of the found contacts to f_W; with_stiffness, also per-node 3x3
+// stiffness bounds (diagonal blocks dominating the true pair stiffness) and the extra contact
+// damping per node (5.8), except for the first `exact_pairs` self contacts, whose stiffness
+// and damping the implicit step couples exactly (relative, per pair).
 void AddContactForces(const ThreadModel& model, ThreadState& state, Eigen::Matrix3Xd& f_W,
-                      bool with_stiffness);
+                      bool with_stiffness, int exact_pairs = 0);
 
 // Projects links back to at least guard_fraction * diameter apart (and out of objects), using
 // the start-of-step positions in scratch.x_prev_W to catch links that crossed within the step.

@@ -85,6 +85,16 @@ void ThreadDef::Validate() const {
           "a time step in (0, 0.1] s");
   Require(max_grasps >= 1 && max_grasps <= 64, "max_grasps", "an integer in [1, 64]");
   Require(max_contacts >= 0, "max_contacts", "0 (automatic) or a positive capacity");
+  Require(exact_contact_pairs >= 0 && exact_contact_pairs <= 1024, "exact_contact_pairs",
+          "0 (diagonal bound only) to 1024");
+  Require(
+      Finite(friction_coefficient) && friction_coefficient >= 0.0 && friction_coefficient <= 10.0,
+      "friction_coefficient", "a coefficient in [0, 10]");
+  Require(Finite(object_friction_coefficient) && object_friction_coefficient >= 0.0 &&
+              object_friction_coefficient <= 10.0,
+          "object_friction_coefficient", "a coefficient in [0, 10]");
+  Require(friction_contacts >= 0 && friction_contacts <= 1024, "friction_contacts",
+          "0 (no friction) to 1024");
 }
 
 ThreadDef StiffNylon10_0() {
@@ -194,7 +204,11 @@ ThreadDef LoadThreadDef(const std::string& path) {
                                            "integrator",
                                            "time_step_s",
                                            "max_grasps",
-                                           "max_contacts"};
+                                           "max_contacts",
+                                           "exact_contact_pairs",
+                                           "friction_coefficient",
+                                           "object_friction_coefficient",
+                                           "friction_contacts"};
   for (const auto& entry : root) {
     const std::string key = entry.first.as<std::string>();
     bool known = false;
@@ -235,6 +249,10 @@ ThreadDef LoadThreadDef(const std::string& path) {
   ReadYamlField(root, path, "", "time_step_s", def.time_step_s);
   ReadYamlField(root, path, "", "max_grasps", def.max_grasps);
   ReadYamlField(root, path, "", "max_contacts", def.max_contacts);
+  ReadYamlField(root, path, "", "exact_contact_pairs", def.exact_contact_pairs);
+  ReadYamlField(root, path, "", "friction_coefficient", def.friction_coefficient);
+  ReadYamlField(root, path, "", "object_friction_coefficient", def.object_friction_coefficient);
+  ReadYamlField(root, path, "", "friction_contacts", def.friction_contacts);
   if (const YAML::Node g = root["gravity_m_per_s2"]) {
     if (!g.IsSequence() || g.size() != 3) {
       throw std::runtime_error(path + ": field 'thread.gravity_m_per_s2' (line " +

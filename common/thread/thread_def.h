@@ -84,6 +84,31 @@ struct ThreadDef {
   int max_grasps = 4;
   int max_contacts = 0;  // 0: 16 per link
 
+  // Self contacts whose stiffness and damping enter the linearly implicit step exactly, as the
+  // relative pair terms (h c + h^2 k) (g (x) n)(g (x) n)^T (a low-rank update of the banded
+  // solve, by Woodbury's identity); the deepest contacts first. Contacts beyond this count get
+  // the per-node diagonal bound 2 |g_i| k n n^T, which dominates the pair term but anchors the
+  // nodes in absolute terms (a tight knot then resists being moved as a whole). 0: bound only
+  // (the default: the knot-tying jig does not tie with exact pairs yet, see README "Not done").
+  int exact_contact_pairs = 0;
+
+  // Coulomb friction (not in the thesis, whose "friction" (5.8) is viscous damping): the
+  // tangential impulse of a contact over a step is at most mu * f_n * h, f_n the normal force
+  // (5.9) at the start of the step; the contact sticks when the impulse that stops its relative
+  // tangential motion is inside that cone. Thread on thread and thread on objects (tools, the
+  // needle, tissue). 0: frictionless. Literature: nylon on nylon 0.15-0.25 (dry, engineering
+  // tables, e.g. Roymech "Coefficients of friction"); surgical sutures on skin-like surfaces
+  // were measured by the capstan method by Zhang, Ren, Zeng & van der Heide, Friction 7 (2019)
+  // 87-98, doi:10.1007/s40544-017-0140-3. Braided silk is rougher than a monofilament (braided
+  // sutures hold knots with fewer throws): 0.3 for silk. Off (0) by default and in the presets:
+  // with mu = 0.2 the scripted square knot's first throw springs apart when the jig's pegs are
+  // withdrawn (README "Not done"); scenes opt in.
+  double friction_coefficient = 0.0;
+  double object_friction_coefficient = 0.0;
+  // Contacts (self first, deepest first, then object contacts) that get friction in one step;
+  // each adds two columns to the linearly implicit step's low-rank solve. 0: none.
+  int friction_contacts = 64;
+
   // Throws std::invalid_argument naming the bad field and what was expected.
   void Validate() const;
 };

@@ -1,5 +1,6 @@
 #include "common/thread/thread_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -50,6 +51,10 @@ ThreadModel MakeThreadModel(const ThreadDef& def) {
   m.bvh_inflate_m = m.radius_m + def.contact_cutoff_m + 0.5 * def.diameter_m;
   m.contact_capacity = def.max_contacts > 0 ? def.max_contacts : 16 * m.num_links;
   m.half_bandwidth = 8;
+  m.exact_pair_capacity = std::min(def.exact_contact_pairs, m.contact_capacity);
+  m.friction_capacity = def.friction_coefficient > 0.0 || def.object_friction_coefficient > 0.0
+                            ? std::min(def.friction_contacts, 2 * m.contact_capacity)
+                            : 0;
   return m;
 }
 
@@ -81,6 +86,16 @@ ThreadState MakeThreadState(const ThreadModel& model, const Eigen::Matrix3Xd& x_
   w.rhs = Eigen::VectorXd::Zero(3 * n);
   w.twist_rhs = Eigen::VectorXd::Zero(n);
   w.grasp_rows = Eigen::MatrixXd::Zero(3 * model.def.max_grasps, 2 * model.half_bandwidth + 2);
+  const int pairs = model.exact_pair_capacity;
+  const int friction = model.friction_capacity;
+  w.low_rank = LowRankSolver(3 * n, pairs + 2 * friction);
+  w.columns.assign(pairs + 2 * friction, NodeColumn{});
+  w.friction_columns.assign(2 * friction, NodeColumn{});
+  w.pair_d = Eigen::VectorXd::Zero(std::max(1, pairs));
+  w.delassus = Eigen::MatrixXd::Zero(std::max(1, 2 * friction), std::max(1, 2 * friction));
+  w.friction_p = Eigen::VectorXd::Zero(std::max(1, 2 * friction));
+  w.friction_vt = Eigen::VectorXd::Zero(std::max(1, 2 * friction));
+  w.friction_bound = Eigen::VectorXd::Zero(std::max(1, friction));
   return s;
 }
 

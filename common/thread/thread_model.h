@@ -29,8 +29,10 @@ struct ThreadModel {
   // Leaf spheres grow by this: thread radius plus contact cutoff plus a motion margin, so
   // pairs that may touch before the next step are already candidates.
   double bvh_inflate_m = 0.0;
-  int contact_capacity = 0;  // self pairs and object contacts, each
-  int half_bandwidth = 8;    // of the 3N x 3N implicit matrix
+  int contact_capacity = 0;     // self pairs and object contacts, each
+  int half_bandwidth = 8;       // of the 3N x 3N implicit matrix
+  int exact_pair_capacity = 0;  // self contacts coupled exactly in the implicit step
+  int friction_capacity = 0;    // contacts with friction per step
 };
 
 // Builds the model; throws std::invalid_argument (from ThreadDef::Validate) on a bad def.
@@ -75,7 +77,11 @@ struct ThreadStatus {
   int num_candidate_pairs = 0;
   int num_self_contacts = 0;
   int num_object_contacts = 0;
-  double max_strain = 0.0;  // max |l - r| / r after the step
+  int num_exact_pairs = 0;        // self contacts coupled exactly in the last implicit step
+  int num_bound_pairs = 0;        // self contacts beyond exact_pair_capacity: diagonal bound
+  int num_friction_contacts = 0;  // contacts with friction in the last step
+  int num_sliding_contacts = 0;   // of those, at the friction cone's limit (slipping)
+  double max_strain = 0.0;        // max |l - r| / r after the step
 };
 
 // Work arrays, sized once by MakeThreadState; no step resizes them.
@@ -101,6 +107,19 @@ struct ThreadScratch {
   Eigen::VectorXd twist_rhs;
   Eigen::MatrixXd
       grasp_rows;  // (3 max_grasps) x (2 p + 2): unmodified rows and rhs of grasped nodes
+  // Low-rank contact terms of the implicit step (thread_step.cc): exactly coupled pairs (first
+  // exact_pair_capacity columns at most) and two friction columns per friction contact, with
+  // grasped nodes' weights zeroed for the solve; the friction columns with all weights (for
+  // relative velocities and the tool's reaction); pair weights, the friction Delassus
+  // operator, impulses, relative tangential velocities and impulse bounds.
+  LowRankSolver low_rank;
+  std::vector<NodeColumn> columns;
+  std::vector<NodeColumn> friction_columns;
+  Eigen::VectorXd pair_d;
+  Eigen::MatrixXd delassus;
+  Eigen::VectorXd friction_p;
+  Eigen::VectorXd friction_vt;
+  Eigen::VectorXd friction_bound;
 };
 
 struct ThreadState {

@@ -1,12 +1,199 @@
 #include "common/thread/thread_step.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
+#include <span>
 
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
 
 namespace microdex::thread {
 namespace {
+
+int ExactPairCount(const ThreadModel& model, const ThreadState& state) {
+  return std::min(state.scratch.num_self_contacts, model.exact_pair_capacity);
+}
+
+// The nodes of self contact c, their weights g (node motion to gap change) and the pair's
+// normal: the contact's term in the implicit matrix is d g g^T (x) n n^T.
+struct PairTerm {
+  int node[4];
+  double g[4];
+  Eigen::Vector3d n;
+};
+PairTerm MakePairTerm(const SelfContact& sc) {
+  return {{sc.link_a, sc.link_a + 1, sc.link_b, sc.link_b + 1},
+          {1.0 - sc.s, sc.s, -(1.0 - sc.t), -sc.t},
+          sc.n_W};
+}
+
+// A solve column of the low-rank terms: the contact's nodes and weights along dir, with grasped
+// nodes' weights zeroed (their rows are identity rows holding a prescribed dv).
+NodeColumn MakeSolveColumn(const PairTerm& t, const Eigen::Vector3d& dir, const ThreadScratch& w) {
+  NodeColumn c;
+  c.count = 4;
+  c.dir = dir;
+  for (int k = 0; k < 4; ++k) {
+    c.node[k] = t.node[k];
+    c.weight[k] = w.grasp_slot[t.node[k]] >= 0 ? 0.0 : t.g[k];
+  }
+  return c;
+}
+
+// When there are more self contacts than the exact coupling or friction take, the deepest ones
+// (largest force) go first. std::sort does not allocate.
+void SortSelfContactsByDepth(const ThreadModel& model, ThreadScratch& w) {
+  const int n = w.num_self_contacts;
+  const int exact = model.exact_pair_capacity, friction = model.friction_capacity;
+  if (!((exact > 0 && n > exact) || (friction > 0 && n > friction))) return;
+  std::sort(w.self_contacts.begin(), w.self_contacts.begin() + n,
+            [](const SelfContact& a, const SelfContact& b) { return a.gap_m < b.gap_m; });
+}
+
+// Stage: the friction contacts of this step: two unit tangents per contact (the columns with all
+// node weights: relative tangential velocity t^T sum_k g_k v_k) and the impulse bound
+// mu f_n h, f_n the normal force (5.9) at the start of the step.
+void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadState& state) {
+  ThreadScratch& w = state.scratch;
+  const ThreadDef& def = model.def;
+  int nf = 0;
+  auto add = [&](const int* nodes, const double* g, int count, const Eigen::Vector3d& n,
+                 double bound) {
+    if (nf >= model.friction_capacity || !(bound > 0.0)) return;
+    const Eigen::Vector3d axis =
+        std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d t1 = n.cross(axis).normalized();
+    const Eigen::Vector3d t2 = n.cross(t1);
+    for (int d = 0; d < 2; ++d) {
+      NodeColumn& c = w.friction_columns[2 * nf + d];
+      c.count = count;
+      c.dir = d == 0 ? t1 : t2;
+      for (int k = 0; k < count; ++k) {
+        c.node[k] = nodes[k];
+        c.weight[k] = g[k];
+      }
+    }
+    w.friction_bound[nf] = bound;
+    ++nf;
+  };
+  if (def.friction_coefficient > 0.0) {
+    for (int c = 0; c < w.num_self_contacts; ++c) {
+      const PairTerm t = MakePairTerm(w.self_contacts[c]);
+      add(t.node, t.g, 4, t.n,
+          def.friction_coefficient * ContactForceMagnitude(def, w.self_contacts[c].gap_m) * h);
+    }
+  }
+  if (def.object_friction_coefficient > 0.0) {
+    for (int c = 0; c < w.num_object_contacts; ++c) {
+      const ObjectContact& oc = w.object_contacts[c];
+      const int nodes[2] = {oc.link, oc.link + 1};
+      const double g[2] = {1.0 - oc.s, oc.s};
+      add(nodes, g, 2, oc.n_W,
+          def.object_friction_coefficient * ContactForceMagnitude(def, oc.gap_m) * h);
+    }
+  }
+  state.status.num_friction_contacts = nf;
+  state.status.num_sliding_contacts = 0;
+}
+
+// Stage: Coulomb friction in the implicit system. dv is the step's velocity change without
+// friction; the friction impulses p (two per contact, in the tangent plane) change it by
+// (A + U D U^T)^-1 T p, so the relative tangential velocities after the step are
+// v_t = T^T (v + dv) + G p with G the Delassus operator of the implicit system. Projected
+// Gauss-Seidel over the contacts: each contact takes the impulse that stops its slip, projected
+// onto the disc |p_c| <= mu f_n h (stick inside, slide at the rim). The implicit system's G,
+// not the node masses, is what resists: a node of a stiff chain is held by its neighbours.
+void SolveFriction(ThreadState& state, Eigen::VectorXd& dv) {
+  constexpr int kMaxSweeps = 50;
+  constexpr double kTolerance = 1e-4;  // of the largest impulse bound, per sweep
+  ThreadScratch& w = state.scratch;
+  const int nf = state.status.num_friction_contacts;
+  const int nt = 2 * nf;
+  const Eigen::Map<const Eigen::VectorXd> v(state.v_W.data(), state.v_W.size());
+  Eigen::MatrixXd& G = w.delassus;
+  w.low_rank.Delassus(G);
+  double max_bound = 0.0;
+  for (int c = 0; c < nf; ++c) max_bound = std::max(max_bound, w.friction_bound[c]);
+  for (int j = 0; j < nt; ++j) {
+    w.friction_vt[j] = w.friction_columns[j].Dot(v) + w.friction_columns[j].Dot(dv);
+    w.friction_p[j] = 0.0;
+  }
+  for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
+    double change = 0.0;
+    for (int c = 0; c < nf; ++c) {
+      const int i = 2 * c;
+      const double g00 = G(i, i), g01 = G(i, i + 1), g11 = G(i + 1, i + 1);
+      const double det = g00 * g11 - g01 * g01;
+      if (!(det > 0.0) || !(g00 > 0.0)) continue;  // all its nodes grasped
+      const double r0 = w.friction_vt[i], r1 = w.friction_vt[i + 1];
+      double p0 = w.friction_p[i] - (g11 * r0 - g01 * r1) / det;
+      double p1 = w.friction_p[i + 1] - (g00 * r1 - g01 * r0) / det;
+      const double norm = std::hypot(p0, p1);
+      const double bound = w.friction_bound[c];
+      if (norm > bound) {
+        p0 *= bound / norm;
+        p1 *= bound / norm;
+      }
+      const double d0 = p0 - w.friction_p[i], d1 = p1 - w.friction_p[i + 1];
+      if (d0 == 0.0 && d1 == 0.0) continue;
+      for (int j = 0; j < nt; ++j) w.friction_vt[j] += G(j, i) * d0 + G(j, i + 1) * d1;
+      w.friction_p[i] = p0;
+      w.friction_p[i + 1] = p1;
+      change = std::max(change, std::hypot(d0, d1));
+    }
+    if (change <= kTolerance * max_bound) break;
+  }
+  int sliding = 0;
+  for (int c = 0; c < nf; ++c) {
+    const double norm = std::hypot(w.friction_p[2 * c], w.friction_p[2 * c + 1]);
+    if (norm >= (1.0 - 1e-9) * w.friction_bound[c]) ++sliding;
+  }
+  state.status.num_sliding_contacts = sliding;
+  w.low_rank.AddResponse(w.friction_p.head(nt), dv);
+}
+
+// Stage: friction after the explicit baseline step (5.2), per contact with the node masses
+// (Bridson, Fedkiw & Anderson 2002): in an explicit step the velocity already carries h F / m,
+// so stopping the slip with impulses distributed by inverse masses, capped at mu f_n h, is
+// Coulomb friction. Positions follow (x = x_prev + h v); grasped nodes do not move and pass
+// their share to the tool.
+void ApplyExplicitFriction(const ThreadModel& model, double h, ThreadState& state) {
+  ThreadScratch& w = state.scratch;
+  const int nf = state.status.num_friction_contacts;
+  for (int c = 0; c < nf; ++c) {
+    const NodeColumn& c1 = w.friction_columns[2 * c];
+    const NodeColumn& c2 = w.friction_columns[2 * c + 1];
+    double inv_mass = 0.0;
+    for (int k = 0; k < c1.count; ++k) {
+      if (w.grasp_slot[c1.node[k]] < 0) {
+        inv_mass += c1.weight[k] * c1.weight[k] / model.mass_kg[c1.node[k]];
+      }
+    }
+    if (!(inv_mass > 0.0)) continue;
+    const Eigen::Map<const Eigen::VectorXd> v(state.v_W.data(), state.v_W.size());
+    double p0 = -c1.Dot(v) / inv_mass;
+    double p1 = -c2.Dot(v) / inv_mass;
+    const double norm = std::hypot(p0, p1);
+    if (norm > w.friction_bound[c]) {
+      p0 *= w.friction_bound[c] / norm;
+      p1 *= w.friction_bound[c] / norm;
+      ++state.status.num_sliding_contacts;
+    }
+    const Eigen::Vector3d p_W = p0 * c1.dir + p1 * c2.dir;
+    for (int k = 0; k < c1.count; ++k) {
+      const int node = c1.node[k];
+      const int slot = w.grasp_slot[node];
+      if (slot >= 0) {
+        state.grasps[slot].f_T_W += (c1.weight[k] / h) * p_W;
+        continue;
+      }
+      const Eigen::Vector3d dv = (c1.weight[k] / model.mass_kg[node]) * p_W;
+      state.v_W.col(node) += dv;
+      state.x_W.col(node) += h * dv;
+    }
+  }
+}
 
 // Stage: forces at the start of the step (5.3) without damping; torques (5.6). When system is
 // given, also h^2 K into it (stretch, bend) and the contact stiffness bounds into scratch.
@@ -17,7 +204,10 @@ void CalcForces(const ThreadModel& model, ThreadState& state, BandedSpd* system,
   AddBendForces(model, state.x_W, w.f_W, system, h2);
   AddTwistCouplingForces(model, state.x_W, state.q_rad, w.f_W);
   AddGravityForces(model, w.f_W);
-  AddContactForces(model, state, w.f_W, /*with_stiffness=*/true);
+  // The implicit step couples the first self contacts exactly (ExactPairCount); the explicit
+  // baseline keeps the thesis's per-node contact damping for all of them.
+  const int exact = system != nullptr ? ExactPairCount(model, state) : 0;
+  AddContactForces(model, state, w.f_W, /*with_stiffness=*/true, exact);
   CalcTwistTorques(model, state.q_rad, w.tau_N_m);
 }
 
@@ -70,6 +260,33 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& 
       b[k] = h * (w.f_W(r, i) - c * v[k]) - b[k];
     }
   }
+  // Exactly coupled self contacts: A += d u u^T, b -= d (u^T v) u with u = g (x) n and
+  // d = h c + h^2 k (contact damping and stiffness of the pair, relative motion only). Columns
+  // of grasped nodes hold a prescribed dv: their part moves to the free rows' right-hand side.
+  const int m = ExactPairCount(model, state);
+  state.status.num_exact_pairs = m;
+  state.status.num_bound_pairs = w.num_self_contacts - m;
+  for (int q = 0; q < m; ++q) {
+    const PairTerm t = MakePairTerm(w.self_contacts[q]);
+    const double d = h * model.def.contact_damping_N_s_per_m +
+                     h * h * ContactStiffness(model.def, w.self_contacts[q].gap_m);
+    w.pair_d[q] = d;
+    double uv = 0.0, ug = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      uv += t.g[k] * t.n.dot(state.v_W.col(t.node[k]));
+      const int slot = w.grasp_slot[t.node[k]];
+      if (slot >= 0) {
+        const Grasp& gr = state.grasps[slot];
+        const Eigen::Vector3d dvg =
+            (gr.p_WT - state.x_W.col(t.node[k])) / h - state.v_W.col(t.node[k]);
+        ug += t.g[k] * t.n.dot(dvg);
+      }
+    }
+    for (int k = 0; k < 4; ++k) {
+      const bool grasped = w.grasp_slot[t.node[k]] >= 0;
+      b.segment<3>(3 * t.node[k]) -= (d * (uv + (grasped ? 0.0 : ug)) * t.g[k]) * t.n;
+    }
+  }
   // Prescribed dv of grasped nodes; keep their unmodified rows for the reaction.
   Eigen::VectorXd& dv = b;  // solved in place
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
@@ -111,6 +328,24 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& 
   }
   if (!A.Factorize()) return false;
   A.Solve(dv);
+  // Exactly coupled pairs and friction: low-rank terms on top of the banded factor.
+  const int nf = state.status.num_friction_contacts;
+  if (m + nf > 0) {
+    for (int q = 0; q < m; ++q) {
+      w.columns[q] = MakeSolveColumn(MakePairTerm(w.self_contacts[q]), w.self_contacts[q].n_W, w);
+    }
+    for (int j = 0; j < 2 * nf; ++j) {
+      w.columns[m + j] = w.friction_columns[j];
+      NodeColumn& c = w.columns[m + j];
+      for (int k = 0; k < c.count; ++k) {
+        if (w.grasp_slot[c.node[k]] >= 0) c.weight[k] = 0.0;
+      }
+    }
+    const std::span<const NodeColumn> cols(w.columns.data(), m + 2 * nf);
+    if (!w.low_rank.Prepare(A, cols, m, w.pair_d.data())) return false;
+    w.low_rank.CorrectSolution(dv);
+    if (nf > 0) SolveFriction(state, dv);
+  }
   // Reaction: r = (A dv - b)_g / h is what the tool pushes with; the thread pushes back.
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     Grasp& g = state.grasps[slot];
@@ -122,6 +357,29 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& 
         row += w.grasp_rows(3 * slot + r, j - k + p) * dv[j];
       }
       g.f_T_W[r] = -(row - w.grasp_rows(3 * slot + r, 2 * p + 1)) / h;
+    }
+  }
+  // The grasped nodes' rows also hold the exactly coupled pairs' d u (u^T dv).
+  for (int q = 0; q < m; ++q) {
+    const PairTerm t = MakePairTerm(w.self_contacts[q]);
+    double ud = 0.0;
+    bool any = false;
+    for (int k = 0; k < 4; ++k) {
+      ud += t.g[k] * t.n.dot(dv.segment<3>(3 * t.node[k]));
+      any = any || w.grasp_slot[t.node[k]] >= 0;
+    }
+    if (!any) continue;
+    for (int k = 0; k < 4; ++k) {
+      const int slot = w.grasp_slot[t.node[k]];
+      if (slot >= 0) state.grasps[slot].f_T_W -= (w.pair_d[q] * ud * t.g[k] / h) * t.n;
+    }
+  }
+  // Friction impulses on grasped nodes are carried by the tool.
+  for (int j = 0; j < 2 * nf; ++j) {
+    const NodeColumn& c = w.friction_columns[j];
+    for (int k = 0; k < c.count; ++k) {
+      const int slot = w.grasp_slot[c.node[k]];
+      if (slot >= 0) state.grasps[slot].f_T_W += (c.weight[k] * w.friction_p[j] / h) * c.dir;
     }
   }
   for (int i = 0; i < n; ++i) {
@@ -227,10 +485,13 @@ void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
   w.q_prev_rad = state.q_rad;
   w.qdot_prev_rad_per_s = state.qdot_rad_per_s;
   FindThreadContacts(model, colliders, state);
+  SortSelfContactsByDepth(model, w);
+  PrepareFrictionContacts(model, h, state);
   bool ok = true;
   if (integrator == Integrator::kSemiImplicitEuler) {
     CalcForces(model, state, nullptr, 0.0);
     IntegrateSemiImplicit(model, h, state);
+    ApplyExplicitFriction(model, h, state);
   } else {
     w.system.SetZero();
     CalcForces(model, state, &w.system, h * h);

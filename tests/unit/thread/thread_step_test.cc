@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -21,9 +22,17 @@ namespace microdex::thread {
 namespace {
 
 TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
-  for (Integrator integ : {Integrator::kSemiImplicitEuler, Integrator::kLinearlyImplicitEuler}) {
+  // The third case: exact pair coupling and friction (the low-rank solve of the implicit step).
+  for (int c = 0; c < 3; ++c) {
+    const Integrator integ =
+        c == 0 ? Integrator::kSemiImplicitEuler : Integrator::kLinearlyImplicitEuler;
     ThreadDef def = StiffNylon10_0();
     def.integrator = integ;
+    if (c == 2) {
+      def.exact_contact_pairs = 64;
+      def.friction_coefficient = 0.2;
+      def.object_friction_coefficient = 0.2;
+    }
     // The baseline needs a time step it survives; allocation must not depend on that.
     if (integ == Integrator::kSemiImplicitEuler) {
       def.mass_scale = 1e6;
@@ -41,6 +50,7 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
     const int a = GraspNode(model, 0, state);
     const int b = GraspNode(model, 64, state);
     for (int k = 0; k < 10; ++k) StepThread(model, colliders, state);
+    int most_exact = 0, most_friction = 0;
     ::microdex::testing::StartCountingAllocations();
     for (int k = 0; k < 200; ++k) {
       SetGraspTarget(state, a, Eigen::Vector3d(-1e-6 * k, 0, 0), 0.01 * k);
@@ -48,9 +58,15 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
       if (k == 100) ReleaseGrasp(state, b);
       if (k == 150) GraspNode(model, 40, state);
       StepThread(model, colliders, state);
+      most_exact = std::max(most_exact, state.status.num_exact_pairs);
+      most_friction = std::max(most_friction, state.status.num_friction_contacts);
     }
-    EXPECT_EQ(::microdex::testing::StopCountingAllocations(), 0u) << IntegratorName(integ);
+    EXPECT_EQ(::microdex::testing::StopCountingAllocations(), 0u) << IntegratorName(integ) << c;
     EXPECT_GT(state.status.num_candidate_pairs, 0) << IntegratorName(integ);
+    if (c == 2) {
+      EXPECT_GT(most_exact, 0);
+      EXPECT_GT(most_friction, 0);
+    }
   }
 }
 
