@@ -25,6 +25,8 @@ constexpr double kPhiConstantRel = 1e-12;
 constexpr double kKeepBothResidual = 1e-6;
 // Largest step of the distance ascent [rad of needle parameter].
 constexpr double kMaxPolishStep_rad = 0.5;
+// Budgets of polish_max_iters steps an ascent may use before it stops unconverged.
+constexpr int kMaxAscentBudgets = 4;
 // Certificate passes: distances within this fraction of R count as beyond the horn torus;
 // below this fraction of R the level torus is too thin for the lifted conic's precision (the
 // clearance is then within this of r); φ_t below −this·|φ|'s size marks a farther point.
@@ -34,9 +36,18 @@ constexpr double kCertifyPhiRel = 1e-12;
 // The quick test proves G̃_t ≥ −this·(the size of G̃_t's terms): ten times inside the full
 // pass's threshold, and far above the rounding of G̃_t's coefficients (~10 ε of that size).
 constexpr double kQuickCertifyRel = 1e-13;
+// Beyond the horn torus G̃_t's terms grow as t⁴ while d² − t² is bounded through d'² − t² ~ t²
+// (see the tightness test), so the margin is smaller there: still ~10 times the rounding.
+constexpr double kQuickCertifyDeepRel = 2e-14;
+// The rounding of the quick test's polynomial coefficients, relative to the size of G̃_t's
+// terms (~18 ε): what the proof's G̃_t ≥ −ε may miss besides ε itself.
+constexpr double kLevelTorusRoundingRel = 4e-15;
 // What the quick test must prove: no point farther than t + this·max(R, t) (the clearance
 // agreement asked of SP is 1e-10 R; the ascent, not this bound, sets the actual error).
 constexpr double kQuickCertifyTolRel = 1e-11;
+// Beyond the horn torus the quick test skips the needle points with L = |x|² + R² − t² below
+// −this·(the size of L's terms): far above L's rounding, so that they are surely nearer than t.
+constexpr double kLevelOuterRel = 1e-12;
 // Uniform starting points per in-range piece on the robust path.
 constexpr int kRobustSamples = 24;
 
@@ -227,12 +238,16 @@ void AdvanceAngle(double s_new, double h, double* cs, double* sn) {
   }
 }
 
-// Safeguarded Newton ascent of the distance² on [iv.lo, iv.hi] from s (cos s = cs,
-// sin s = sn, values cur there): the Newton step where f is concave, a bounded step uphill
-// elsewhere, halved until f does not decrease. Returns the best f and writes its s.
-double AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval& iv, double s,
-                        double cs, double sn, CoreDistSq cur, const SpOptions& opt, double* s_best,
-                        double* cs_best, double* sn_best) {
+// Safeguarded Newton ascent of the distance² on [iv.lo, iv.hi] from *s (cos = *cs, sin = *sn,
+// values *cur there), at most polish_max_iters steps: the Newton step where f is concave, a
+// bounded step uphill elsewhere, halved until f does not decrease. Moves (*s, *cs, *sn, *cur)
+// to the best point; returns false when the step budget ran out before convergence.
+bool AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval& iv,
+                      const SpOptions& opt, double* s_io, double* cs_io, double* sn_io,
+                      CoreDistSq* cur_io) {
+  double s = *s_io, cs = *cs_io, sn = *sn_io;
+  CoreDistSq cur = *cur_io;
+  bool converged = false;
   for (int it = 0; it < opt.polish_max_iters; ++it) {
     const bool newton = cur.d2f < 0;
     double step;
@@ -245,7 +260,10 @@ double AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval&
     double s1 = std::clamp(s + step, iv.lo, iv.hi);
     double h = s1 - s;
     // A Newton step this small leaves an error of O(h²) in f: converged.
-    if (h == 0 || (newton && std::abs(h) <= opt.polish_tol_rad)) break;
+    if (h == 0 || (newton && std::abs(h) <= opt.polish_tol_rad)) {
+      converged = true;
+      break;
+    }
     double cs1 = cs, sn1 = sn;
     AdvanceAngle(s1, h, &cs1, &sn1);
     CoreDistSq next = EvalCoreDistSq(nv, core_radius, cs1, sn1);
@@ -258,17 +276,24 @@ double AscendCoreDistSq(const NeedleInV& nv, double core_radius, const Interval&
       AdvanceAngle(s1, h, &cs1, &sn1);
       next = EvalCoreDistSq(nv, core_radius, cs1, sn1);
     }
-    if (next.f < cur.f) break;
+    if (next.f < cur.f) {
+      converged = true;  // no step uphill left at this resolution
+      break;
+    }
     s = s1;
     cs = cs1;
     sn = sn1;
     cur = next;
-    if (std::abs(h) <= opt.polish_tol_rad) break;
+    if (std::abs(h) <= opt.polish_tol_rad) {
+      converged = true;
+      break;
+    }
   }
-  *s_best = s;
-  *cs_best = cs;
-  *sn_best = sn;
-  return cur.f;
+  *s_io = s;
+  *cs_io = cs;
+  *sn_io = sn;
+  *cur_io = cur;
+  return converged;
 }
 
 // A starting point of the distance ascent. Piece ends start it only when the distance grows
@@ -410,6 +435,20 @@ double AxisDistSqLowerBound(const double w[6]) {
   const double h2 = 0.5 * (w[0] - w[2]);
   return w[5] + 0.5 * (w[0] + w[2]) - std::sqrt(h2 * h2 + 0.25 * w[1] * w[1]) -
          std::sqrt(w[3] * w[3] + w[4] * w[4]);
+}
+
+// The same for the whole circle's true minimum, less its rounding: the least value at the
+// extrema, which (4.17)–(4.26) find for any such polynomial as for φ. Costs a quartic.
+double TrigPolyMinimum(const double w[6], const SpOptions& opt) {
+  const CircleConic k{w[0], w[1], w[2], w[3], w[4], w[5]};
+  double ct[8], st[8];
+  bool constant, quartic_fallback;
+  const int n = FindConicExtremaOnCircle(k, opt, ct, st, &constant, &quartic_fallback);
+  double v = constant ? k.Eval(1, 0) : std::numeric_limits<double>::infinity();
+  for (int j = 0; j < n; ++j) v = std::min(v, k.Eval(ct[j], st[j]));
+  double size = 0;
+  for (int i = 0; i < 6; ++i) size += std::abs(w[i]);
+  return v - 1e-15 * size;
 }
 
 }  // namespace
@@ -696,8 +735,17 @@ double CubicMinimum(double c1, double c2, double c3, double c4, double lo, doubl
 // q ≥ q₀ + q₁τ + mτ² there, and that quadratic's minimum ≥ −ε proves G̃_t ≥ −ε on the clipped
 // arc: no point farther than t, without the quartic (4.26). Only sufficient: when it fails,
 // the full pass answers.
+//
+// Beyond the horn torus (t > R) the level set {d = t} is a spindle torus and G̃_t < 0 also in
+// its inner lemon, where d < t (README_sp.md, "Deep contacts"): there `outer` gives
+// L = |x|² + R² − t² = k + p cos s + q sin s (units of R) and only the parts of the pieces
+// where L ≥ −η are tested (d² − t² = L − 2Rw, so L < 0 means d < t whatever G̃_t).
+struct LevelOuterSide {
+  double k = 0, p = 0, q = 0, eta = 0;
+};
+
 bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, double s_best,
-                         double ca, double sa, double eps) {
+                         double ca, double sa, double eps, const LevelOuterSide* outer) {
   // The trigonometric polynomial rotated to s*: G̃ = A'cos²Δ + B'cosΔ sinΔ + C'sin²Δ + D'cosΔ
   // + E'sinΔ + F.
   const double cc = ca * ca, ss = sa * sa, cs = ca * sa;
@@ -755,6 +803,28 @@ bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, dou
     }
     return false;
   };
+  // With `outer`: the parts of [ta, tb] where (1 + τ²)(L + η) = aτ² + bτ + c ≥ 0 (L rotated to
+  // s* like G̃), each tested by range_ok; the rest has d < t.
+  const double lp = outer != nullptr ? outer->p * ca + outer->q * sa : 0;
+  const double lq = outer != nullptr ? outer->q * ca - outer->p * sa : 0;
+  const double la = outer != nullptr ? outer->k + outer->eta - lp : 0;
+  const double lb = 2 * lq;
+  const double lc = outer != nullptr ? outer->k + outer->eta + lp : 0;
+  const auto outer_ok = [&](double ta, double tb) {
+    if (outer == nullptr) return range_ok(ta, tb);
+    const auto sub_ok = [&](double lo, double hi) { return !(lo < hi) || range_ok(lo, hi); };
+    if (la == 0) {
+      if (lb == 0) return !(lc >= 0) || range_ok(ta, tb);
+      const double root = -lc / lb;
+      return lb > 0 ? sub_ok(std::max(ta, root), tb) : sub_ok(ta, std::min(tb, root));
+    }
+    const double disc = lb * lb - 4 * la * lc;
+    if (!(disc > 0)) return !(la > 0) || range_ok(ta, tb);
+    const double w = -0.5 * (lb + std::copysign(std::sqrt(disc), lb));
+    const double r1 = std::min(w / la, lc / w), r2 = std::max(w / la, lc / w);
+    if (la > 0) return sub_ok(ta, std::min(tb, r1)) && sub_ok(std::max(ta, r2), tb);
+    return sub_ok(std::max(ta, r1), std::min(tb, r2));
+  };
   // τ = tan(Δ/2) = sin Δ / (1 + cos Δ), Δ = s − s* taken in (−π, π).
   const auto tau = [&](double c, double sn) { return (sn * ca - c * sa) / (1 + c * ca + sn * sa); };
   // Ends within this of Δ = ±π are not given a τ (1 + cos Δ → 0): the range is extended past
@@ -775,18 +845,51 @@ bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, dou
     const double t_lo = tau(iv[i].cos_lo, iv[i].sin_lo), t_hi = tau(iv[i].cos_hi, iv[i].sin_hi);
     bool ok;
     if (d_lo > -kLim && d_hi < kLim) {
-      ok = range_ok(t_lo, t_hi);  // Δ ∈ [d_lo, d_hi] ⊂ (−π, π)
+      ok = outer_ok(t_lo, t_hi);  // Δ ∈ [d_lo, d_hi] ⊂ (−π, π)
     } else if (d_lo > -kLim && d_hi - d_lo < kTwoPi) {
       // Up to and past Δ = π: [τ_lo, ∞), then (past π, Δ − 2π ∈ (−π, d_hi − 2π]) from −∞.
-      ok = range_ok(t_lo, kInf) &&
-           (d_hi <= kPi || range_ok(-kInf, d_hi - kTwoPi > -kLim ? t_hi : -kFarTau));
+      ok = outer_ok(t_lo, kInf) &&
+           (d_hi <= kPi || outer_ok(-kInf, d_hi - kTwoPi > -kLim ? t_hi : -kFarTau));
     } else if (d_hi < kLim && d_hi - d_lo < kTwoPi) {
-      ok = range_ok(-kInf, t_hi) &&
-           (d_lo >= -kPi || range_ok(d_lo + kTwoPi < kLim ? t_lo : kFarTau, kInf));
+      ok = outer_ok(-kInf, t_hi) &&
+           (d_lo >= -kPi || outer_ok(d_lo + kTwoPi < kLim ? t_lo : kFarTau, kInf));
     } else {
-      ok = range_ok(-kInf, kInf);  // (nearly) the whole circle
+      ok = outer_ok(-kInf, kInf);  // (nearly) the whole circle
     }
     if (!ok) return false;
+  }
+  return true;
+}
+
+// The certificate's extrema search on G̃_t along the needle (README_sp.md, "Deep contacts"):
+// G̃_t is a trigonometric polynomial of degree 2 in the needle parameter s, so (4.17)–(4.26)
+// find its extrema on the needle circle as they find φ's on the lifted circle. Where G̃_t ≥ −ε
+// at every extremum inside the pieces and outside the spindle's lemon (L ≥ −η, `outer`), it is
+// ≥ −ε on the whole clipped arc there: at the piece ends and on the lemon's boundary G̃_t ≥ 0
+// up to η² (no end is farther than t). The extrema below −ε are the ascent's next starting
+// points (none: no farther point). Returns false when G̃_t is constant along the needle.
+bool FindLevelMinimaAlongNeedle(const NeedleInV& nv, double core_r, const CircleConic& g,
+                                double eps, const LevelOuterSide* outer, const Interval* iv,
+                                int n_iv, const SpOptions& opt, Candidate* starts, int* n_start) {
+  double ct[8], st[8];
+  bool constant, quartic_fallback;
+  const int n_ext = FindConicExtremaOnCircle(g, opt, ct, st, &constant, &quartic_fallback);
+  if (constant) return false;
+  for (int j = 0; j < n_ext; ++j) {
+    const double c = ct[j], sn = st[j];
+    if (!(g.Eval(c, sn) < -eps)) continue;
+    if (outer != nullptr && outer->k + outer->p * c + outer->q * sn < -outer->eta) continue;
+    const double s = WrapTo2Pi(std::atan2(sn, c));
+    const int i = FindInterval(iv, n_iv, s);
+    if (i < 0) continue;
+    const double s_in = std::clamp(s, iv[i].lo, iv[i].hi);
+    const double inv = 1 / std::sqrt(c * c + sn * sn);
+    double cs = c * inv, ss = sn * inv;
+    if (s_in != s) {
+      cs = std::cos(s_in);
+      ss = std::sin(s_in);
+    }
+    starts[(*n_start)++] = MakeCandidate(nv, core_r, s_in, cs, ss, i, CandidateKind::kInterior);
   }
   return true;
 }
@@ -810,7 +913,22 @@ double TryCandidate(const NeedleInV& nv, double core_r, const Interval* iv, cons
   const bool ascend =
       opt.polish_max_iters > 0 && (c.kind == CandidateKind::kInterior || PointsInward(c));
   if (ascend) {
-    f = AscendCoreDistSq(nv, core_r, iv[c.interval], s, cs, sn, c.e(), opt, &s, &cs, &sn);
+    // A long climb (from an arc end, along a needle many times R long, or over the ridge near
+    // the axis) may need more than one budget of steps; the certificate bounds the distance
+    // only to its tolerance, so the point it certifies must be converged itself.
+    CoreDistSq cur = c.e();
+    int budgets = 1;
+    while (!AscendCoreDistSq(nv, core_r, iv[c.interval], opt, &s, &cs, &sn, &cur) &&
+           budgets < kMaxAscentBudgets) {
+      // The rotations' rounding drifts (cos, sin) off the unit circle by ~ε per step: back on
+      // it after a long climb.
+      const double inv = 1 / std::sqrt(cs * cs + sn * sn);
+      cs *= inv;
+      sn *= inv;
+      cur = EvalCoreDistSq(nv, core_r, cs, sn);
+      ++budgets;
+    }
+    f = cur.f;
   }
   if (f > best->f) *best = {f, s, cs, sn};
   return f;
@@ -950,8 +1068,9 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   }
   // Beyond the horn torus (t ≥ R) the level sets are spindle tori, which (4.4) cannot express:
   // there only the quick test can certify (see below), and the exact method answers when it
-  // cannot, or when the search runs the wall pass.
-  if (deep && (have_pass || rounds == 0 || !opt.quick_certificate)) {
+  // cannot, or when the search starts with the wall pass (wall_pass_first; with diagnostics
+  // alone the wall pass only reports, and the search goes on as without them).
+  if (deep && (rounds == 0 || !opt.quick_certificate || opt.wall_pass_first)) {
     diag.deep_fallback = true;
     return CalcArcTorusClearanceExact(arc, torus);
   }
@@ -1000,30 +1119,84 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
     ++diag.certify_passes;
     const double t_sq = std::max(best.f, kMinCertifyRel * kMinCertifyRel * core_r * core_r);
     if (opt.quick_certificate) {
-      // G̃_t ≥ −ε on the arc bounds, for any point farther than t, (d² − t²)(d'² − t²) ≤ ε,
-      // d' the distance to the opposite core point, d'² − t² ≥ max(R² − t², 4Rw) (w the
-      // distance to the axis): the quick test is used where that bounds d − t by
-      // kQuickCertifyTolRel·max(R, t) (thin level tori near the axis would not).
+      // G̃_t ≥ −ε on the arc bounds, for any point farther than t, (d² − t²)(d'² − t²) ≤ ε
+      // (plus rounding), d' the distance to the opposite core point, with d'² − t² at least
+      // R² − t², 4Rw (w the distance to the axis) and √M (below): the quick test is used
+      // where that bounds d − t by kQuickCertifyTolRel·max(R, t) (thin level tori near the
+      // axis, or needles through the spindle's tips, would not).
       double size;
       const double t_sq_rel = t_sq * inv_r * inv_r;
       const CircleConic level_trig = CalcLevelTorusAlongNeedle(
           inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one, t_sq_rel, &size);
-      const double eps = kQuickCertifyRel * size;
-      // eps ≤ tol · max(1, t) · 2t · max(R² − t², 4Rw), squared (no square roots; t > 0).
-      const double lhs = eps * eps;
+      const double eps = (t_sq_rel > 1 ? kQuickCertifyDeepRel : kQuickCertifyRel) * size;
+      // ε + rounding ≤ tol · max(1, t) · 2t · (bound of d'² − t²), squared (no square roots).
+      const double eps_true = eps + kLevelTorusRoundingRel * size;
+      const double lhs = eps_true * eps_true;
       const double rhs =
           4 * kQuickCertifyTolRel * kQuickCertifyTolRel * t_sq_rel * std::max(1.0, t_sq_rel);
       const double near = 1 - t_sq_rel;
       bool tight = near > 0 && lhs <= rhs * near * near;
-      if (!tight) {  // deep, or t near R: the bound through the distance to the axis
+      LevelOuterSide outer;
+      if (!tight) {
+        // Deep, or t near R: the bounds through the distance to the axis, d'² − t² ≥ 4Rw, and,
+        // beyond the horn torus, through the spindle's tips (below).
+        const Eigen::Vector3d o = inv_r * nv.o;
+        const Eigen::Vector3d u = inv_r * nv.rho * nv.e1, v = inv_r * nv.rho * nv.e2;
         double w[6];
-        AxisDistSqTerms(inv_r * nv.o, inv_r * nv.rho * nv.e1, inv_r * nv.rho * nv.e2, w);
-        const double w_sq_min = AxisDistSqLowerBound(w);
-        tight = w_sq_min > 0 && lhs <= rhs * 16 * w_sq_min;
+        AxisDistSqTerms(o, u, v, w);
+        double bound = 16 * AxisDistSqLowerBound(w);
+        outer.k = o.squaredNorm() + rho_sq_minus_one + 2 - t_sq_rel;
+        outer.p = 2 * o.dot(u);
+        outer.q = 2 * o.dot(v);
+        if (t_sq_rel > 1) {
+          // At a point farther than t, L = |x|² + R² − t² = d'² − t² − 2Rw exceeds 2Rw ≥ 0, so
+          // (d'² − t²)² ≥ L² + 4R²w² = M, which vanishes only at the spindle's tips (0, 0, ±z_T),
+          // z_T² = t² − R², and M ≥ min(1, z_T²)·D², D the distance to the nearer tip (units of
+          // R; README_sp.md): D from the distance of the needle circle to each tip.
+          const double z_tip_sq = t_sq_rel - 1;
+          const double z_tip = std::sqrt(z_tip_sq);
+          const double h1 = (o - Eigen::Vector3d(0, 0, z_tip)).dot(nv.e3);
+          const double h2 = (o + Eigen::Vector3d(0, 0, z_tip)).dot(nv.e3);
+          // In-plane parts: o's in-plane offset from each tip, and ρ.
+          const auto in_plane = [&](double zt) {
+            const Eigen::Vector3d a = o - Eigen::Vector3d(0, 0, zt);
+            const double p1 = a.dot(nv.e1), p2 = a.dot(nv.e2);
+            const double gap = std::sqrt(p1 * p1 + p2 * p2) - inv_r * nv.rho;
+            return gap * gap;
+          };
+          const double d_sq = std::min(h1 * h1 + in_plane(z_tip), h2 * h2 + in_plane(-z_tip));
+          bound = std::max(bound, std::min(1.0, z_tip_sq) * d_sq);
+        }
+        tight = bound > 0 && lhs <= rhs * bound;
+        if (!tight && t_sq_rel > 1) {
+          // Deep contacts only (the others have the full pass): w²'s true minimum on the circle.
+          bound = std::max(bound, 16 * TrigPolyMinimum(w, opt));
+          tight = bound > 0 && lhs <= rhs * bound;
+        }
+        // L's rounding is ~ε of this; L < −η is then d < t for sure.
+        outer.eta = kLevelOuterRel * (o.squaredNorm() + std::abs(rho_sq_minus_one) + 2 + t_sq_rel +
+                                      std::abs(outer.p) + std::abs(outer.q));
       }
-      if (tight && ProveNoFartherPoint(level_trig, iv, n_iv, best.s, best.cos_s, best.sin_s, eps)) {
+      // Only beyond the horn torus can L be negative (|x|² < t² − R²).
+      const LevelOuterSide* outer_side = t_sq_rel > 1 ? &outer : nullptr;
+      if (tight && ProveNoFartherPoint(level_trig, iv, n_iv, best.s, best.cos_s, best.sin_s, eps,
+                                       outer_side)) {
         ++diag.certify_quick;
         break;
+      }
+      if (tight && IsDeep(best.f, core_r)) {
+        // Beyond the horn torus the lifted pass cannot run; the same extrema search runs on
+        // G̃_t along the needle instead, with the same error bound.
+        Candidate starts[8];
+        int n_start = 0;
+        if (FindLevelMinimaAlongNeedle(nv, core_r, level_trig, eps, outer_side, iv, n_iv, opt,
+                                       starts, &n_start)) {
+          const double f_before = best.f;
+          for (int j = 0; j < n_start; ++j) TryCandidate(nv, core_r, iv, starts[j], opt, &best);
+          if (!(best.f > f_before)) break;
+          ++diag.certify_improvements;
+          continue;
+        }
       }
     }
     if (IsDeep(best.f, core_r)) {

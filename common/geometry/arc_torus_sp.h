@@ -57,7 +57,7 @@ struct SpDiagnostics {
   bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
   bool deep_fallback = false;     // a point ≥ R from the core circle that the quick test could
-                                  // not certify (or a wall pass ran): exact method answered
+                                  // not certify (or wall_pass_first): exact method answered
   int certify_passes = 0;         // SP passes against level tori
   int certify_improvements = 0;   // of which found a farther point than the ascent had
   int certify_quick = 0;          // of which settled by the quick test (no quartic)

@@ -510,6 +510,29 @@ TEST(ArcTorusSpTest, NeedleThroughTorusHole) {
   ExpectAgrees(q2);
 }
 
+// The deepest point on the z axis, where the distance has a ridge (every core point is as far,
+// √(R² + z²)): the level set through it is the spindle torus whose tip is that very point, where
+// the quick test's error bound vanishes, so the certificate must not claim it. The needle lies
+// in the yz-plane, curving down from (0, 0, z₀) both ways, so that its top is the deepest point
+// (d² = R² + ρ² − (z₀ − ρ)² + 2z(z₀ − ρ) − 2R|y| on it); then moved off the axis.
+TEST(ArcTorusSpTest, DeepestPointAtTheSpindleTip) {
+  const double R = 5e-3, r = 0.5e-3, z0 = 1.5 * R, rho = 0.8 * R, sweep = 0.6 * kPi;
+  Query q = MakeQuery(R, r, rho, sweep);
+  const double beta = kPi / 2 - sweep / 2;  // the needle's mid-sweep point on the axis
+  Eigen::Matrix3d R_VN;
+  R_VN.col(0) = Eigen::Vector3d(0, std::cos(beta), std::sin(beta));
+  R_VN.col(1) = Eigen::Vector3d(0, -std::sin(beta), std::cos(beta));
+  R_VN.col(2) = Eigen::Vector3d::UnitX();
+  Place(&q, Eigen::Vector3d(0, 0, z0 - rho), R_VN);
+  const ArcTorusClearance sp = ExpectAgrees(q);
+  EXPECT_NEAR(sp.clearance_m, r - std::sqrt(R * R + z0 * z0), 1e-12 * R);
+  EXPECT_NEAR(sp.s_rad, sweep / 2, 1e-6);
+  for (const double off : {1e-12, 1e-9, 1e-6, 1e-3, 0.1}) {
+    Place(&q, Eigen::Vector3d(off * R, 0, z0 - rho), R_VN);
+    ExpectAgrees(q);
+  }
+}
+
 // The projection pole is the image of ∞ and of points far from the torus in the scaled
 // frame; its antipode is the torus centre. Needles reaching far out and through the centre.
 TEST(ArcTorusSpTest, PointsNearProjectionPole) {

@@ -348,6 +348,42 @@ TEST(SpAgreementTest, QuickCertificateAgreesWithTheFullPass) {
   EXPECT_GT(settled_quick, near_core / 2);
 }
 
+// Deep contacts (the deepest point R or more from the core circle): the level sets there are
+// spindle tori, which the lifted quadric (4.4) cannot express, but the certificate along the
+// needle handles them itself (outside the spindle's inner lemon; README_sp.md), so that the
+// exact method answers only a few up to 10·R — and SP's answers agree with it (with the
+// long-double brute force as arbiter, as above). Farther out, G̃_t's precision no longer
+// bounds the error well enough and more of them go to the exact method (printed).
+TEST(SpAgreementTest, DeepContactsAreCertifiedBySp) {
+  std::mt19937_64 rng(777);
+  Stats deep;
+  long within_10r = 0, by_exact = 0, by_exact_within_10r = 0;
+  for (int i = 0; i < kSmallSetCases; ++i) {
+    const RandomArcTorus c = i % 2 == 0 ? MakeCrossing(rng) : testing::MakeWideArcTorus(rng);
+    const ArcTorusClearance exact = CalcArcTorusClearanceExact(c.arc, c.torus);
+    const double R = c.torus.core_radius_m;
+    const double t = c.torus.tube_radius_m - exact.clearance_m;
+    if (exact.status != ClearanceStatus::kOk || t < R) continue;
+    deep.Add(c);
+    SpDiagnostics diag;
+    const ArcTorusClearance sp = CalcArcTorusClearanceSP(c.arc, c.torus, SpOptions{}, &diag);
+    EXPECT_NEAR(sp.clearance_m, exact.clearance_m, kClearanceRelTol * R) << Stats::Describe(c);
+    by_exact += diag.deep_fallback;
+    if (t < 10 * R) {
+      ++within_10r;
+      by_exact_within_10r += diag.deep_fallback;
+    }
+    if (::testing::Test::HasFailure()) break;
+  }
+  deep.Print("deep contacts");
+  std::printf(
+      "[ deep contacts ] answered by the exact method: %ld of %ld, of those within 10 R: %ld of "
+      "%ld\n",
+      by_exact, deep.ok, by_exact_within_10r, within_10r);
+  EXPECT_GT(within_10r, kSmallSetCases / 4);
+  EXPECT_LT(by_exact_within_10r, within_10r / 50);
+}
+
 TEST(SpAgreementTest, InvariantUnderRigidMotionAndUniformScaling) {
   std::mt19937_64 rng(99);
   double max_rigid = 0, max_scale = 0;
