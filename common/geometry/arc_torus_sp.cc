@@ -803,15 +803,50 @@ bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, dou
     }
     return false;
   };
+  // τ = tan(Δ/2) = sin Δ / (1 + cos Δ), Δ = s − s* taken in (−π, π).
+  const auto tau = [&](double c, double sn) { return (sn * ca - c * sa) / (1 + c * ca + sn * sa); };
+  // Ends within this of Δ = ±π are not given a τ (1 + cos Δ → 0): the range is extended past
+  // them, to ±∞ or to ±kFarTau (< cot(kNearAntipode_rad/2) ≈ 2000), which is conservative.
+  constexpr double kNearAntipode_rad = 1e-3;
+  constexpr double kLim = kPi - kNearAntipode_rad;
+  constexpr double kFarTau = 1000;
+  // Every piece's τ-range by `test` (range_ok, or outer_ok beyond the horn torus; a template
+  // so that the common case inlines range_ok).
+  const auto all_pieces_ok = [&](const auto& test) {
+    for (int i = 0; i < n_iv; ++i) {
+      // Δ of the ends, shifted by 2π so that d_lo < π and d_hi > −π (τ is 2π-periodic in Δ).
+      double d_lo = iv[i].lo - s_best, d_hi = iv[i].hi - s_best;
+      if (d_lo >= kPi) {
+        d_lo -= kTwoPi;
+        d_hi -= kTwoPi;
+      } else if (d_hi <= -kPi) {
+        d_lo += kTwoPi;
+        d_hi += kTwoPi;
+      }
+      const double t_lo = tau(iv[i].cos_lo, iv[i].sin_lo), t_hi = tau(iv[i].cos_hi, iv[i].sin_hi);
+      bool ok;
+      if (d_lo > -kLim && d_hi < kLim) {
+        ok = test(t_lo, t_hi);  // Δ ∈ [d_lo, d_hi] ⊂ (−π, π)
+      } else if (d_lo > -kLim && d_hi - d_lo < kTwoPi) {
+        // Up to and past Δ = π: [τ_lo, ∞), then (past π, Δ − 2π ∈ (−π, d_hi − 2π]) from −∞.
+        ok = test(t_lo, kInf) &&
+             (d_hi <= kPi || test(-kInf, d_hi - kTwoPi > -kLim ? t_hi : -kFarTau));
+      } else if (d_hi < kLim && d_hi - d_lo < kTwoPi) {
+        ok = test(-kInf, t_hi) &&
+             (d_lo >= -kPi || test(d_lo + kTwoPi < kLim ? t_lo : kFarTau, kInf));
+      } else {
+        ok = test(-kInf, kInf);  // (nearly) the whole circle
+      }
+      if (!ok) return false;
+    }
+    return true;
+  };
+  if (outer == nullptr) return all_pieces_ok(range_ok);
   // With `outer`: the parts of [ta, tb] where (1 + τ²)(L + η) = aτ² + bτ + c ≥ 0 (L rotated to
   // s* like G̃), each tested by range_ok; the rest has d < t.
-  const double lp = outer != nullptr ? outer->p * ca + outer->q * sa : 0;
-  const double lq = outer != nullptr ? outer->q * ca - outer->p * sa : 0;
-  const double la = outer != nullptr ? outer->k + outer->eta - lp : 0;
-  const double lb = 2 * lq;
-  const double lc = outer != nullptr ? outer->k + outer->eta + lp : 0;
+  const double lp = outer->p * ca + outer->q * sa, lq = outer->q * ca - outer->p * sa;
+  const double la = outer->k + outer->eta - lp, lb = 2 * lq, lc = outer->k + outer->eta + lp;
   const auto outer_ok = [&](double ta, double tb) {
-    if (outer == nullptr) return range_ok(ta, tb);
     const auto sub_ok = [&](double lo, double hi) { return !(lo < hi) || range_ok(lo, hi); };
     if (la == 0) {
       if (lb == 0) return !(lc >= 0) || range_ok(ta, tb);
@@ -825,40 +860,7 @@ bool ProveNoFartherPoint(const CircleConic& q, const Interval* iv, int n_iv, dou
     if (la > 0) return sub_ok(ta, std::min(tb, r1)) && sub_ok(std::max(ta, r2), tb);
     return sub_ok(std::max(ta, r1), std::min(tb, r2));
   };
-  // τ = tan(Δ/2) = sin Δ / (1 + cos Δ), Δ = s − s* taken in (−π, π).
-  const auto tau = [&](double c, double sn) { return (sn * ca - c * sa) / (1 + c * ca + sn * sa); };
-  // Ends within this of Δ = ±π are not given a τ (1 + cos Δ → 0): the range is extended past
-  // them, to ±∞ or to ±kFarTau (< cot(kNearAntipode_rad/2) ≈ 2000), which is conservative.
-  constexpr double kNearAntipode_rad = 1e-3;
-  constexpr double kLim = kPi - kNearAntipode_rad;
-  constexpr double kFarTau = 1000;
-  for (int i = 0; i < n_iv; ++i) {
-    // Δ of the ends, shifted by 2π so that d_lo < π and d_hi > −π (τ is 2π-periodic in Δ).
-    double d_lo = iv[i].lo - s_best, d_hi = iv[i].hi - s_best;
-    if (d_lo >= kPi) {
-      d_lo -= kTwoPi;
-      d_hi -= kTwoPi;
-    } else if (d_hi <= -kPi) {
-      d_lo += kTwoPi;
-      d_hi += kTwoPi;
-    }
-    const double t_lo = tau(iv[i].cos_lo, iv[i].sin_lo), t_hi = tau(iv[i].cos_hi, iv[i].sin_hi);
-    bool ok;
-    if (d_lo > -kLim && d_hi < kLim) {
-      ok = outer_ok(t_lo, t_hi);  // Δ ∈ [d_lo, d_hi] ⊂ (−π, π)
-    } else if (d_lo > -kLim && d_hi - d_lo < kTwoPi) {
-      // Up to and past Δ = π: [τ_lo, ∞), then (past π, Δ − 2π ∈ (−π, d_hi − 2π]) from −∞.
-      ok = outer_ok(t_lo, kInf) &&
-           (d_hi <= kPi || outer_ok(-kInf, d_hi - kTwoPi > -kLim ? t_hi : -kFarTau));
-    } else if (d_hi < kLim && d_hi - d_lo < kTwoPi) {
-      ok = outer_ok(-kInf, t_hi) &&
-           (d_lo >= -kPi || outer_ok(d_lo + kTwoPi < kLim ? t_lo : kFarTau, kInf));
-    } else {
-      ok = outer_ok(-kInf, kInf);  // (nearly) the whole circle
-    }
-    if (!ok) return false;
-  }
-  return true;
+  return all_pieces_ok(outer_ok);
 }
 
 // The certificate's extrema search on G̃_t along the needle (README_sp.md, "Deep contacts"):
