@@ -33,15 +33,16 @@ constexpr int kMaxAscentBudgets = 4;
 constexpr double kDeepRel = 1e-6;
 constexpr double kMinCertifyRel = 1e-6;
 constexpr double kCertifyPhiRel = 1e-12;
-// The quick test proves G̃_t ≥ −this·(the size of G̃_t's terms): ten times inside the full
-// pass's threshold, and far above the rounding of G̃_t's coefficients (~10 ε of that size).
-constexpr double kQuickCertifyRel = 1e-13;
-// Beyond the horn torus G̃_t's terms grow as t⁴ while d² − t² is bounded through d'² − t² ~ t²
-// (see the tightness test), so the margin is smaller there: still ~10 times the rounding.
-constexpr double kQuickCertifyDeepRel = 2e-14;
-// The rounding of the quick test's polynomial coefficients, relative to the size of G̃_t's
-// terms (~18 ε): what the proof's G̃_t ≥ −ε may miss besides ε itself.
-constexpr double kLevelTorusRoundingRel = 4e-15;
+// The quick test proves G̃_t ≥ −this·(the size of G̃_t's terms): a fiftieth of the full pass's
+// relative threshold, and a few times the rounding of G̃_t's coefficients (below). Smaller is
+// better for its error bound, which grows with this (see the tightness test): at 1e-13 it
+// could not bound d − t for needles crossing the wall whose terms are ~10³ times t² (ρ and
+// |o| of ~2R), which then took the lifted pass.
+constexpr double kQuickCertifyRel = 2e-14;
+// The rounding of the quick test's polynomial coefficients and of its evaluation, relative to
+// the size of G̃_t's terms (~45 ε: products and sums of a few terms, the rotation to s*, the
+// τ-polynomial): what the proof's G̃_t ≥ −ε may miss besides ε itself.
+constexpr double kLevelTorusRoundingRel = 1e-14;
 // What the quick test must prove: no point farther than t + this·max(R, t) (the clearance
 // agreement asked of SP is 1e-10 R; the ascent, not this bound, sets the actual error).
 constexpr double kQuickCertifyTolRel = 1e-11;
@@ -1130,7 +1131,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
       const double t_sq_rel = t_sq * inv_r * inv_r;
       const CircleConic level_trig = CalcLevelTorusAlongNeedle(
           inv_r * nv.o, nv.e1, nv.e2, inv_r * nv.rho, rho_sq_minus_one, t_sq_rel, &size);
-      const double eps = (t_sq_rel > 1 ? kQuickCertifyDeepRel : kQuickCertifyRel) * size;
+      const double eps = kQuickCertifyRel * size;
       // ε + rounding ≤ tol · max(1, t) · 2t · (bound of d'² − t²), squared (no square roots).
       const double eps_true = eps + kLevelTorusRoundingRel * size;
       const double lhs = eps_true * eps_true;
@@ -1170,8 +1171,8 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
           bound = std::max(bound, std::min(1.0, z_tip_sq) * d_sq);
         }
         tight = bound > 0 && lhs <= rhs * bound;
-        if (!tight && t_sq_rel > 1) {
-          // Deep contacts only (the others have the full pass): w²'s true minimum on the circle.
+        if (!tight) {
+          // w²'s true minimum on the circle (a quartic: still cheaper than the lifted pass).
           bound = std::max(bound, 16 * TrigPolyMinimum(w, opt));
           tight = bound > 0 && lhs <= rhs * bound;
         }
