@@ -10,7 +10,10 @@
 // (arc_torus.h) is evaluated at SP candidates refined by a Newton ascent of the true distance,
 // and certified against the level torus {distance = t} through the deepest point found, which
 // is itself a torus of tube radius t: first by a quick test on the lifted torus along the
-// needle, deflated at that point, and where it cannot prove, by a full SP pass (README_sp.md).
+// needle, deflated at that point, and where it cannot prove, by a full SP pass; beyond the horn
+// torus (t ≥ R: spindle level sets) by the quick test outside the spindle's lemon and an
+// extrema search along the needle, the exact method answering where their error bound fails
+// (README_sp.md).
 //
 // Hot path: no allocation, no virtual call, no exception. Invalid input returns kInvalidInput.
 
@@ -58,7 +61,8 @@ struct SpDiagnostics {
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
   bool deep_fallback = false;     // a point ≥ R from the core circle that the quick test could
                                   // not certify (or wall_pass_first): exact method answered
-  int certify_passes = 0;         // SP passes against level tori
+  int certify_passes = 0;         // certificate rounds against level tori: the quick test,
+                                  // then a lifted pass (deep: extrema along the needle)
   int certify_improvements = 0;   // of which found a farther point than the ascent had
   int certify_quick = 0;          // of which settled by the quick test (no quartic)
   int num_extrema = 0;            // critical points of φ found on the whole lifted circle
