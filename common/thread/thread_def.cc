@@ -113,6 +113,9 @@ ThreadDef StiffNylon10_0() {
   def.contact_decay_m = 2.5e-6;
   def.contact_cutoff_m = 12.5e-6;
   def.twist_coupling_N = 1e-5;
+  def.exact_contact_pairs = 64;
+  def.friction_coefficient = 0.2;  // nylon on nylon 0.15-0.25 (ThreadDef)
+  def.object_friction_coefficient = 0.2;
   return def;
 }
 
@@ -132,6 +135,9 @@ ThreadDef SoftSilk() {
   def.contact_decay_m = 7e-6;
   def.contact_cutoff_m = 35e-6;
   def.twist_coupling_N = 1e-5;
+  def.exact_contact_pairs = 64;
+  def.friction_coefficient = 0.3;  // braided silk, rougher than a monofilament (ThreadDef)
+  def.object_friction_coefficient = 0.3;
   return def;
 }
 
@@ -154,6 +160,11 @@ ThreadDef Necklace() {
   def.contact_decay_m = 0.3e-3;
   def.contact_cutoff_m = 1.5e-3;
   def.twist_coupling_N = 0.0;
+  // Beads rubbing on beads and on objects: 0.3, a judgement between lubricated (0.2-0.3) and
+  // clean (0.5-0.7) glass on metal in engineering charts (e.g. Schneider's reference chart).
+  def.exact_contact_pairs = 64;
+  def.friction_coefficient = 0.3;
+  def.object_friction_coefficient = 0.3;
   return def;
 }
 

@@ -88,9 +88,8 @@ struct ThreadDef {
   // relative pair terms (h c + h^2 k) (g (x) n)(g (x) n)^T (a low-rank update of the banded
   // solve, by Woodbury's identity); the deepest contacts first. Contacts beyond this count get
   // the per-node diagonal bound 2 |g_i| k n n^T, which dominates the pair term but anchors the
-  // nodes in absolute terms (a tight knot then resists being moved as a whole). 0: bound only
-  // (the default: the knot-tying jig does not tie with exact pairs yet, see README "Not done").
-  int exact_contact_pairs = 0;
+  // nodes in absolute terms (a tight knot then resists being moved as a whole). 0: bound only.
+  int exact_contact_pairs = 64;
 
   // Coulomb friction (not in the thesis, whose "friction" (5.8) is viscous damping): the
   // tangential impulse of a contact over a step is at most mu * f_n * h, f_n the normal force
@@ -100,11 +99,11 @@ struct ThreadDef {
   // tables, e.g. Roymech "Coefficients of friction"); surgical sutures on skin-like surfaces
   // were measured by the capstan method by Zhang, Ren, Zeng & van der Heide, Friction 7 (2019)
   // 87-98, doi:10.1007/s40544-017-0140-3. Braided silk is rougher than a monofilament (braided
-  // sutures hold knots with fewer throws): 0.3 for silk. Off (0) by default and in the presets:
-  // with mu = 0.2 the scripted square knot's first throw springs apart when the jig's pegs are
-  // withdrawn (README "Not done"); scenes opt in.
-  double friction_coefficient = 0.0;
-  double object_friction_coefficient = 0.0;
+  // sutures hold knots with fewer throws): 0.3 for silk. The default is the nylon's 0.2 on
+  // itself and on objects (nylon on steel 0.15-0.25 in the same tables); the presets set
+  // their own.
+  double friction_coefficient = 0.2;
+  double object_friction_coefficient = 0.2;
   // Contacts (self first, deepest first, then object contacts) that get friction in one step;
   // each adds two columns to the linearly implicit step's low-rank solve. 0: none.
   int friction_contacts = 64;

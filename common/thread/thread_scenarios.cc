@@ -134,6 +134,11 @@ ThreadDef KnotTyingDef(int num_nodes) {
   def.num_nodes = num_nodes;
   def.length_m = link_m * (num_nodes - 1);
   def.gravity_m_per_s2.setZero();
+  // Thread on thread keeps the nylon's friction; the jig's pegs and jaws are frictionless (wet,
+  // polished instruments): the driver carries the end round them by position, so with peg
+  // friction the thread it needs is drawn over ~5 pi of wrap (capstan factor e^{0.2 * 5 pi} =
+  // 23) and the driver's pull reaches ~40 mN with 15 % transient strain in the helix.
+  def.object_friction_coefficient = 0.0;
   return def;
 }
 
@@ -184,6 +189,11 @@ constexpr double kPegHalfHeight_m = 1.5e-3;
 constexpr double kAround_m = 0.3e-3;
 constexpr double kHelixRadius_m = 0.15e-3;
 constexpr double kSecondPegHeight_m = 0.6e-3;
+// The instrument jaw the throws are wrapped on (see the constructor): its radius, its
+// clearance from the standing part, and how far it reaches beyond the helix at either end.
+constexpr double kJawRadius_m = 40e-6;
+constexpr double kJawClearance_m = 5e-6;
+constexpr double kJawOverhang_m = 0.2e-3;
 // Standing hand: speed per newton of tension error, and its speed limit.
 constexpr double kTensionGain_m_per_s_N = 3.0;
 constexpr double kMaxHandSpeed_m_per_s = 0.02;
@@ -232,6 +242,20 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
   auto at = [&](double dx, double y, double dz) {
     return Eigen::Vector3d(x0 + sx_ * dx, y, z_s + sx_ * dz);
   };
+  // The instrument's jaws: two rigid rods along the standing part, one on either side of it out
+  // of the loop's plane (the standing part lies between the open jaws), over the helix's
+  // length. The helix wraps the jaws and the standing part together, as an instrument tie
+  // wraps the thread on the needle holder: the wraps cannot drag the standing part (held only
+  // by thread tension) out of the helix, and the loop cannot slide sideways along the pegs.
+  // When the jaws are withdrawn the wraps close on the standing part.
+  const double dx_h0 = -a + kPegRadius_m + 0.2e-3;
+  const double dx_h1 = 0.3 * a;
+  const double jaw_offset = kJawRadius_m + model.radius_m + kJawClearance_m;
+  for (const double side : {-1.0, 1.0}) {
+    colliders_.push_back(Collider::Capsule(at(dx_h0 - kJawOverhang_m, y_s, side * jaw_offset),
+                                           at(dx_h1 + kJawOverhang_m, y_s, side * jaw_offset),
+                                           kJawRadius_m));
+  }
   path_.push_back({state.x_W.col(driver_node), Phase::kLoop});
   // The loop: up past peg 1's outer side, over both pegs, down past peg 2's outer side.
   path_.push_back({at(a + kAround_m, y_p1 + kAround_m, 0.0), Phase::kLoop});
@@ -240,8 +264,6 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
   // The helix around the standing part, starting inside the loop (y > 0): over it (the loop's
   // crossing), then `passes` times under and over, ending on the near side (y < 0).
   const double rho = kHelixRadius_m;
-  const double dx_h0 = -a + kPegRadius_m + 0.2e-3;
-  const double dx_h1 = 0.3 * a;
   const double handed = options.right ? 1.0 : -1.0;
   const double theta0 = -std::numbers::pi;
   const double theta1 = 2.0 * std::numbers::pi * options.passes;

@@ -6,6 +6,7 @@
 //   microdex-bench thread --accuracy --json FILE
 //   microdex-bench thread --adversarial [--steps 1000000] [--json FILE]
 //   microdex-bench thread --tie 2 | 1r,1l [--nodes N] [--obj FILE]   tie throws, trace them
+//   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
 //   --quick                                              reduced sizes (CTest)
 #include <algorithm>
 #include <chrono>
@@ -295,8 +296,22 @@ int RunAccuracy(bool quick, const std::string& json) {
   return 0;
 }
 
+// Contact model options of the command line (--friction MU, --object-friction MU,
+// --exact-pairs N), applied on top of a thread's defaults; negative: keep the default.
+struct ContactOverrides {
+  double friction = -1.0;
+  double object_friction = -1.0;
+  int exact_pairs = -1;
+  ThreadDef Apply(ThreadDef def) const {
+    if (friction >= 0.0) def.friction_coefficient = friction;
+    if (object_friction >= 0.0) def.object_friction_coefficient = object_friction;
+    if (exact_pairs >= 0) def.exact_contact_pairs = exact_pairs;
+    return def;
+  }
+};
+
 // ---- speed ---------------------------------------------------------------------------------
-int RunSpeed(bool quick, const std::string& json) {
+int RunSpeed(bool quick, const std::string& json, const ContactOverrides& contact) {
   const std::vector<int> nodes =
       quick ? std::vector<int>{65, 129} : std::vector<int>{65, 129, 257, 513, 1025};
   const int max_steps = quick ? 300 : 3000;
@@ -319,7 +334,7 @@ int RunSpeed(bool quick, const std::string& json) {
   };
   for (Integrator integ : kIntegrators) {
     for (int n : nodes) {
-      ThreadDef def = KnotTyingDef(n);
+      ThreadDef def = contact.Apply(KnotTyingDef(n));
       def.integrator = integ;
       const ThreadModel model = MakeThreadModel(def);
       ThreadState state =
@@ -455,7 +470,8 @@ std::string KnotOf(const ThreadModel& model, const ThreadState& state, int* cros
 
 // Ties the throws of `spec` ("2": double overhand; "1r,1l": square; "1r,1r": granny; a pass
 // count and r/l handedness per throw) and prints the topology at each phase change.
-int RunTie(const std::string& spec, int nodes, const std::string& obj) {
+int RunTie(const std::string& spec, int nodes, const std::string& obj,
+           const ContactOverrides& contact) {
   std::vector<KnotThrowOptions> throws;
   std::stringstream in(spec);
   std::string item;
@@ -467,7 +483,10 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
     throws.push_back(t);
   }
   if (throws.empty()) throw std::invalid_argument("--tie: expected throws such as 2 or 1r,1l");
-  const ThreadModel model = MakeThreadModel(KnotTyingDef(nodes));
+  const ThreadModel model = MakeThreadModel(contact.Apply(KnotTyingDef(nodes)));
+  std::printf("model: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
+              model.def.exact_contact_pairs, model.def.friction_coefficient,
+              model.def.object_friction_coefficient);
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
   KnotTyingHands hands = SetUpKnotTying(model, state);
@@ -482,6 +501,8 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
     throws[t].knot_x_m = knot_x;
     KnotThrowScript script(model, state, hands, throws[t]);
     KnotThrowScript::Phase last = script.phase();
+    std::vector<double> f_standing, f_driver;
+    int max_contacts = 0;
     if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr) {
       for (const Collider& c : script.colliders()) {
         const Eigen::Vector3d m = 0.5 * (c.a_W + c.b_W) * 1e3;
@@ -506,6 +527,9 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
         }
       }
       min_d = std::min(min_d, d_now);
+      f_standing.push_back(state.grasps[hands.standing_slot].f_T_W.norm());
+      f_driver.push_back(state.grasps[hands.driver_slot].f_T_W.norm());
+      max_contacts = std::max(max_contacts, state.status.num_self_contacts);
       if (dump != nullptr && k % dump_every == 0) {
         std::FILE* f = std::fopen(dump, "a");
         for (int i = 0; i < model.num_nodes; ++i) {
@@ -517,6 +541,17 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
       }
       ++k;
       if (script.phase() != last) {
+        // Grasp forces over the phase just finished (median / max), the figures to set
+        // against the capstan estimate.
+        const double sd_max = *std::max_element(f_standing.begin(), f_standing.end());
+        const double dr_max = *std::max_element(f_driver.begin(), f_driver.end());
+        std::printf(
+            "  %s: f_standing median %.3g max %.3g N, f_driver median %.3g max %.3g N, "
+            "self contacts max %d\n",
+            PhaseName(last), Median(f_standing), sd_max, Median(f_driver), dr_max, max_contacts);
+        f_standing.clear();
+        f_driver.clear();
+        max_contacts = 0;
         int crossings = 0;
         const std::string knot = KnotOf(model, state, &crossings);
         std::printf(
@@ -551,6 +586,14 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj) {
               state.grasps[hands.driver_slot].p_WT.y() * 1e3);
         }
       }
+    }
+    if (!f_standing.empty()) {
+      std::printf(
+          "  %s: f_standing median %.3g max %.3g N, f_driver median %.3g max %.3g N, "
+          "self contacts max %d\n",
+          PhaseName(last), Median(f_standing),
+          *std::max_element(f_standing.begin(), f_standing.end()), Median(f_driver),
+          *std::max_element(f_driver.begin(), f_driver.end()), max_contacts);
     }
     int crossings = 0;
     const std::string knot = KnotOf(model, state, &crossings);
@@ -674,6 +717,7 @@ int Main(int argc, char** argv) {
   std::int64_t steps = 1000000;
   int nodes = 257;
   std::string json, plot, tie, obj;
+  ContactOverrides contact;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&](const char* name) -> std::string {
@@ -699,6 +743,17 @@ int Main(int argc, char** argv) {
       plot = value("--plot");
     } else if (arg == "--tie") {
       tie = value("--tie");
+    } else if (arg == "--friction") {
+      contact.friction = std::atof(value("--friction").c_str());
+      if (!(contact.friction >= 0.0)) throw std::invalid_argument("--friction: expected mu >= 0");
+    } else if (arg == "--object-friction") {
+      contact.object_friction = std::atof(value("--object-friction").c_str());
+      if (!(contact.object_friction >= 0.0)) {
+        throw std::invalid_argument("--object-friction: expected mu >= 0");
+      }
+    } else if (arg == "--exact-pairs") {
+      contact.exact_pairs = std::atoi(value("--exact-pairs").c_str());
+      if (contact.exact_pairs < 0) throw std::invalid_argument("--exact-pairs: expected N >= 0");
     } else if (arg == "--nodes") {
       nodes = std::atoi(value("--nodes").c_str());
       if (nodes < 33) throw std::invalid_argument("--nodes: expected at least 33");
@@ -706,17 +761,18 @@ int Main(int argc, char** argv) {
       std::printf(
           "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --adversarial "
           "[--steps N] | --tie THROWS "
-          "[--nodes N] [--obj FILE]] [--json FILE] [--quick]\n");
+          "[--nodes N] [--obj FILE]] [--friction MU] [--object-friction MU] [--exact-pairs N] "
+          "[--json FILE] [--quick]\n");
       return 0;
     } else {
       throw std::invalid_argument("unknown option '" + arg + "'");
     }
   }
-  if (!tie.empty()) return RunTie(tie, nodes, obj);
+  if (!tie.empty()) return RunTie(tie, nodes, obj, contact);
   if (stability) return RunStability(quick, json, plot);
   if (adversarial) return RunAdversarial(quick ? 20000 : steps, json);
   if (accuracy) return RunAccuracy(quick, json);
-  return RunSpeed(quick, json);
+  return RunSpeed(quick, json, contact);
 }
 
 }  // namespace
