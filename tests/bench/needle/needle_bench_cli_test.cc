@@ -177,6 +177,8 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
       4)
       << families;
   EXPECT_EQ(count_matches(std::regex(R"re("point_ratios": \{"mesh_over_sp": )re")), 4) << families;
+  EXPECT_EQ(count_matches(std::regex(R"re("lower_bounds": \[("[a-z_ ()]+"(, )?)*\])re")), 4)
+      << families;
   EXPECT_EQ(count_matches(std::regex(R"re("met": (true|false))re")),
             4 + 3 * 3)  // the mesh goal only where the mesh answers
       << families;
