@@ -99,9 +99,9 @@ struct ThreadDef {
   // tables, e.g. Roymech "Coefficients of friction"); surgical sutures on skin-like surfaces
   // were measured by the capstan method by Zhang, Ren, Zeng & van der Heide, Friction 7 (2019)
   // 87-98, doi:10.1007/s40544-017-0140-3. Braided silk is rougher than a monofilament (braided
-  // sutures hold knots with fewer throws): 0.3 for silk. The default is the nylon's 0.2 on
-  // itself and on objects (nylon on steel 0.15-0.25 in the same tables); the presets set
-  // their own.
+  // sutures hold knots with fewer throws): 0.3 for silk. The default is the nylon's 0.2, also
+  // used on objects (steel instruments, tissue: a working value, not taken from a table); the
+  // presets set their own.
   double friction_coefficient = 0.2;
   double object_friction_coefficient = 0.2;
   // Contacts (self first, deepest first, then object contacts) that get friction in one step;

@@ -189,10 +189,11 @@ constexpr double kPegHalfHeight_m = 1.5e-3;
 constexpr double kAround_m = 0.3e-3;
 constexpr double kHelixRadius_m = 0.15e-3;
 constexpr double kSecondPegHeight_m = 0.6e-3;
-// The instrument jaw the throws are wrapped on (see the constructor): its radius, its
-// clearance from the standing part, and how far it reaches beyond the helix at either end.
+// The instrument jaws the throws are wrapped on (see the constructor): their radius, their
+// clearance from the standing part (beyond the contact cutoff, so a straight thread slides
+// between them untouched), and how far they reach beyond the helix at either end.
 constexpr double kJawRadius_m = 40e-6;
-constexpr double kJawClearance_m = 5e-6;
+constexpr double kJawClearance_m = 15e-6;
 constexpr double kJawOverhang_m = 0.2e-3;
 // Standing hand: speed per newton of tension error, and its speed limit.
 constexpr double kTensionGain_m_per_s_N = 3.0;
