@@ -64,13 +64,16 @@ KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state);
 // One throw, tied as by hand on a jig (thesis §5.5, Fig. 5.7): the driver carries the working
 // end under a first peg, over it and a second peg (the loop), back across the standing part
 // and `passes` times around the standing part inside the loop (a helix), then away to +x.
-// Meanwhile the standing hand keeps the thread taut at hold_tension_N by feeding or taking in
-// thread along x. Then the pegs are withdrawn and both hands pull apart until each feels
-// pull_tension_N. passes = 1 ties an overhand knot (trefoil), 2 a double overhand; right picks
-// the handedness (all crossings positive seen from +z). A second throw on the same thread,
-// next to the first, makes a square (opposite handedness) or granny knot; it is tied with the
-// other end (the hands swap roles), whose tail is the long one after the first throw. With
-// the driver's end towards -x of the knot the jig is turned by pi about the y axis.
+// The helix is wrapped on an instrument's jaws: two rigid rods along the standing part, one on
+// either side of it, which keep the standing part (held only by thread tension) inside the
+// wraps, as in an instrument tie. Meanwhile the standing hand keeps the thread taut at
+// hold_tension_N by feeding or taking in thread along x. Then pegs and jaws are withdrawn and
+// both hands pull apart until each feels pull_tension_N. passes = 1 ties an overhand knot
+// (trefoil), 2 a double overhand; right picks the handedness (all crossings positive seen from +z).
+// A second throw on the same thread, next to the first, makes a square (opposite handedness) or
+// granny knot; it is tied with the other end (the hands swap roles), whose tail is the long one
+// after the first throw. With the driver's end towards -x of the knot the jig is turned by pi about
+// the y axis.
 struct KnotThrowOptions {
   int passes = 1;
   bool right = true;
