@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
 #include <vector>
 
@@ -66,6 +67,9 @@ struct ThrowResult {
   long long trouble = 0;  // rolled-back steps
   bool finite = true;
   double pull_force_N = 0.0;  // the smaller grasp force at the end of the pull
+  // Largest grasp forces while the driver draws the end out of the throw (exit phase).
+  double exit_driver_N = 0.0;
+  double exit_standing_N = 0.0;
 };
 
 // Runs one throw to its end, checking the non-adjacent distance after every step.
@@ -76,6 +80,11 @@ ThrowResult Tie(const ThreadModel& model, ThreadState& state, KnotTyingHands han
   const long long before = state.status.nonfinite_resets + state.status.factorization_failures;
   const double limit = model.def.diameter_m;
   while (script.Step(model, state)) {
+    if (script.phase() == KnotThrowScript::Phase::kExit) {
+      r.exit_driver_N = std::max(r.exit_driver_N, state.grasps[hands.driver_slot].f_T_W.norm());
+      r.exit_standing_N =
+          std::max(r.exit_standing_N, state.grasps[hands.standing_slot].f_T_W.norm());
+    }
     r.min_distance_m = std::min(r.min_distance_m, MinNonAdjacentDistanceBelow(state.x_W, limit));
     r.finite = r.finite && state.x_W.allFinite() && state.v_W.allFinite();
   }
@@ -127,6 +136,13 @@ void TieTwoThrows(bool second_right, KnotType expected) {
   second.knot_x_m = x1 - 3e-3;
   const ThrowResult r2 = Tie(model, state, hands, second);
   EXPECT_EQ(Recognize(model, state), expected);
+  // Drawing the end out of the second throw past the first knot: contact friction can make the
+  // driver's pull at most the capstan factor exp(mu theta) times the standing hand's, theta the
+  // throw's wrap of thread on thread (1.5 turns, 3 pi). An anchoring contact model (per-node
+  // stiffness bounds) drags the whole knot and exceeds it several times over.
+  const double capstan = std::exp(model.def.friction_coefficient * 3.0 * std::numbers::pi);
+  EXPECT_GT(r2.exit_standing_N, 0.0);
+  EXPECT_LE(r2.exit_driver_N, capstan * r2.exit_standing_N);
   EXPECT_GE(r2.pull_force_N, second.pull_tension_N);
   EXPECT_GE(std::min(r1.min_distance_m, r2.min_distance_m), 0.5 * model.def.diameter_m);
   EXPECT_TRUE(r1.finite && r2.finite);
