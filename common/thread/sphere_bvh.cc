@@ -399,17 +399,21 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
   unsigned head = 0, tail = 0, small_head = 0, small_tail = 0;
   int count = 0;
 
-  // One FindCollision step on a pair with a node of more than two links: test it and push its
-  // two children, to the small ring when both of their nodes are small; a miss keeps nothing.
-  // No branch depends on the test, so successive tests overlap in the processor. Needs two
-  // free slots in each ring.
+  auto overlap = [&](SphereBvhNodePair pq) -> unsigned {
+    return Overlap(
+               reinterpret_cast<const float*>(sphere_bytes + static_cast<std::uint32_t>(pq)),
+               reinterpret_cast<const float*>(sphere_bytes + static_cast<std::uint32_t>(pq >> 32)))
+               ? 1u
+               : 0u;
+  };
+  // One FindCollision step on a pair already found to overlap, with a node of more than two
+  // links: split it and test its two children, keeping those that overlap; children with both
+  // nodes small go to the small ring untested (their leaf pairs are tested there). A miss costs
+  // one test and nothing else, as the pairs are tested where they are made. No branch depends
+  // on a test, so successive tests overlap in the processor. Needs two free slots in each ring.
   auto step = [&](SphereBvhNodePair pq) {
     const std::uint32_t p = static_cast<std::uint32_t>(pq);
     const std::uint32_t q = static_cast<std::uint32_t>(pq >> 32);
-    const unsigned hit = Overlap(reinterpret_cast<const float*>(sphere_bytes + p),
-                                 reinterpret_cast<const float*>(sphere_bytes + q))
-                             ? 1u
-                             : 0u;
     // Split p (first) or q; the other keeps its half of the packed pair. Arithmetic, not a
     // branch: which one is split follows no pattern the processor could predict.
     const SphereBvhTraversalNode& np = record(p);
@@ -429,13 +433,13 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     const unsigned left_small = keep_small & split.left_offset;
     const unsigned right_small = keep_small & split.right_offset;
     ring[tail & (ring_size - 1)] = left;
-    tail += hit & (left_small ^ 1u);
+    tail += (left_small ^ 1u) & overlap(left);
     ring[tail & (ring_size - 1)] = right;
-    tail += hit & (right_small ^ 1u);
+    tail += (right_small ^ 1u) & overlap(right);
     small_ring[small_tail & (small_size - 1)] = left;
-    small_tail += hit & left_small;
+    small_tail += left_small;
     small_ring[small_tail & (small_size - 1)] = right;
-    small_tail += hit & right_small;
+    small_tail += right_small;
   };
   // The up to four leaf pairs (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1): those of `lanes`
   // that overlap are written (the tests are the single-pair test, without branches). Needs four
@@ -511,16 +515,19 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
   const SphereBvhNodePair* start = t.self_pairs.data();
   const unsigned num_start = static_cast<unsigned>(t.self_pairs.size());
   for (unsigned k = 0; k < num_start;) {
-    const unsigned run = run_length(num_start - k);
+    const unsigned run = std::min(num_start - k, ring_size - (tail - head));
     if (run == 0) {
       count = FindCollisionOnStack(t, sphere, start[k++], pairs, capacity, count);
       continue;
     }
-    for (const unsigned end = k + run; k < end; ++k) step(start[k]);
+    for (const unsigned end = k + run; k < end; ++k) {
+      ring[tail & (ring_size - 1)] = start[k];
+      tail += overlap(start[k]);
+    }
   }
   while (head != tail) {
     const unsigned run = run_length(tail - head);
-    if (run == 0) {
+    if (run == 0) {  // the pair overlaps: the stack's first test repeats that
       count =
           FindCollisionOnStack(t, sphere, ring[head++ & (ring_size - 1)], pairs, capacity, count);
       continue;
