@@ -16,7 +16,9 @@ std::atomic<bool> g_stop{false};
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// Errors are caught around parsing and the run; what could escape is an allocation failure
+// while setting up, which ends the process as it should.
+int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   // SIGINT/SIGTERM are blocked in every thread (the DDS threads inherit the mask) and taken
   // by one watcher thread that only sets the stop flag.
   sigset_t signals;

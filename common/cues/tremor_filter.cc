@@ -10,7 +10,7 @@ constexpr double kPi = 3.14159265358979323846;
 // One biquad step, direct form II transposed, on three channels.
 Eigen::Vector3d StepBiquad(const Biquad& f, const Eigen::Vector3d& x, Eigen::Vector3d& z1,
                            Eigen::Vector3d& z2) {
-  const Eigen::Vector3d y = f.b0 * x + z1;
+  Eigen::Vector3d y = f.b0 * x + z1;
   z1 = f.b1 * x - f.a1 * y + z2;
   z2 = f.b2 * x - f.a2 * y;
   return y;

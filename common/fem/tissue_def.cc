@@ -131,7 +131,9 @@ TissueDef LoadTissueDef(const std::string& path) {
     const std::string key = entry.first.as<std::string>();
     bool known = false;
     for (const char* name : kKnown) known = known || key == name;
-    if (!known) throw std::runtime_error(path + ": field 'tissue." + key + "': unknown field");
+    if (!known)
+      throw std::runtime_error(
+          std::string(path).append(": field 'tissue.").append(key).append("': unknown field"));
   }
   TissueDef def;
   std::string name;  // documentation only

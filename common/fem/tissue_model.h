@@ -31,7 +31,10 @@ struct TissueModel {
   int max_mesh_nodes = 0;
 
   double NodeX_m(int id) const { return (id % nodes_per_side) * h_x_m; }
-  double NodeY_m(int id) const { return (id / nodes_per_side) * h_y_m; }
+  double NodeY_m(int id) const {
+    const int row = id / nodes_per_side;
+    return row * h_y_m;
+  }
   bool IsBoundaryNode(int id) const {
     const int i = id % nodes_per_side, j = id / nodes_per_side;
     return i == 0 || j == 0 || i == cells_per_side || j == cells_per_side;

@@ -70,7 +70,7 @@ std::string DefaultDdsProfileFile() {
   if (const char* env = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE"); env != nullptr && *env) {
     return env;
   }
-  const std::string local = "deploy/dds/loopback.xml";
+  std::string local = "deploy/dds/loopback.xml";
   if (std::filesystem::is_regular_file(local)) return local;
   return std::string(MICRODEX_SOURCE_DIR) + "/deploy/dds/loopback.xml";
 }

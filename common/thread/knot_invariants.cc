@@ -322,7 +322,7 @@ LaurentPolynomial AlexanderPolynomial(const PlanarDiagram& pd) {
   std::vector<std::uint64_t> ys(n);
   std::vector<std::uint64_t> a(size * size);
   for (int i = 0; i < n; ++i) {
-    const std::uint64_t t = static_cast<std::uint64_t>(i + 2);
+    const std::uint64_t t = static_cast<std::uint64_t>(i) + 2;
     xs[i] = t;
     for (int r = 0; r < size; ++r) {
       for (int col = 0; col < size; ++col) {
@@ -337,7 +337,7 @@ LaurentPolynomial AlexanderPolynomial(const PlanarDiagram& pd) {
   for (std::size_t i = 0; i < coeff.size(); ++i) coeff[i] = ToSigned(coeff_mod[i]);
   LaurentPolynomial p = Trimmed(LaurentPolynomial{0, std::move(coeff)});
   const auto& c = p.coefficients;
-  const LaurentPolynomial invalid{0, {}};
+  LaurentPolynomial invalid{0, {}};
   if (c.empty() || c.size() % 2 == 0) return invalid;
   for (std::size_t i = 0; i < c.size(); ++i) {
     if (c[i] != c[c.size() - 1 - i]) return invalid;

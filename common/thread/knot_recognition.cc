@@ -145,7 +145,7 @@ Eigen::Vector3d RandomDirection(std::mt19937_64& rng) {
 // Closed, reduced polygon of an open thread.
 std::vector<Eigen::Vector3d> ReducedClosure(std::span<const Eigen::Vector3d> nodes,
                                             double diameter_m, bool reduce = true) {
-  const std::vector<Eigen::Vector3d> closed = knot::CloseThread(nodes, diameter_m);
+  std::vector<Eigen::Vector3d> closed = knot::CloseThread(nodes, diameter_m);
   if (!reduce) return closed;
   const std::vector<int> kept = knot::ReducePolygon(closed);
   std::vector<Eigen::Vector3d> reduced;

@@ -114,14 +114,12 @@ class Reducer {
 
   void BuildGrid(int head) {
     Eigen::AlignedBox3d box;
-    double length_sum = 0.0;
     int v = head;
     std::vector<double> lengths;
     lengths.reserve(alive_count_);
     for (int k = 0; k < alive_count_; ++k) {
       box.extend(pts_[v]);
       lengths.push_back((pts_[next_[v]] - pts_[v]).norm());
-      length_sum += lengths.back();
       v = next_[v];
     }
     std::nth_element(lengths.begin(), lengths.begin() + static_cast<long>(lengths.size() / 2),

@@ -148,8 +148,8 @@ Curve LongKnot(std::span<const Eigen::Vector3d> closed, double tail_length) {
   const double x_right = box.max().x() + margin;
   const double z_top = box.max().z() + margin;
   const double x_left = box.min().x() - margin;
-  const Eigen::Vector3d a = closed[(i_max + 1) % n];
-  const Eigen::Vector3d b = closed[(i_max + n - 1) % n];
+  const Eigen::Vector3d& a = closed[(i_max + 1) % n];
+  const Eigen::Vector3d& b = closed[(i_max + n - 1) % n];
   Curve c;
   // Left tail (reversed path from a): far left above everything, over the top, down to a.
   c.push_back({x_left - tail_length, a.y(), z_top});

@@ -224,7 +224,9 @@ ThreadDef LoadThreadDef(const std::string& path) {
     const std::string key = entry.first.as<std::string>();
     bool known = false;
     for (const char* name : kKnown) known = known || key == name;
-    if (!known) throw std::runtime_error(path + ": field 'thread." + key + "': unknown field");
+    if (!known)
+      throw std::runtime_error(
+          std::string(path).append(": field 'thread.").append(key).append("': unknown field"));
   }
   ThreadDef def;
   std::string base;
