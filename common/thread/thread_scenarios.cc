@@ -161,6 +161,11 @@ KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state) {
   return hands;
 }
 
+double HoldTensionAfterThrow(const KnotThrowOptions& previous, const KnotThrowOptions& next) {
+  constexpr double kAfterDoubleThrow_N = 1e-3;
+  return previous.passes > 1 ? kAfterDoubleThrow_N : next.hold_tension_N;
+}
+
 void KnotThrowOptions::Validate() const {
   auto require = [](bool ok, const char* field, const char* expected) {
     if (!ok) {

@@ -87,6 +87,12 @@ struct KnotThrowOptions {
   void Validate() const;
 };
 
+// The standing hand's hold for `next`, tied after `previous` on the same thread: 1 mN after a
+// double throw (surgeon's knot: at 2 mN the single throw's loop sprang open when pegs and jaws
+// were withdrawn and the end slipped out, 385 nodes), next.hold_tension_N otherwise (at 1 mN the
+// square knot's second throw is the one lost).
+double HoldTensionAfterThrow(const KnotThrowOptions& previous, const KnotThrowOptions& next);
+
 class KnotThrowScript {
  public:
   enum class Phase { kLoop, kHelix, kExit, kPull, kDone };

@@ -468,8 +468,6 @@ std::string KnotOf(const ThreadModel& model, const ThreadState& state, int* cros
   return std::string(KnotName(a.type));
 }
 
-constexpr double kSurgeonsHoldTension_N = 1e-3;
-
 // Ties the throws of `spec` ("2": double overhand; "1r,1l": square; "1r,1r": granny; "2r,1l":
 // surgeon's; a pass
 // count and r/l handedness per throw) and prints the topology at each phase change.
@@ -502,11 +500,7 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj,
   double knot_x = 4e-3;
   for (size_t t = 0; t < throws.size(); ++t) {
     throws[t].knot_x_m = knot_x;
-    // After a double throw (surgeon's knot) the single throw is tied with the standing hand
-    // holding 1 mN: at 2 mN its loop sprang open when pegs and jaws were withdrawn and the end
-    // slipped out (double overhand after the pull, 385 nodes); at 1 mN the square's second
-    // throw is the one lost, so the lower hold is used only here.
-    if (t > 0 && throws[t - 1].passes > 1) throws[t].hold_tension_N = kSurgeonsHoldTension_N;
+    if (t > 0) throws[t].hold_tension_N = HoldTensionAfterThrow(throws[t - 1], throws[t]);
     KnotThrowScript script(model, state, hands, throws[t]);
     KnotThrowScript::Phase last = script.phase();
     std::vector<double> f_standing, f_driver;

@@ -132,9 +132,7 @@ void TieTwoThrows(int first_passes, bool second_right, KnotType expected_first, 
   KnotThrowOptions second;
   second.passes = 1;
   second.right = second_right;
-  // After a double throw the standing hand holds the single throw at 1 mN (as the bench's
-  // --tie 2r,1l): at 2 mN its loop springs open when the jig is withdrawn.
-  if (first_passes > 1) second.hold_tension_N = 1e-3;
+  second.hold_tension_N = HoldTensionAfterThrow(first, second);
   const double x1 = KnotCentreX(model, state);
   // The driver now holds node 0, left of the first knot: the second throw goes 3 mm left.
   ASSERT_LT(state.grasps[hands.driver_slot].p_WT.x(), x1);
