@@ -31,7 +31,7 @@ void NeedleModule::Step(const ToolInput& in, Eigen::Vector3d& f_T_W) {
   if (clearance_.status == geometry::ClearanceStatus::kOk && clearance_.clearance_m < 0) {
     // Outside the tube by -clearance: push the deepest needle point back towards the wall
     // point nearest to it (inwards), proportionally to the depth.
-    const Eigen::Vector3d inward = clearance_.p_WW - clearance_.p_WN;
+    const Eigen::Vector3d inward = clearance_.p_WB - clearance_.p_WD;
     const double n = inward.norm();
     if (n > 0) f_T_W += wall_stiffness_N_per_m_ * (-clearance_.clearance_m) * (inward / n);
   }
@@ -55,8 +55,8 @@ void NeedleModule::WriteSnapshot(TickSnapshot& s) const {
   s.needle.clearance_m = ok ? clearance_.clearance_m : nan;
   s.needle.contact = ok && clearance_.contact ? 1 : 0;
   s.needle.s_rad = ok ? clearance_.s_rad : nan;
-  s.needle.p_WD = {clearance_.p_WN.x(), clearance_.p_WN.y(), clearance_.p_WN.z()};
-  s.needle.p_WW = {clearance_.p_WW.x(), clearance_.p_WW.y(), clearance_.p_WW.z()};
+  s.needle.p_WD = {clearance_.p_WD.x(), clearance_.p_WD.y(), clearance_.p_WD.z()};
+  s.needle.p_WB = {clearance_.p_WB.x(), clearance_.p_WB.y(), clearance_.p_WB.z()};
 }
 
 double CalcSampledClearance(const geometry::ArcDef& arc, const geometry::TorusSegmentDef& torus,

@@ -46,7 +46,7 @@ struct NeedleSnapshot {
   std::uint8_t status = 0;  // net::ClearanceStatus
   double s_rad = 0;
   Vec3 p_WD{};
-  Vec3 p_WW{};
+  Vec3 p_WB{};
 };
 
 // The thread module's mirrored state, written by the haptic thread every mirror period.

@@ -259,7 +259,7 @@ void StationPublisher::PublishMirror() {
     n.contact = s.needle.contact != 0;
     n.s_rad = s.needle.s_rad;
     n.p_WD = E(s.needle.p_WD);
-    n.p_WW = E(s.needle.p_WW);
+    n.p_WB = E(s.needle.p_WB);
     n.status = static_cast<net::ClearanceStatus>(s.needle.status);
     net::ToMsg(n, w_->needle_msg);
     w_->needle->write(&w_->needle_msg);

@@ -39,8 +39,8 @@ struct ArcTorusClearance {
   double clearance_m = 0;  // NaN unless status == kOk
   bool contact = false;    // clearance_m ≤ 0 (false unless kOk)
   double s_rad = 0;        // needle parameter of the deepest point (argmin of clearance)
-  Eigen::Vector3d p_WN = Eigen::Vector3d::Zero();  // that needle point, in world
-  Eigen::Vector3d p_WW = Eigen::Vector3d::Zero();  // nearest tube-wall point to it, in world
+  Eigen::Vector3d p_WD = Eigen::Vector3d::Zero();  // that needle point D (deepest), in world
+  Eigen::Vector3d p_WB = Eigen::Vector3d::Zero();  // B: the tube-wall point nearest to D, in world
 };
 
 // Empty when (arc, torus) is a valid query; otherwise a one-line reason naming the field.

@@ -694,8 +694,8 @@ ArcTorusClearance MakeArcTorusClearance(const TorusSegmentDef& torus, const ArcI
   const double n = offset.norm();
   // On the core circle every wall point at distance r is nearest: take the outward one.
   const Eigen::Vector3d dir = n > 0 ? Eigen::Vector3d(offset / n) : radial;
-  out.p_WN = torus.X_WV * p_V;
-  out.p_WW = torus.X_WV * Eigen::Vector3d(q_V + r * dir);
+  out.p_WD = torus.X_WV * p_V;
+  out.p_WB = torus.X_WV * Eigen::Vector3d(q_V + r * dir);
   return out;
 }
 

@@ -197,8 +197,8 @@ ArcTorusClearance ArcTorusMeshModel::Calc(const Eigen::Isometry3d& X_WN,
                           impl_->scale;
   ArcTorusClearance out;
   out.status = ClearanceStatus::kOk;
-  out.p_WN = X_WV * Eigen::Vector3d(result.nearest_points[0] / impl_->scale);
-  out.p_WW = X_WV * Eigen::Vector3d(result.nearest_points[1] / impl_->scale);
+  out.p_WD = X_WV * Eigen::Vector3d(result.nearest_points[0] / impl_->scale);
+  out.p_WB = X_WV * Eigen::Vector3d(result.nearest_points[1] / impl_->scale);
   if (!(distance > 0)) {
     out.contact = true;
     out.clearance_m = 0;

@@ -1241,7 +1241,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
   out.contact = clearance <= 0;
   out.s_rad = best.s;
   const Eigen::Vector3d p_VN = nv.o + nv.rho * (best.cos_s * nv.e1 + best.sin_s * nv.e2);
-  out.p_WN = torus.X_WV * p_VN;
+  out.p_WD = torus.X_WV * p_VN;
   // Nearest wall point: along the ray from the nearest core point through the needle point,
   // whose distance from it is dist (f was evaluated at this very point).
   const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());
@@ -1250,7 +1250,7 @@ ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentD
       w > 0 ? Eigen::Vector3d(p_VN.x() * inv_w, p_VN.y() * inv_w, 0) : Eigen::Vector3d::UnitX();
   const Eigen::Vector3d core_pt = core_r * radial;
   const Eigen::Vector3d dir = dist > 0 ? Eigen::Vector3d((p_VN - core_pt) * inv_dist) : radial;
-  out.p_WW = torus.X_WV * Eigen::Vector3d(core_pt + tube_r * dir);
+  out.p_WB = torus.X_WV * Eigen::Vector3d(core_pt + tube_r * dir);
   return out;
 }
 

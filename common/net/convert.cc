@@ -221,7 +221,7 @@ void ToMsg(const NeedleState& in, msg::NeedleState& out) {
   out.contact(in.contact ? 1 : 0);
   out.s_rad(in.s_rad);
   out.p_WD(V(in.p_WD));
-  out.p_WW(V(in.p_WW));
+  out.p_WB(V(in.p_WB));
   out.status(static_cast<std::uint8_t>(in.status));
 }
 
@@ -237,7 +237,7 @@ bool FromMsg(const msg::NeedleState& in, NeedleState& out, std::string* why) {
     c.Finite(in.clearance_m(), "clearance_m");
     c.Finite(in.s_rad(), "s_rad");
     c.Finite(in.p_WD(), "p_WD");
-    c.Finite(in.p_WW(), "p_WW");
+    c.Finite(in.p_WB(), "p_WB");
   }
   out.p_WN = V(in.p_WN());
   out.q_WN = Q(in.q_WN());
@@ -245,7 +245,7 @@ bool FromMsg(const msg::NeedleState& in, NeedleState& out, std::string* why) {
   out.contact = in.contact() == 1;
   out.s_rad = in.s_rad();
   out.p_WD = V(in.p_WD());
-  out.p_WW = V(in.p_WW());
+  out.p_WB = V(in.p_WB());
   out.status = static_cast<ClearanceStatus>(in.status());
   return c.ok();
 }

@@ -65,7 +65,7 @@ struct NeedleState {
   bool contact = false;
   double s_rad = 0;
   Eigen::Vector3d p_WD = Eigen::Vector3d::Zero();  // deepest needle point
-  Eigen::Vector3d p_WW = Eigen::Vector3d::Zero();  // nearest wall point
+  Eigen::Vector3d p_WB = Eigen::Vector3d::Zero();  // nearest wall point
   ClearanceStatus status = ClearanceStatus::kOk;
 };
 

@@ -152,7 +152,7 @@ void ValidateScene(const SceneModel& s) {
     }
     if (!seen.insert(m).second) Fail(o, "modules", "module '" + m + "' named twice");
   }
-  const VesselDef& v = s.vessel;
+  const geometry::TorusSegmentDef& v = s.vessel;
   if (!(v.core_radius_m > 0)) Fail(o, "vessel.core_radius_m", "expected > 0");
   if (!(v.tube_radius_m > 0 && v.tube_radius_m < v.core_radius_m)) {
     Fail(o, "vessel.tube_radius_m", "expected 0 < tube radius < core radius");
@@ -160,7 +160,7 @@ void ValidateScene(const SceneModel& s) {
   if (!(v.segment_angle_rad > 0 && v.segment_angle_rad <= kTwoPi)) {
     Fail(o, "vessel.segment_angle_rad", "expected in (0, 2π]");
   }
-  const NeedleDef& n = s.needle;
+  const geometry::ArcDef& n = s.needle;
   if (!(n.radius_m > 0)) Fail(o, "needle.radius_m", "expected > 0");
   if (!(std::abs(n.radius_m - v.core_radius_m) < v.tube_radius_m)) {
     Fail(o, "needle.radius_m",
@@ -399,6 +399,7 @@ SceneModel ParseScene(const std::string& yaml_text, const std::string& origin) {
     s.tissue = d;
   }
   ValidateScene(s);
+  s.needle.X_WN = s.CalcIdealX_WT(s.task.start_azimuth_rad) * s.X_TN();
   return s;
 }
 

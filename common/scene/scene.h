@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/fem/tissue_def.h"
+#include "common/geometry/arc_torus.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::scene {
@@ -31,19 +32,10 @@ class SceneError : public std::runtime_error {
 // Modules a scene may name; "thread" and "tissue" need their scene sections.
 inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue"};
 
-// The tube: a torus segment (same conventions as geometry::TorusSegmentDef).
-struct VesselDef {
-  double core_radius_m = 5e-3;
-  double tube_radius_m = 0.5e-3;
-  double segment_angle_rad = 4.71238898038469;  // 270°
-  Eigen::Isometry3d X_WV = Eigen::Isometry3d::Identity();
-};
-
-// The needle: an arc of radius radius_m and sweep sweep_rad, held at its s = 0 end.
-struct NeedleDef {
-  double radius_m = 5e-3;
-  double sweep_rad = 1.0471975511965976;  // 60°
-};
+// The tube is a geometry::TorusSegmentDef (scene section `vessel`: core_radius_m,
+// tube_radius_m, segment_angle_rad, position_m, rpy_rad). The needle is a geometry::ArcDef
+// (section `needle`: radius_m, sweep_rad) held at its s = 0 end by the tool; its X_WN is the
+// needle's pose at the start of the task (CalcIdealX_WT(start azimuth) * X_TN()).
 
 // The ideal tool path the simulated trainee follows and the guidance fields pull towards.
 enum class PathKind {
@@ -113,8 +105,10 @@ struct SceneModel {
   std::string path;  // where it was loaded from ("" when parsed from text)
   std::string name;
   std::vector<std::string> modules;
-  VesselDef vessel;
-  NeedleDef needle;
+  geometry::TorusSegmentDef vessel{5e-3, 0.5e-3, 4.71238898038469,  // 270°
+                                   Eigen::Isometry3d::Identity()};
+  geometry::ArcDef needle{5e-3, 1.0471975511965976,  // 60°
+                          Eigen::Isometry3d::Identity()};
   TaskDef task;
   HapticDef haptic;
   std::optional<ThreadSceneDef> thread;  // present exactly when modules has "thread"

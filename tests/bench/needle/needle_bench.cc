@@ -335,7 +335,7 @@ void Score(const std::vector<ArcTorusClearance>& got, const std::vector<ArcTorus
     sum2 += e * e;
     ++n;
     if (isolated[i]) {
-      const double pe = (got[i].p_WN - ref[i].p_WN).norm();
+      const double pe = (got[i].p_WD - ref[i].p_WD).norm();
       max_p = std::max(max_p, std::isfinite(pe) ? pe : std::numeric_limits<double>::infinity());
       ++np;
     }

@@ -503,7 +503,7 @@ TEST(ArcTorusExact, InvariantUnderRigidMotions) {
     if (a.status != ClearanceStatus::kOk) continue;
     const double tol = kRelTol * c.torus.core_radius_m;
     EXPECT_NEAR(a.clearance_m, b.clearance_m, tol) << i;
-    EXPECT_LT((X * a.p_WN - b.p_WN).norm(), 1e-6 * c.torus.core_radius_m) << i;
+    EXPECT_LT((X * a.p_WD - b.p_WD).norm(), 1e-6 * c.torus.core_radius_m) << i;
   }
 }
 
@@ -534,21 +534,21 @@ TEST(ArcTorusExact, ClosestPointsAreConsistent) {
     if (out.status != ClearanceStatus::kOk) continue;
     const double R = c.torus.core_radius_m, r = c.torus.tube_radius_m;
     const double tol = 1e-9 * R * (1 + c.arc.radius_m / R);
-    // p_WN is the needle point at s_rad, inside the azimuth range.
+    // p_WD is the needle point at s_rad, inside the azimuth range.
     const Eigen::Vector3d p_N(c.arc.radius_m * std::cos(out.s_rad),
                               c.arc.radius_m * std::sin(out.s_rad), 0);
-    EXPECT_LT((c.arc.X_WN * p_N - out.p_WN).norm(), tol);
+    EXPECT_LT((c.arc.X_WN * p_N - out.p_WD).norm(), tol);
     EXPECT_GE(out.s_rad, 0);
     EXPECT_LE(out.s_rad, c.arc.sweep_rad);
-    const Eigen::Vector3d p_V = c.torus.X_WV.inverse() * out.p_WN;
+    const Eigen::Vector3d p_V = c.torus.X_WV.inverse() * out.p_WD;
     const double omega = c.torus.segment_angle_rad;
     const bool on_end_plane = std::abs(p_V.y()) < tol ||
                               std::abs(p_V.x() * std::sin(omega) - p_V.y() * std::cos(omega)) < tol;
     EXPECT_TRUE(IsAzimuthInSegment(p_V.x(), p_V.y(), omega) || on_end_plane);
-    // p_WW is on the wall, at distance |clearance| from p_WN.
-    const Eigen::Vector3d w_V = c.torus.X_WV.inverse() * out.p_WW;
+    // p_WB is on the wall, at distance |clearance| from p_WD.
+    const Eigen::Vector3d w_V = c.torus.X_WV.inverse() * out.p_WB;
     EXPECT_NEAR(std::hypot(w_V.head<2>().norm() - R, w_V.z()), r, tol);
-    EXPECT_NEAR((out.p_WW - out.p_WN).norm(), std::abs(out.clearance_m), tol);
+    EXPECT_NEAR((out.p_WB - out.p_WD).norm(), std::abs(out.clearance_m), tol);
   }
 }
 

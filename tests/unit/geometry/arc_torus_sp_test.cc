@@ -674,11 +674,11 @@ TEST(ArcTorusSpTest, ClosestPointsAreConsistent) {
   ASSERT_EQ(sp.status, ClearanceStatus::kOk);
   const Eigen::Vector3d p_N(q.arc.radius_m * std::cos(sp.s_rad),
                             q.arc.radius_m * std::sin(sp.s_rad), 0);
-  EXPECT_LE((q.arc.X_WN * p_N - sp.p_WN).norm(), 1e-15);
+  EXPECT_LE((q.arc.X_WN * p_N - sp.p_WD).norm(), 1e-15);
   // The wall point is at distance r from the core circle and |clearance| from the needle point.
-  const Eigen::Vector3d w_V = q.torus.X_WV.inverse() * sp.p_WW;
+  const Eigen::Vector3d w_V = q.torus.X_WV.inverse() * sp.p_WB;
   EXPECT_NEAR(std::hypot(std::hypot(w_V.x(), w_V.y()) - 5e-3, w_V.z()), 0.5e-3, 1e-15);
-  EXPECT_NEAR((sp.p_WW - sp.p_WN).norm(), std::abs(sp.clearance_m), 1e-15);
+  EXPECT_NEAR((sp.p_WB - sp.p_WD).norm(), std::abs(sp.clearance_m), 1e-15);
 }
 
 }  // namespace

@@ -44,7 +44,7 @@ TEST(NetConvert, NeedleStateRoundTripAndFlag) {
   in.contact = true;
   in.s_rad = 1.1;
   in.p_WD = {1, 2, 3};
-  in.p_WW = {4, 5, 6};
+  in.p_WB = {4, 5, 6};
   msg::NeedleState m;
   ToMsg(in, m);
   EXPECT_EQ(m.contact(), 1);

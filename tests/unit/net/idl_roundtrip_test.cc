@@ -89,7 +89,7 @@ NeedleState MakeNeedleState() {
   m.contact(1);
   m.s_rad(0.7);
   m.p_WD({4e-3, 1e-3, 0});
-  m.p_WW({4.1e-3, 1e-3, 0});
+  m.p_WB({4.1e-3, 1e-3, 0});
   m.status(0);
   return m;
 }
