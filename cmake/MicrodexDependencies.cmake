@@ -21,3 +21,10 @@ target_include_directories(microdex::cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
 target_link_libraries(microdex::cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSECONFIG_LIBRARY})
 
 find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)
+
+# xxHash (XXH3) for the station state hash; Debian's libxxhash-dev ships no CMake config.
+find_path(XXHASH_INCLUDE_DIR xxhash.h REQUIRED)
+find_library(XXHASH_LIBRARY xxhash REQUIRED)
+add_library(microdex::xxhash INTERFACE IMPORTED)
+target_include_directories(microdex::xxhash INTERFACE ${XXHASH_INCLUDE_DIR})
+target_link_libraries(microdex::xxhash INTERFACE ${XXHASH_LIBRARY})
