@@ -34,7 +34,7 @@ CueSpec ParseCueSpec(const std::string& text) {
     throw std::invalid_argument("--cue '" + text + "': STATION must be 1..64 characters or 'all'");
   }
   const std::string kind = text.substr(c1 + 1, c2 - c1 - 1);
-  if (!net::ParseCueKind(kind, &spec.kind)) {
+  if (!cues::ParseCueKind(kind, &spec.kind)) {
     throw std::invalid_argument("--cue '" + text + "': KIND '" + kind +
                                 "' is not one of clear, convergent, divergent, tremor");
   }

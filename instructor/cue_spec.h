@@ -11,7 +11,7 @@ namespace microdex::instructor {
 
 struct CueSpec {
   std::string station;
-  net::CueKind kind = net::CueKind::kClear;
+  cues::CueKind kind = cues::CueKind::kClear;
   double param = 0;
   double at_s = 0;
 };

@@ -310,7 +310,7 @@ void Instructor::SendQueuedCues() {
   }
 }
 
-std::uint64_t Instructor::SendCue(const std::string& station_id, net::CueKind kind, double param,
+std::uint64_t Instructor::SendCue(const std::string& station_id, cues::CueKind kind, double param,
                                   std::uint64_t at_step) {
   if (station_id.empty() || station_id.size() > net::kMaxIdLength) {
     throw std::invalid_argument("cue target: expected a station id or 'all'");
@@ -402,10 +402,10 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
     }
     if (v.tool.latest) {
       age = static_cast<double>(now_ns - v.tool.received_ns) * 1e-6;
-      for (std::uint32_t k = 1; k < net::kCueKindCount; ++k) {
+      for (std::uint32_t k = 1; k < cues::kCueKindCount; ++k) {
         if ((v.tool.latest->active_cues >> k) & 1u) {
           if (!cues.empty()) cues += ',';
-          cues += net::CueKindName(net::CueKind(k));
+          cues += cues::CueKindName(cues::CueKind(k));
         }
       }
     }

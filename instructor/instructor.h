@@ -103,7 +103,7 @@ class Instructor {
 
   // Queues a cue for `station_id` (or net::kAllStations) applied at `at_step` (0: on
   // receipt); returns its cue id. Throws std::invalid_argument for a bad target.
-  std::uint64_t SendCue(const std::string& station_id, net::CueKind kind, double param,
+  std::uint64_t SendCue(const std::string& station_id, cues::CueKind kind, double param,
                         std::uint64_t at_step = 0);
 
   // Task events of every station received since the last call, in arrival order.

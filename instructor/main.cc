@@ -1,4 +1,4 @@
-// microdex-instructor: the instructor console, headless text view (DESIGN.md
+// microdex-instructor: the instructor console, headless text view (README.md
 // "Command-line contracts").
 #include <pthread.h>
 
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
         if (!sent[i] && t >= cues[i].at_s) {
           const auto id = console.SendCue(cues[i].station, cues[i].kind, cues[i].param);
           std::printf("[%7.3f] cue %llu sent: %s %s %g\n", t, static_cast<unsigned long long>(id),
-                      cues[i].station.c_str(), net::CueKindName(cues[i].kind), cues[i].param);
+                      cues[i].station.c_str(), cues::CueKindName(cues[i].kind), cues[i].param);
           sent[i] = true;
         }
       }

@@ -1,23 +1,24 @@
 #pragma once
-// The haptic thread's work: one step reads the device, applies the cues that are due, steps
-// the scene's modules, writes a finite saturated force, updates the score and pushes a
-// snapshot into the ring. Run() paces the steps on absolute deadlines of an injected clock.
+// The haptic thread's work: one tick reads the device, takes the cue requests that arrived,
+// runs one StepStation on the station's state, writes the force to the device, and pushes a
+// snapshot (a projection of the state) into the ring; every frame period the modules' large
+// frames, every hash period the state hash. Run() paces the ticks on absolute deadlines of an
+// injected clock.
 //
+// The loop owns the station's one StationState; nothing else holds simulation state.
 // Tick() and Run() never allocate, lock, log or block (beyond the clock's sleep): everything
 // is sized in the constructor. A test runs them under an allocation counter.
 
 #include <atomic>
 #include <memory>
-#include <vector>
 
-#include "common/cues/path_force_field.h"
-#include "common/cues/tremor_filter.h"
 #include "common/scene/scene.h"
+#include "common/state/station_state.h"
 #include "station/device.h"
-#include "station/module.h"
 #include "station/rt/clock.h"
 #include "station/rt/spsc_ring.h"
 #include "station/snapshot.h"
+#include "station/station_step.h"
 
 namespace microdex::station {
 
@@ -25,26 +26,25 @@ namespace microdex::station {
 struct StationRings {
   explicit StationRings(std::size_t snapshot_capacity = 4096, std::size_t cue_capacity = 64)
       : snapshots(snapshot_capacity), cues(cue_capacity) {}
-  rt::SpscRing<TickSnapshot> snapshots;  // producer: haptic thread; consumer: publisher thread
-  rt::SpscRing<CueRequest> cues;         // producer: publisher thread; consumer: haptic thread
-  LargeFrames frames;                    // producer: haptic thread; consumer: publisher thread
+  rt::SpscRing<TickSnapshot> snapshots;      // producer: haptic thread; consumer: publisher thread
+  rt::SpscRing<state::CueRequest> cues;      // producer: publisher thread; consumer: haptic thread
+  LargeFrames frames;                        // producer: haptic thread; consumer: publisher thread
 };
 
-// Cue limits: a request outside them is rejected before it reaches the haptic thread.
-inline constexpr double kMaxFieldStiffness_N_per_m = 2000;
-inline constexpr double kMaxTremorGain = 20;
-// Empty when the cue can be applied; otherwise why not.
-const char* CheckCue(net::CueKind kind, double param);
+struct HapticLoopConfig {
+  std::uint64_t seed = 1;
+  // The modules write their large frames (thread nodes, tissue field) every that many steps
+  // (the mirror period), starting at step 0.
+  int frame_period_steps = 16;
+  // The state hash is taken after every step whose index is a multiple of this (1000: once
+  // a second at 1 kHz, the telemetry's hash); 0: never.
+  int hash_period_steps = 1000;
+};
 
 class HapticLoop {
  public:
-  static constexpr int kMaxPendingCues = 32;
-
-  // frame_period_steps: the modules write their large frames (thread nodes, tissue field)
-  // every that many steps (the mirror period), starting at step 0.
-  HapticLoop(const scene::SceneModel& scene, Device& device,
-             std::vector<std::unique_ptr<Module>> modules, StationRings& rings, rt::Clock& clock,
-             int frame_period_steps = 16);
+  HapticLoop(const scene::SceneModel& scene, Device& device, StationRings& rings,
+             rt::Clock& clock, const HapticLoopConfig& config = {});
 
   // One step, started at tick_start_ns (monotonic) with the given period since the previous
   // start; stamp_ns is the CLOCK_REALTIME source stamp.
@@ -57,53 +57,30 @@ class HapticLoop {
   void Run(const std::atomic<bool>& stop, std::uint64_t max_steps);
   static constexpr int kResyncPeriods = 10;
 
-  std::uint64_t step() const { return step_; }
+  std::uint64_t step() const { return state_.step; }
   std::uint64_t ring_dropped() const { return ring_dropped_.load(std::memory_order_relaxed); }
   std::uint64_t overruns() const { return overruns_; }
   const TickSnapshot& last_snapshot() const { return snap_; }
-  double dt_s() const { return dt_s_; }
+  double dt_s() const { return sim_.dt_s(); }
+  // The station's state and simulation, for tests and tools on the haptic thread's side (or
+  // after Run returned).
+  const state::StationState& state() const { return state_; }
+  const Simulation& simulation() const { return sim_; }
   // What module i's error estimate measures (a constant string; any thread may ask).
-  const char* module_error_kind(std::size_t i) const { return modules_[i]->error_kind(); }
-  // Module i, for tests and tools on the haptic thread's side (or after Run returned).
-  const Module& module(std::size_t i) const { return *modules_[i]; }
-  std::size_t module_count() const { return modules_.size(); }
+  const char* module_error_kind(std::size_t i) const { return sim_.module(i).error_kind(); }
+  std::size_t module_count() const { return sim_.module_count(); }
 
  private:
-  void TakeDueCues();
-  void ApplyCue(const CueRequest& cue);
-  void UpdateScore(const Eigen::Vector3d& p_device, TickSnapshot& s);
-
-  const scene::SceneModel& scene_;
+  Simulation sim_;
   Device& device_;
-  std::vector<std::unique_ptr<Module>> modules_;
   StationRings& rings_;
   rt::Clock& clock_;
-  double dt_s_;
+  HapticLoopConfig config_;
   std::int64_t period_ns_;
-  int frame_period_steps_;
-  std::uint64_t step_ = 0;
+  state::StationState state_;
   std::uint64_t overruns_ = 0;
   std::atomic<std::uint64_t> ring_dropped_{0};
-  std::uint32_t force_warnings_ = 0;
-
-  // Cues.
-  CueRequest pending_[kMaxPendingCues];
-  int pending_count_ = 0;
-  double field_stiffness_N_per_m_ = 0;  // > 0 convergent, < 0 divergent, 0 none
-  double tremor_gain_ = 1;
-  cues::IdealPath path_;
-  cues::TremorFilterModel tremor_filter_;
-  cues::TremorFilterState tremor_state_;
-
-  // Score and events. A fault episode (needle contact, overstretched thread, tissue pressed too
-  // hard) ends after kContactReleaseSteps steps without fault, so tremor at the limit does not
-  // count as hundreds of episodes.
-  static constexpr int kContactReleaseSteps = 50;
-  bool in_episode_ = false;
-  int steps_free_ = 0;
-  bool have_prev_ = false;
-  Eigen::Vector3d p_device_prev_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d p_ideal_prev_ = Eigen::Vector3d::Zero();
+  std::array<state::CueRequest, state::kMaxPendingCues> arrived_{};
   TickSnapshot snap_;
 };
 

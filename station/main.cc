@@ -1,4 +1,4 @@
-// microdex-station: one trainee station (DESIGN.md "Command-line contracts").
+// microdex-station: one trainee station (README.md "Command-line contracts").
 #include <pthread.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>

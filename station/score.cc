@@ -6,7 +6,7 @@
 
 namespace microdex::station {
 
-net::Score CalcScore(const scene::SceneModel& scene, const ScoreTotals& t) {
+net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& t) {
   net::Score s;
   s.duration_s = t.time_s;
   s.time_in_contact_s = t.time_in_contact_s;

@@ -1,6 +1,6 @@
 #pragma once
 // The task score of a needle-in-tube run, from the running totals the haptic thread keeps
-// (snapshot.h ScoreTotals). Simple and explainable:
+// (state::ScoreState). Simple and explainable:
 //   contact fraction  c = time in contact / time
 //   clearance factor  g = clamp(mean clearance / tube radius, 0, 1)
 //   score             = 100 (1 − c) (1 + g) / 2
@@ -11,10 +11,10 @@
 
 #include "common/net/messages.h"
 #include "common/scene/scene.h"
-#include "station/snapshot.h"
+#include "common/state/station_state.h"
 
 namespace microdex::station {
 
-net::Score CalcScore(const scene::SceneModel& scene, const ScoreTotals& totals);
+net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& totals);
 
 }  // namespace microdex::station

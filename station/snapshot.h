@@ -1,40 +1,29 @@
 #pragma once
 // What the haptic thread hands to the publisher thread after every step (through the
-// snapshot ring), and what the publisher hands to the haptic thread (cue requests through
-// the cue ring). Plain, fixed-size, trivially copyable: copying one never allocates.
+// snapshot ring): a projection of the station's state (ProjectSnapshot) plus the step's
+// timing, and the large frames of the thread and tissue once per mirror period. Plain,
+// fixed-size, trivially copyable: copying one never allocates. The conversion to the DDS
+// messages lives in the publisher (common/net's plain types), not here.
 
 #include <array>
 #include <cstdint>
 
-#include "common/net/messages.h"
+#include "common/state/station_state.h"
 #include "station/rt/triple_buffer.h"
 
 namespace microdex::station {
 
 inline constexpr int kMaxStationModules = 8;
-inline constexpr int kMaxAcksPerTick = 4;
+// Frame bounds: those of the DDS types (the publisher checks they agree).
+inline constexpr std::size_t kMaxFrameThreadNodes = 512;
+inline constexpr std::size_t kMaxFrameTissueNodes = 16384;
 
 using Vec3 = std::array<double, 3>;
 using Quat = std::array<double, 4>;  // (w, x, y, z)
 
-// A cue as it enters the haptic thread: applied at the first step >= apply_at_step.
-struct CueRequest {
-  std::uint64_t cue_id = 0;
-  net::CueKind kind = net::CueKind::kClear;
-  double param = 0;
-  std::uint64_t apply_at_step = 0;
-};
-
-// A cue applied during a step (reported back as a TaskEvent with that step).
-struct CueAck {
-  std::uint64_t cue_id = 0;
-  net::CueKind kind = net::CueKind::kClear;
-  double param = 0;
-};
-
 struct ModuleSample {
-  double step_time_s = 0;      // wall time of this module's step
-  double error_estimate = 0;   // module-defined; NaN when none this step
+  double step_time_s = 0;      // wall time of this module's step (telemetry, not state)
+  double error_estimate = 0;   // module-defined; NaN when none
   std::uint32_t warnings = 0;  // running count
 };
 
@@ -43,7 +32,7 @@ struct NeedleSnapshot {
   Quat q_WN{1, 0, 0, 0};
   double clearance_m = 0;
   std::uint8_t contact = 0;
-  std::uint8_t status = 0;  // net::ClearanceStatus
+  geometry::ClearanceStatus status = geometry::ClearanceStatus::kOk;
   double s_rad = 0;
   Vec3 p_WD{};
   Vec3 p_WB{};
@@ -54,7 +43,7 @@ struct ThreadFrame {
   std::uint64_t step = 0;
   std::int64_t stamp_ns = 0;
   int num_nodes = 0;
-  std::array<Vec3, net::kMaxThreadNodes> p_W{};  // node positions, world, m
+  std::array<Vec3, kMaxFrameThreadNodes> p_W{};  // node positions, world, m
   double max_strain = 0;
   int grasped_node = -1;
   Vec3 f_grasp_W{};  // thread on the tool, N
@@ -70,7 +59,7 @@ struct TissueFrame {
   std::uint32_t unknowns = 0;
   double max_displacement_m = 0;
   std::uint8_t status = 0;
-  std::array<float, net::kMaxTissueNodes> w_m{};  // x fastest
+  std::array<float, kMaxFrameTissueNodes> w_m{};  // x fastest
 };
 
 // Large states go through latest-value handoffs rather than the per-step snapshot ring (a
@@ -78,20 +67,6 @@ struct TissueFrame {
 struct LargeFrames {
   rt::TripleBuffer<ThreadFrame> thread;  // producer: haptic thread; consumer: publisher thread
   rt::TripleBuffer<TissueFrame> tissue;  // producer: haptic thread; consumer: publisher thread
-};
-
-// Running totals of the task score (station/score.h), updated every step.
-struct ScoreTotals {
-  double time_s = 0;
-  double time_in_contact_s = 0;
-  std::uint32_t contacts = 0;
-  double clearance_sum_m = 0;  // needle module only
-  std::uint64_t clearance_samples = 0;
-  double min_clearance_m = 0;
-  double path_length_m = 0;
-  double ideal_path_length_m = 0;
-  double tremor_sq_sum_m2 = 0;
-  std::uint64_t tremor_samples = 0;
 };
 
 struct TickSnapshot {
@@ -119,7 +94,7 @@ struct TickSnapshot {
   std::array<ModuleSample, kMaxStationModules> modules{};
   int module_count = 0;
   // Events of this step.
-  std::array<CueAck, kMaxAcksPerTick> acks{};
+  std::array<state::CueAck, state::kMaxAcksPerStep> acks{};
   int ack_count = 0;
   // A fault this step: needle contact with the wall, thread overstretched, tissue pressed too
   // hard. Fault episodes are the score's "contacts".
@@ -127,7 +102,9 @@ struct TickSnapshot {
   double fault_value = 0;            // of the first module at fault (clearance, strain, force)
   std::int8_t contact_event = 0;     // +1 fault episode began, -1 ended
   std::uint32_t force_warnings = 0;  // running count of non-finite forces replaced by zero
-  ScoreTotals score;
+  std::uint64_t state_hash = 0;  // CalcStateHash after this step, when has_state_hash
+  std::uint8_t has_state_hash = 0;
+  state::ScoreState score;
 };
 
 }  // namespace microdex::station

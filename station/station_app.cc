@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "common/scene/scene.h"
+#include "common/state/state_hash.h"
 #include "station/haptic_loop.h"
 #include "station/module.h"
 #include "station/rt/clock.h"
@@ -26,6 +27,12 @@ std::string JsonNumber(double v) {
   if (!std::isfinite(v)) return "null";
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string StateHashHex(std::uint64_t h) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
   return buf;
 }
 
@@ -82,23 +89,26 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
   f << "  \"modules\": [";
   for (std::size_t i = 0; i < scene.modules.size(); ++i) {
     const PeriodStats& m = pub.run_step_times(i);
+    const ModuleStatus status = loop.simulation().module(i).Status(loop.state());
     f << (i ? ", " : "") << "{\"name\": " << JsonString(scene.modules[i])
       << ", \"step_mean_us\": " << JsonNumber(m.mean_s() * 1e6)
       << ", \"step_p99_us\": " << JsonNumber(m.Quantile_s(0.99) * 1e6)
       << ", \"step_max_us\": " << JsonNumber(m.max_s() * 1e6)
       << ", \"error_kind\": " << JsonString(loop.module_error_kind(i))
-      << ", \"error_estimate\": " << JsonNumber(loop.module(i).error_estimate())
-      << ", \"warnings\": " << loop.module(i).warnings() << "}";
+      << ", \"error_estimate\": " << JsonNumber(status.error_estimate)
+      << ", \"warnings\": " << status.warnings << "}";
   }
   f << "],\n";
   f << "  \"cues_applied\": [";
   for (std::size_t i = 0; i < t.cues_applied.size(); ++i) {
-    const AppliedCue& c = t.cues_applied[i];
-    f << (i ? ", " : "") << "{\"cue_id\": " << c.cue_id
-      << ", \"kind\": " << JsonString(net::CueKindName(c.kind))
-      << ", \"param\": " << JsonNumber(c.param) << ", \"step\": " << c.step << "}";
+    const AppliedCue& a = t.cues_applied[i];
+    f << (i ? ", " : "") << "{\"cue_id\": " << a.cue.cue_id
+      << ", \"kind\": " << JsonString(cues::CueKindName(a.cue.kind))
+      << ", \"param\": " << JsonNumber(a.cue.param) << ", \"step\": " << a.step << "}";
   }
-  f << "],\n  \"cues_rejected\": " << t.cues_rejected << "\n}\n";
+  f << "],\n  \"cues_rejected\": " << t.cues_rejected << ",\n";
+  f << "  \"state_hash\": \"" << StateHashHex(state::CalcStateHash(loop.state())) << "\",\n";
+  f << "  \"state_hash_version\": " << state::kStateHashVersion << "\n}\n";
 }
 
 }  // namespace
@@ -123,7 +133,6 @@ std::string StationOptions::Validate() const {
 
 int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   const scene::SceneModel scene = scene::LoadScene(o.scene_path);
-  std::vector<std::unique_ptr<Module>> modules = MakeModules(scene);
   SimTraineeDef trainee_def;
   trainee_def.skill = o.skill;
   trainee_def.seed = o.seed;
@@ -144,7 +153,10 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   // The modules write their large frames once per mirror period.
   const int frame_period_steps =
       static_cast<int>(std::max(1L, std::lround(scene.haptic.rate_hz / o.mirror_rate_hz)));
-  HapticLoop loop(scene, device, std::move(modules), rings, clock, frame_period_steps);
+  HapticLoopConfig lc;
+  lc.seed = o.seed;
+  lc.frame_period_steps = frame_period_steps;
+  HapticLoop loop(scene, device, rings, clock, lc);
 
   PublisherConfig pc;
   pc.station_id = o.station_id;

@@ -24,6 +24,9 @@
 
 namespace microdex::station {
 
+static_assert(kMaxFrameThreadNodes == net::kMaxThreadNodes, "frame bound = ThreadState bound");
+static_assert(kMaxFrameTissueNodes == net::kMaxTissueNodes, "frame bound = TissueState bound");
+
 namespace dds = eprosima::fastdds::dds;
 using eprosima::fastrtps::types::ReturnCode_t;
 
@@ -67,6 +70,19 @@ rt::MonotonicClock& SystemClock() {
 Eigen::Vector3d E(const Vec3& v) { return {v[0], v[1], v[2]}; }
 Eigen::Quaterniond Q(const Quat& q) { return {q[0], q[1], q[2], q[3]}; }
 
+// The geometry's clearance status as the message's, enumerator by enumerator.
+net::ClearanceStatus ToNet(geometry::ClearanceStatus status) {
+  switch (status) {
+    case geometry::ClearanceStatus::kOk:
+      return net::ClearanceStatus::kOk;
+    case geometry::ClearanceStatus::kEmptyRange:
+      return net::ClearanceStatus::kEmptyRange;
+    case geometry::ClearanceStatus::kInvalidInput:
+      return net::ClearanceStatus::kInvalidInput;
+  }
+  return net::ClearanceStatus::kInvalidInput;
+}
+
 }  // namespace
 
 StationPublisher::StationPublisher(const PublisherConfig& config, const net::DdsOptions& dds,
@@ -88,11 +104,11 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   }
   if (scene.HasModule("thread")) {
     w_->thread = dds_->CreateWriter<msg::ThreadStatePubSubType>(net::kThreadStateTopic);
-    w_->thread_plain.nodes.reserve(net::kMaxThreadNodes);
+    w_->thread_plain.nodes.reserve(kMaxFrameThreadNodes);
   }
   if (scene.HasModule("tissue")) {
     w_->tissue = dds_->CreateWriter<msg::TissueStatePubSubType>(net::kTissueStateTopic);
-    w_->tissue_plain.displacement_m.reserve(net::kMaxTissueNodes);
+    w_->tissue_plain.displacement_m.reserve(kMaxFrameTissueNodes);
     const scene::TissueSceneDef& t = *scene.tissue;
     w_->tissue_plain.p_WS = t.X_WS.translation();
     w_->tissue_plain.q_WS = Eigen::Quaterniond(t.X_WS.linear());
@@ -181,7 +197,7 @@ void StationPublisher::HandleCues() {
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param, why_not);
       continue;
     }
-    CueRequest request{cue.cue_id, cue.kind, cue.param, cue.header.step};
+    state::CueRequest request{cue.cue_id, cue.kind, cue.param, cue.header.step};
     if (!rings_.cues.TryPush(request)) {
       ++totals_.cues_rejected;
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param,
@@ -203,6 +219,11 @@ void StationPublisher::Drain() {
       ++window_overruns_;
     }
     ++window_ticks_;
+    if (s.has_state_hash) {
+      totals_.has_state_hash = true;
+      totals_.state_hash_step = s.step;
+      totals_.state_hash = s.state_hash;
+    }
     for (int i = 0; i < s.module_count && i < static_cast<int>(window_step_time_sum_s_.size());
          ++i) {
       window_step_time_sum_s_[i] += s.modules[i].step_time_s;
@@ -222,10 +243,10 @@ void StationPublisher::Drain() {
       ++totals_.input_write_failed;
     }
     for (int i = 0; i < s.ack_count; ++i) {
-      const CueAck& a = s.acks[i];
-      totals_.cues_applied.push_back({a.cue_id, a.kind, a.param, s.step});
+      const state::CueAck& a = s.acks[i];
+      totals_.cues_applied.push_back({a, s.step});
       PublishEvent(net::TaskEventKind::kCueApplied, s.step, a.cue_id, a.param,
-                   net::CueKindName(a.kind));
+                   cues::CueKindName(a.kind));
     }
     // Value: the needle's clearance, else the faulting module's strain or force.
     const double event_value = s.has_needle ? s.needle.clearance_m : s.fault_value;
@@ -260,7 +281,7 @@ void StationPublisher::PublishMirror() {
     n.s_rad = s.needle.s_rad;
     n.p_WD = E(s.needle.p_WD);
     n.p_WB = E(s.needle.p_WB);
-    n.status = static_cast<net::ClearanceStatus>(s.needle.status);
+    n.status = ToNet(s.needle.status);
     net::ToMsg(n, w_->needle_msg);
     w_->needle->write(&w_->needle_msg);
   }
@@ -319,6 +340,9 @@ void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
   t.overruns = window_overruns_;
   t.ring_dropped = loop_.ring_dropped();
   t.realtime = config_.realtime;
+  t.has_state_hash = totals_.has_state_hash;
+  t.state_hash_step = totals_.state_hash_step;
+  t.state_hash = totals_.state_hash;
   for (std::size_t i = 0; i < scene_.modules.size(); ++i) {
     net::ModuleTelemetry m;
     m.name = scene_.modules[i];

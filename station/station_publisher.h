@@ -48,10 +48,9 @@ struct PublisherConfig {
   std::int64_t wake_offset_ns = 60'000;
 };
 
+// A cue as the haptic thread acknowledged it, with the step it took effect at.
 struct AppliedCue {
-  std::uint64_t cue_id = 0;
-  net::CueKind kind = net::CueKind::kClear;
-  double param = 0;
+  state::CueAck cue;
   std::uint64_t step = 0;
 };
 
@@ -61,6 +60,10 @@ struct PublisherTotals {
   std::uint64_t input_write_failed = 0;
   std::uint64_t overruns = 0;
   std::uint64_t cues_rejected = 0;
+  // The latest state hash the haptic thread took (once a second), and its step.
+  bool has_state_hash = false;
+  std::uint64_t state_hash_step = 0;
+  std::uint64_t state_hash = 0;
   std::vector<AppliedCue> cues_applied;
 };
 

@@ -58,13 +58,14 @@ Eigen::Matrix3Xd CalcSlackThreadNodes(const Eigen::Vector3d& p_W_a, const Eigen:
 ThreadModule::ThreadModule(const scene::SceneModel& scene)
     : max_force_N_(scene.haptic.max_force_N), max_strain_(scene.thread->max_strain) {
   const scene::ThreadSceneDef& d = *scene.thread;
-  if (d.def.num_nodes > static_cast<int>(net::kMaxThreadNodes)) {
+  if (d.def.num_nodes > static_cast<int>(kMaxFrameThreadNodes)) {
     throw std::runtime_error(scene.path + ": thread.params: " + d.params_path +
-                             ": num_nodes: expected <= " + std::to_string(net::kMaxThreadNodes) +
+                             ": num_nodes: expected <= " + std::to_string(kMaxFrameThreadNodes) +
                              " (the ThreadState bound)");
   }
   model_ = thread::MakeThreadModel(d.def);
-  state_ = thread::MakeThreadState(
+  ws_ = thread::MakeThreadWorkspace(model_);
+  initial_ = thread::MakeThreadState(
       model_, CalcSlackThreadNodes(d.p_W_anchor, scene.CalcIdealToolPose(0).translation(),
                                    d.slack_side_W, d.def.length_m, model_.num_nodes));
   if (std::isfinite(d.floor_height_m)) {
@@ -72,42 +73,53 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
         thread::Collider::Plane(Eigen::Vector3d(0, 0, d.floor_height_m), Eigen::Vector3d::UnitZ());
     num_colliders_ = 1;
   }
-  anchor_slot_ = thread::GraspNode(model_, 0, state_);
+  const int anchor_slot = thread::GraspNode(model_, 0, initial_);
   tool_node_ = model_.num_nodes - 1;
-  tool_slot_ = thread::GraspNode(model_, tool_node_, state_);
-  MICRODEX_CHECK(anchor_slot_ >= 0 && tool_slot_ >= 0);  // max_grasps >= 2 (scene validation)
+  tool_slot_ = thread::GraspNode(model_, tool_node_, initial_);
+  MICRODEX_CHECK(anchor_slot >= 0 && tool_slot_ >= 0);  // max_grasps >= 2 (scene validation)
 }
 
-void ThreadModule::Step(const ToolInput& in, Eigen::Vector3d& f_T_W) {
+void ThreadModule::InitState(state::StationState& s) const {
+  s.thread = state::ThreadModuleState{initial_, Eigen::Vector3d::Zero()};
+}
+
+void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& f_T_W) {
+  state::ThreadModuleState& t = *s.thread;
   // The grasped node follows the tool tip; its torsion follows the tool's roll about x.
   const Eigen::Matrix3d& R = in.X_WT.linear();
   const double roll_rad = std::atan2(R(2, 1), R(2, 2));
-  thread::SetGraspTarget(state_, tool_slot_, in.X_WT.translation(), roll_rad);
-  thread::StepThread(model_, std::span<const thread::Collider>(colliders_.data(), num_colliders_),
-                     state_);
-  f_tool_W_ = thread::GraspForce(state_, tool_slot_, max_force_N_);
-  f_T_W += f_tool_W_;
+  thread::SetGraspTarget(t.thread, tool_slot_, in.X_WT.translation(), roll_rad);
+  thread::StepThread(model_,
+                     std::span<const thread::Collider>(colliders_.data(), num_colliders_), ws_,
+                     t.thread);
+  t.f_tool_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
+  f_T_W += t.f_tool_W;
 }
 
-std::uint32_t ThreadModule::warnings() const {
-  const thread::ThreadStatus& s = state_.status;
-  return static_cast<std::uint32_t>(s.nonfinite_resets + s.factorization_failures +
-                                    s.contact_overflows);
+ModuleStatus ThreadModule::Status(const state::StationState& s) const {
+  const thread::ThreadStatus& st = s.thread->thread.status;
+  ModuleStatus out;
+  out.fault = st.max_strain > max_strain_;
+  out.fault_value = st.max_strain;
+  out.error_estimate = st.max_strain;
+  out.warnings =
+      static_cast<std::uint32_t>(st.nonfinite_resets + st.factorization_failures + st.contact_overflows);
+  return out;
 }
 
-void ThreadModule::WriteSnapshot(TickSnapshot& /*snapshot*/) const {}
-
-void ThreadModule::WriteFrame(std::uint64_t step, std::int64_t stamp_ns, LargeFrames& frames) {
+void ThreadModule::WriteFrame(const state::StationState& s, std::uint64_t step,
+                              std::int64_t stamp_ns, LargeFrames& frames) {
+  const state::ThreadModuleState& t = *s.thread;
   ThreadFrame& f = frames.thread.back();
   f.step = step;
   f.stamp_ns = stamp_ns;
   f.num_nodes = model_.num_nodes;
   for (int i = 0; i < model_.num_nodes; ++i) {
-    f.p_W[i] = {state_.x_W(0, i), state_.x_W(1, i), state_.x_W(2, i)};
+    f.p_W[i] = {t.thread.x_W(0, i), t.thread.x_W(1, i), t.thread.x_W(2, i)};
   }
-  f.max_strain = state_.status.max_strain;
+  f.max_strain = t.thread.status.max_strain;
   f.grasped_node = tool_node_;
-  f.f_grasp_W = {f_tool_W_.x(), f_tool_W_.y(), f_tool_W_.z()};
+  f.f_grasp_W = {t.f_tool_W.x(), t.f_tool_W.y(), t.f_tool_W.z()};
   frames.thread.Publish();
 }
 

@@ -8,7 +8,8 @@
 // Telemetry: the largest link strain |l − r| / r after the step is the error estimate (the
 // links' inextensibility is the constraint the integrator keeps only approximately), and
 // rolled-back steps and contact overflows are the warnings. A strain above the scene's
-// max_strain is a fault (an overstretched suture).
+// max_strain is a fault (an overstretched suture). State: state::ThreadModuleState (the
+// thread's nodes, velocities, torsion, grasps, status, and the force on the tool).
 
 #include <array>
 
@@ -28,35 +29,29 @@ Eigen::Matrix3Xd CalcSlackThreadNodes(const Eigen::Vector3d& p_W_a, const Eigen:
 class ThreadModule final : public Module {
  public:
   // Throws std::runtime_error naming the scene field when the thread does not fit the
-  // published bound (net::kMaxThreadNodes nodes).
+  // published bound (kMaxFrameThreadNodes nodes).
   explicit ThreadModule(const scene::SceneModel& scene);
   const char* name() const override { return "thread"; }
-  void Step(const ToolInput& in, Eigen::Vector3d& f_T_W) override;
-  void WriteSnapshot(TickSnapshot& snapshot) const override;
-  void WriteFrame(std::uint64_t step, std::int64_t stamp_ns, LargeFrames& frames) override;
-  double error_estimate() const override { return state_.status.max_strain; }
   const char* error_kind() const override { return "max_link_strain"; }
-  std::uint32_t warnings() const override;
-  bool fault() const override { return state_.status.max_strain > max_strain_; }
-  double fault_value() const override { return state_.status.max_strain; }
+  void InitState(state::StationState& state) const override;
+  void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) override;
+  ModuleStatus Status(const state::StationState& state) const override;
+  void WriteFrame(const state::StationState& state, std::uint64_t step, std::int64_t stamp_ns,
+                  LargeFrames& frames) override;
 
   const thread::ThreadModel& model() const { return model_; }
-  const thread::ThreadState& state() const { return state_; }
   int tool_slot() const { return tool_slot_; }
-  // The force rendered for the tool after the last step (saturated), N.
-  const Eigen::Vector3d& f_tool_W() const { return f_tool_W_; }
 
  private:
   thread::ThreadModel model_;
-  thread::ThreadState state_;
+  thread::ThreadState initial_;  // at the task's start, both ends grasped
+  thread::ThreadWorkspace ws_;
   std::array<thread::Collider, 1> colliders_;
   int num_colliders_ = 0;
-  int anchor_slot_ = -1;
   int tool_slot_ = -1;
   int tool_node_ = -1;
   double max_force_N_;
   double max_strain_;
-  Eigen::Vector3d f_tool_W_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace microdex::station

@@ -9,7 +9,6 @@ namespace microdex::station {
 TissueModule::TissueModule(const scene::SceneModel& scene)
     : model_(fem::BuildTissueModel(scene.tissue->def)),
       ws_(model_),
-      state_(fem::MakeTissueState(model_)),
       X_SW_(scene.tissue->X_WS.inverse()),
       R_WS_(scene.tissue->X_WS.linear()),
       tool_kind_(scene.tissue->tool),
@@ -18,11 +17,16 @@ TissueModule::TissueModule(const scene::SceneModel& scene)
       display_level_(scene.tissue->display_level),
       max_force_N_(scene.tissue->max_force_N) {
   const std::size_t side = (std::size_t{1} << display_level_) + 1;
-  MICRODEX_CHECK(side * side <= net::kMaxTissueNodes);  // display_level <= 6 (scene)
+  MICRODEX_CHECK(side * side <= kMaxFrameTissueNodes);  // display_level <= 6 (scene)
   grid_m_.assign(side * side, 0.0);
 }
 
-void TissueModule::Step(const ToolInput& in, Eigen::Vector3d& f_T_W) {
+void TissueModule::InitState(state::StationState& s) const {
+  s.tissue = state::TissueModuleState{fem::MakeTissueState(model_), Eigen::Vector3d::Zero()};
+}
+
+void TissueModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& f_T_W) {
+  state::TissueModuleState& t = *s.tissue;
   const Eigen::Vector3d p_ST = X_SW_ * in.X_WT.translation();
   if (tool_kind_ == scene::TissueToolKind::kPoint) {
     tool_ = fem::MakePointTool(p_ST, contact_radius_m_);
@@ -30,34 +34,44 @@ void TissueModule::Step(const ToolInput& in, Eigen::Vector3d& f_T_W) {
     const Eigen::Vector3d u_S = X_SW_.linear() * in.X_WT.linear().col(0);
     tool_ = fem::MakeBarTool(p_ST - half_bar_m_ * u_S, p_ST + half_bar_m_ * u_S);
   }
-  fem::StepTissue(model_, tool_, ws_, state_);
-  if (!state_.stats.pattern_reused) ++mesh_revision_;
+  fem::StepTissue(model_, tool_, ws_, t.tissue);
+  if (!ws_.stats.pattern_reused) ++mesh_revision_;
   // A failed step keeps the last good field and force (StepTissue), so the force stays
-  // continuous; the failure is counted in warnings().
-  f_tool_W_ = R_WS_ * state_.f_T_S;
-  if (!f_tool_W_.allFinite()) f_tool_W_.setZero();
-  f_T_W += f_tool_W_;
+  // continuous; the failure is counted in the state's num_failed_steps.
+  t.f_tool_W = R_WS_ * t.tissue.f_T_S;
+  if (!t.f_tool_W.allFinite()) t.f_tool_W.setZero();
+  f_T_W += t.f_tool_W;
 }
 
-void TissueModule::WriteSnapshot(TickSnapshot& /*snapshot*/) const {}
+ModuleStatus TissueModule::Status(const state::StationState& s) const {
+  const state::TissueModuleState& t = *s.tissue;
+  ModuleStatus out;
+  out.fault = t.f_tool_W.norm() > max_force_N_;
+  out.fault_value = t.f_tool_W.norm();
+  out.error_estimate = ws_.stats.relative_residual;
+  out.warnings = t.tissue.num_failed_steps;
+  return out;
+}
 
-void TissueModule::WriteFrame(std::uint64_t step, std::int64_t stamp_ns, LargeFrames& frames) {
+void TissueModule::WriteFrame(const state::StationState& s, std::uint64_t step,
+                              std::int64_t stamp_ns, LargeFrames& frames) {
+  const fem::TissueState& state = s.tissue->tissue;
   TissueFrame& f = frames.tissue.back();
-  fem::CalcDisplacementGrid(model_, state_, display_level_, grid_m_);  // same size: no allocation
+  fem::CalcDisplacementGrid(model_, state, display_level_, grid_m_);  // same size: no allocation
   const std::uint32_t side = (1u << display_level_) + 1;
   f.step = step;
   f.stamp_ns = stamp_ns;
   f.nodes_x = side;
   f.nodes_y = side;
   f.mesh_revision = mesh_revision_;
-  f.unknowns = static_cast<std::uint32_t>(state_.stats.unknowns);
-  f.status = static_cast<std::uint8_t>(state_.status);
+  f.unknowns = static_cast<std::uint32_t>(ws_.stats.unknowns);
+  f.status = static_cast<std::uint8_t>(state.status);
   for (std::size_t i = 0; i < grid_m_.size(); ++i) f.w_m[i] = static_cast<float>(grid_m_[i]);
   // The field is harmonic off the contact nodes and zero on the edges, so its largest
   // magnitude is at a contact node (maximum principle).
   double w_max = 0;
-  for (int c = 0; c < state_.num_contacts; ++c) {
-    w_max = std::max(w_max, std::abs(state_.w_m[state_.contact_nodes[c]]));
+  for (int c = 0; c < state.num_contacts; ++c) {
+    w_max = std::max(w_max, std::abs(state.w_m[state.contact_nodes[c]]));
   }
   f.max_displacement_m = w_max;
   frames.tissue.Publish();

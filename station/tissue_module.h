@@ -8,6 +8,8 @@
 // and failed steps (which keep the last good field and force) are the warnings. A reaction
 // above the scene's max_force_N is a fault (pressing too hard). Every mirror period the field
 // is sampled on the display grid (uniform, level display_level) into the tissue frame.
+// State: state::TissueModuleState (the displacement field, the last mesh and contacts, the
+// force on the tool).
 
 #include <vector>
 
@@ -21,27 +23,25 @@ class TissueModule final : public Module {
  public:
   explicit TissueModule(const scene::SceneModel& scene);
   const char* name() const override { return "tissue"; }
-  void Step(const ToolInput& in, Eigen::Vector3d& f_T_W) override;
-  void WriteSnapshot(TickSnapshot& snapshot) const override;
-  void WriteFrame(std::uint64_t step, std::int64_t stamp_ns, LargeFrames& frames) override;
-  double error_estimate() const override { return state_.stats.relative_residual; }
   const char* error_kind() const override { return "relative_residual"; }
-  std::uint32_t warnings() const override { return state_.num_failed_steps; }
-  bool fault() const override { return f_tool_W_.norm() > max_force_N_; }
-  double fault_value() const override { return f_tool_W_.norm(); }
+  void InitState(state::StationState& state) const override;
+  void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) override;
+  ModuleStatus Status(const state::StationState& state) const override;
+  void WriteFrame(const state::StationState& state, std::uint64_t step, std::int64_t stamp_ns,
+                  LargeFrames& frames) override;
 
   const fem::TissueModel& model() const { return model_; }
-  const fem::TissueState& state() const { return state_; }
+  // The tool as the last step saw it (derived from the tool pose each step).
   const fem::ToolContact& tool() const { return tool_; }
-  // The force of the tissue on the tool after the last step, world frame, N (unsaturated).
-  const Eigen::Vector3d& f_tool_W() const { return f_tool_W_; }
-  // Changes whenever the step's mesh selection changes.
+  // The last step's cost and solver report (telemetry).
+  const fem::TissueStepStats& stats() const { return ws_.stats; }
+  // Counts the steps whose mesh selection was not in the workspace's cache: a display hint
+  // for the view (rebuild the mesh), not simulation state.
   std::uint32_t mesh_revision() const { return mesh_revision_; }
 
  private:
   fem::TissueModel model_;
   fem::TissueWorkspace ws_;
-  fem::TissueState state_;
   fem::ToolContact tool_;
   Eigen::Isometry3d X_SW_;
   Eigen::Matrix3d R_WS_;
@@ -52,7 +52,6 @@ class TissueModule final : public Module {
   double max_force_N_;
   std::vector<double> grid_m_;  // display grid, sized once
   std::uint32_t mesh_revision_ = 0;
-  Eigen::Vector3d f_tool_W_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace microdex::station

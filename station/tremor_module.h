@@ -1,10 +1,10 @@
 #pragma once
-// The tremor module: measures the trainee's physiological tremor (the 8–12 Hz band of the raw
-// device motion, common/cues/tremor_filter.h) as a running RMS over about one second. Feeds
-// the tool state (tremor_rms_m), the score, and the "tremor control" primitive (thesis §2.2,
-// Fig. 2.2a). It adds no force.
+// The tremor module: measures the trainee's physiological tremor — the 8–12 Hz band of the
+// raw device motion, which the station filters once per step for every scene
+// (state.cues.tremor_band_m, common/cues/tremor_filter.h) — as a running RMS over about one
+// second. Feeds the tool state (tremor_rms_m), the score, and the "tremor control" primitive
+// (thesis §2.2, Fig. 2.2a). It adds no force. State: state::TremorState.
 
-#include "common/cues/tremor_filter.h"
 #include "station/module.h"
 
 namespace microdex::station {
@@ -15,17 +15,12 @@ class TremorModule final : public Module {
 
   explicit TremorModule(const scene::SceneModel& scene);
   const char* name() const override { return "tremor"; }
-  void Step(const ToolInput& in, Eigen::Vector3d& f_T_W) override;
-  void WriteSnapshot(TickSnapshot& snapshot) const override;
-
-  double rms_m() const { return std::sqrt(mean_square_m2_); }
+  void InitState(state::StationState& state) const override { state.tremor.emplace(); }
+  void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) override;
+  ModuleStatus Status(const state::StationState& state) const override;
 
  private:
-  cues::TremorFilterModel filter_;
-  cues::TremorFilterState state_;
   double alpha_;  // exponential-average weight per step
-  double band_m_ = 0;
-  double mean_square_m2_ = 0;
 };
 
 }  // namespace microdex::station

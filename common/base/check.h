@@ -1,5 +1,5 @@
 #pragma once
-// Always-on programming-invariant checks (tier 1 of STYLE.md §10).
+// Always-on programming-invariant checks (README.md "Errors": programming errors abort).
 // A failed check is a bug: it prints file, line and condition and aborts, in release
 // builds too. Bad input is not checked here: it gets an exception at load time or a
 // status value inside the loop.

@@ -67,7 +67,10 @@ struct TissueDef {
   // ends are rounded). 0 disables.
   double end_resolution = 64;
   int end_levels = 2;
-  SolverKind solver = SolverKind::kCholmod;
+  // The default is the one a station can run: CHOLMOD's analysis and factorisation allocate
+  // whenever the mesh selection changes (almost every tick under a moving tool), IC(0) CG
+  // allocates nothing. Benches and reference studies choose cholmod explicitly.
+  SolverKind solver = SolverKind::kPcgIc;
   Ordering ordering = Ordering::kNestedDissection;
   double cg_relative_tolerance = 1e-8;  // ‖b − K u‖ / ‖b‖ at which CG stops
   int cg_max_iterations = 20000;

@@ -378,7 +378,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   TissueStepStats stats;
   if (!ToolIsFinite(tool)) {
     stats.total_us = Microseconds(t_begin, Clock::now());
-    state.stats = stats;
+    ws.stats = stats;
     Fail(state, TissueStatus::kBadInput);
     return;
   }
@@ -407,7 +407,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   stats.leaves = mesh.num_leaves;
   if (!contacts_fit) {
     stats.select_us = stats.total_us = Microseconds(t_begin, Clock::now());
-    state.stats = stats;
+    ws.stats = stats;
     Fail(state, TissueStatus::kTooManyContacts);
     return;
   }
@@ -516,7 +516,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   stats.solve_us = Microseconds(t_assembled, t_solved);
   if (!IsGood(status)) {
     stats.total_us = Microseconds(t_begin, t_solved);
-    state.stats = stats;
+    ws.stats = stats;
     Fail(state, status);
     return;
   }
@@ -548,7 +548,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   }
   if (!f_T_S.allFinite() || !tau_T_S.allFinite()) {
     stats.total_us = Microseconds(t_begin, Clock::now());
-    state.stats = stats;
+    ws.stats = stats;
     Fail(state, TissueStatus::kNonFinite);
     return;
   }
@@ -571,7 +571,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   const Clock::time_point t_end = Clock::now();
   stats.forces_us = Microseconds(t_solved, t_end);
   stats.total_us = Microseconds(t_begin, t_end);
-  state.stats = stats;
+  ws.stats = stats;
 }
 
 void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, int level,

@@ -63,7 +63,6 @@ struct TissueState {
   Eigen::Vector3d tau_T_S = Eigen::Vector3d::Zero();  // its torque about tool.p_ST, N·m (z = 0)
   TissueStatus status = TissueStatus::kNoContact;     // of the latest step
   std::uint32_t num_failed_steps = 0;
-  TissueStepStats stats;
 };
 TissueState MakeTissueState(const TissueModel& model);
 
@@ -110,13 +109,15 @@ struct TissueWorkspace {
   bool ic_valid = false;
   CgWorkspace cg;
   std::unique_ptr<CholmodSolver> cholmod;
+  // The last step's cost and solver report (wall-clock timings: telemetry, not state).
+  TissueStepStats stats;
   // When false every step re-assembles the values and re-factorises even if the pattern is
   // cached (the thesis's per-step assembly); the symbolic analysis is reused either way.
   bool reuse_values = true;
 };
 
 // Reads the tool and the state's last good field (warm start); writes the state: displacement
-// field, contact forces, f_T_S, tau_T_S, status and stats. On failure the state keeps the
+// field, contact forces, f_T_S, tau_T_S, status; and ws.stats. On failure the state keeps the
 // last good field and forces and records the status. Allocation-free after the first steps
 // of each pattern (CHOLMOD analysis of a new pattern allocates inside CHOLMOD).
 void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,

@@ -3,7 +3,7 @@
 // vessel, a segment of a torus. Every method (SP, exact, sampled, mesh) answers the same
 // question with the same types, so the station, the cues and the benchmark can swap them.
 //
-// Clearance (../shared/DESIGN.md): the minimum, over the needle points whose azimuth in the
+// Clearance: the minimum, over the needle points whose azimuth in the
 // tube frame lies in [0, segment_angle], of r − distance(point, core circle). Positive: the
 // needle is inside the tube by that margin; ≤ 0: it touches or crosses the wall.
 

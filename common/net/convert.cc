@@ -81,29 +81,87 @@ void CheckModuleName(const std::string& s) { MICRODEX_CHECK(s.size() <= kMaxModu
 
 }  // namespace
 
-const char* CueKindName(CueKind kind) {
+namespace {
+
+// Cue kinds cross the IDL by name: each enumerator maps to its namesake, never by number.
+msg::CueKind CueKindToMsg(cues::CueKind kind) {
   switch (kind) {
-    case CueKind::kClear:
-      return "clear";
-    case CueKind::kConvergentField:
-      return "convergent";
-    case CueKind::kDivergentField:
-      return "divergent";
-    case CueKind::kAmplifiedTremor:
-      return "tremor";
+    case cues::CueKind::kClear:
+      return msg::CUE_CLEAR;
+    case cues::CueKind::kConvergentField:
+      return msg::CUE_CONVERGENT_FIELD;
+    case cues::CueKind::kDivergentField:
+      return msg::CUE_DIVERGENT_FIELD;
+    case cues::CueKind::kAmplifiedTremor:
+      return msg::CUE_AMPLIFIED_TREMOR;
   }
-  return nullptr;
+  MICRODEX_CHECK(false);
+  return msg::CUE_CLEAR;
 }
 
-bool ParseCueKind(const std::string& name, CueKind* kind) {
-  for (std::uint32_t i = 0; i < kCueKindCount; ++i) {
-    if (name == CueKindName(static_cast<CueKind>(i))) {
-      *kind = static_cast<CueKind>(i);
+bool CueKindFromMsg(msg::CueKind in, cues::CueKind* kind) {
+  switch (in) {
+    case msg::CUE_CLEAR:
+      *kind = cues::CueKind::kClear;
       return true;
-    }
+    case msg::CUE_CONVERGENT_FIELD:
+      *kind = cues::CueKind::kConvergentField;
+      return true;
+    case msg::CUE_DIVERGENT_FIELD:
+      *kind = cues::CueKind::kDivergentField;
+      return true;
+    case msg::CUE_AMPLIFIED_TREMOR:
+      *kind = cues::CueKind::kAmplifiedTremor;
+      return true;
   }
   return false;
 }
+
+// Task events likewise.
+msg::TaskEventKind TaskEventKindToMsg(TaskEventKind kind) {
+  switch (kind) {
+    case TaskEventKind::kTaskStart:
+      return msg::EVENT_TASK_START;
+    case TaskEventKind::kTaskEnd:
+      return msg::EVENT_TASK_END;
+    case TaskEventKind::kCueApplied:
+      return msg::EVENT_CUE_APPLIED;
+    case TaskEventKind::kCueRejected:
+      return msg::EVENT_CUE_REJECTED;
+    case TaskEventKind::kContactBegin:
+      return msg::EVENT_CONTACT_BEGIN;
+    case TaskEventKind::kContactEnd:
+      return msg::EVENT_CONTACT_END;
+  }
+  MICRODEX_CHECK(false);
+  return msg::EVENT_TASK_START;
+}
+
+bool TaskEventKindFromMsg(msg::TaskEventKind in, TaskEventKind* kind) {
+  switch (in) {
+    case msg::EVENT_TASK_START:
+      *kind = TaskEventKind::kTaskStart;
+      return true;
+    case msg::EVENT_TASK_END:
+      *kind = TaskEventKind::kTaskEnd;
+      return true;
+    case msg::EVENT_CUE_APPLIED:
+      *kind = TaskEventKind::kCueApplied;
+      return true;
+    case msg::EVENT_CUE_REJECTED:
+      *kind = TaskEventKind::kCueRejected;
+      return true;
+    case msg::EVENT_CONTACT_BEGIN:
+      *kind = TaskEventKind::kContactBegin;
+      return true;
+    case msg::EVENT_CONTACT_END:
+      *kind = TaskEventKind::kContactEnd;
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
 
 const char* TaskEventKindName(TaskEventKind kind) {
   switch (kind) {
@@ -352,6 +410,9 @@ void ToMsg(const Telemetry& in, msg::Telemetry& out) {
   out.overruns(in.overruns);
   out.ring_dropped(in.ring_dropped);
   out.realtime(in.realtime ? 1 : 0);
+  out.has_state_hash(in.has_state_hash ? 1 : 0);
+  out.state_hash_step(in.state_hash_step);
+  out.state_hash(in.state_hash);
   out.modules().resize(in.modules.size());
   for (std::size_t i = 0; i < in.modules.size(); ++i) {
     const auto& m = in.modules[i];
@@ -375,6 +436,7 @@ bool FromMsg(const msg::Telemetry& in, Telemetry& out, std::string* why) {
   c.Finite(in.period_p99_s(), "period_p99_s");
   c.Finite(in.period_max_s(), "period_max_s");
   c.Flag(in.realtime(), "realtime");
+  c.Flag(in.has_state_hash(), "has_state_hash");
   if (in.modules().size() > kMaxTelemetryModules) c.Fail("modules: too many");
   if (!c.ok()) return false;
   out.window_s = in.window_s();
@@ -384,6 +446,9 @@ bool FromMsg(const msg::Telemetry& in, Telemetry& out, std::string* why) {
   out.period_max_s = in.period_max_s();
   out.overruns = in.overruns();
   out.ring_dropped = in.ring_dropped();
+  out.has_state_hash = in.has_state_hash() != 0;
+  out.state_hash_step = in.state_hash_step();
+  out.state_hash = in.state_hash();
   out.realtime = in.realtime() == 1;
   out.modules.resize(in.modules().size());
   for (std::size_t i = 0; i < in.modules().size(); ++i) {
@@ -402,10 +467,10 @@ bool FromMsg(const msg::Telemetry& in, Telemetry& out, std::string* why) {
 // ---- CueCommand ----
 void ToMsg(const CueCommand& in, msg::CueCommand& out) {
   HeaderToMsg(in.header, out);
-  MICRODEX_CHECK(static_cast<std::uint32_t>(in.kind) < kCueKindCount);
+
   MICRODEX_CHECK(in.issuer.size() <= kMaxIdLength);
   out.cue_id(in.cue_id);
-  out.kind(static_cast<msg::CueKind>(in.kind));
+  out.kind(CueKindToMsg(in.kind));
   out.param(in.param);
   out.issuer(in.issuer);
 }
@@ -413,11 +478,10 @@ void ToMsg(const CueCommand& in, msg::CueCommand& out) {
 bool FromMsg(const msg::CueCommand& in, CueCommand& out, std::string* why) {
   Checker c(why);
   HeaderFromMsg(in, out.header, c);
-  if (static_cast<std::uint32_t>(in.kind()) >= kCueKindCount) c.Fail("kind: unknown cue kind");
+  if (!CueKindFromMsg(in.kind(), &out.kind)) c.Fail("kind: unknown cue kind");
   c.Finite(in.param(), "param");
   c.String(S(in.issuer()), kMaxIdLength, "issuer");
   out.cue_id = in.cue_id();
-  out.kind = static_cast<CueKind>(in.kind());
   out.param = in.param();
   out.issuer = S(in.issuer());
   return c.ok();
@@ -427,7 +491,7 @@ bool FromMsg(const msg::CueCommand& in, CueCommand& out, std::string* why) {
 void ToMsg(const TaskEvent& in, msg::TaskEvent& out) {
   HeaderToMsg(in.header, out);
   MICRODEX_CHECK(in.text.size() <= kMaxTextLength);
-  out.kind(static_cast<msg::TaskEventKind>(in.kind));
+  out.kind(TaskEventKindToMsg(in.kind));
   out.cue_id(in.cue_id);
   out.value(in.value);
   out.text(in.text);
@@ -436,11 +500,8 @@ void ToMsg(const TaskEvent& in, msg::TaskEvent& out) {
 bool FromMsg(const msg::TaskEvent& in, TaskEvent& out, std::string* why) {
   Checker c(why);
   HeaderFromMsg(in, out.header, c);
-  if (static_cast<std::uint32_t>(in.kind()) >
-      static_cast<std::uint32_t>(TaskEventKind::kContactEnd))
-    c.Fail("kind: unknown event kind");
+  if (!TaskEventKindFromMsg(in.kind(), &out.kind)) c.Fail("kind: unknown event kind");
   c.String(S(in.text()), kMaxTextLength, "text");
-  out.kind = static_cast<TaskEventKind>(in.kind());
   out.cue_id = in.cue_id();
   out.value = in.value();
   out.text = S(in.text());

@@ -3,6 +3,7 @@
 // Physics, the station and the instructor use these; only common/net sees microdex::msg.
 // Bounds (kMax...) are those of the IDL; FromMsg rejects a sample that exceeds them.
 
+#include "common/cues/cue_kind.h"
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
@@ -115,25 +116,17 @@ struct Telemetry {
   std::uint64_t ring_dropped = 0;
   bool realtime = false;
   std::vector<ModuleTelemetry> modules;
+  // The latest state hash and the step after which it was taken (has_state_hash false until
+  // the first).
+  bool has_state_hash = false;
+  std::uint64_t state_hash_step = 0;
+  std::uint64_t state_hash = 0;
 };
-
-enum class CueKind : std::uint32_t {
-  kClear = 0,
-  kConvergentField = 1,  // param: stiffness, N/m
-  kDivergentField = 2,   // param: stiffness, N/m
-  kAmplifiedTremor = 3,  // param: gain >= 1
-};
-inline constexpr std::uint32_t kCueKindCount = 4;
-
-// "clear", "convergent", "divergent", "tremor"; nullptr for an unknown value.
-const char* CueKindName(CueKind kind);
-// The inverse; false for an unknown name.
-bool ParseCueKind(const std::string& name, CueKind* kind);
 
 struct CueCommand {
   Header header;  // station_id: the target station or kAllStations; step: 0 = on receipt
   std::uint64_t cue_id = 0;
-  CueKind kind = CueKind::kClear;
+  cues::CueKind kind = cues::CueKind::kClear;
   double param = 0;
   std::string issuer;
 };

@@ -1,5 +1,6 @@
 #pragma once
-// A scene: the immutable description of one training task (DESIGN.md principle 1), loaded
+// A scene: the immutable description of one training task (the scene is never changed
+// by a run; everything that changes is the station state, common/state), loaded
 // once from YAML and validated. It names the modules a station builds; a station builds only
 // those and publishes only their topics.
 //

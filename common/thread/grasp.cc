@@ -4,8 +4,9 @@ namespace microdex::thread {
 
 int GraspNode(const ThreadModel& model, int node, ThreadState& state) {
   if (node < 0 || node >= model.num_nodes) return -1;
-  ThreadScratch& w = state.scratch;
-  if (w.grasp_slot[node] >= 0) return w.grasp_slot[node];
+  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
+    if (state.grasps[slot].node == node) return slot;  // already held
+  }
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     Grasp& g = state.grasps[slot];
     if (g.node >= 0) continue;
@@ -13,7 +14,6 @@ int GraspNode(const ThreadModel& model, int node, ThreadState& state) {
     g.p_WT = state.x_W.col(node);
     g.roll_rad = state.q_rad[node];
     g.f_T_W.setZero();
-    w.grasp_slot[node] = slot;
     return slot;
   }
   return -1;
@@ -22,7 +22,6 @@ int GraspNode(const ThreadModel& model, int node, ThreadState& state) {
 void ReleaseGrasp(ThreadState& state, int slot) {
   if (slot < 0 || slot >= static_cast<int>(state.grasps.size())) return;
   Grasp& g = state.grasps[slot];
-  if (g.node >= 0) state.scratch.grasp_slot[g.node] = -1;
   g = Grasp{};
 }
 

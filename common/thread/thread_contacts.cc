@@ -25,8 +25,8 @@ Eigen::Vector3d FallbackNormal(const Eigen::Vector3d& da, const Eigen::Vector3d&
   return n.squaredNorm() > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ();
 }
 
-double InverseMass(const ThreadModel& model, const ThreadState& state, int node) {
-  return state.scratch.grasp_slot[node] >= 0 ? 0.0 : 1.0 / model.mass_kg[node];
+double InverseMass(const ThreadModel& model, const ThreadWorkspace& w, int node) {
+  return w.grasp_slot[node] >= 0 ? 0.0 : 1.0 / model.mass_kg[node];
 }
 
 }  // namespace
@@ -45,8 +45,7 @@ double ContactStiffness(const ThreadDef& def, double gap_m) {
 }
 
 void FindThreadContacts(const ThreadModel& model, std::span<const Collider> colliders,
-                        ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+                        ThreadWorkspace& w, ThreadState& state) {
   const Eigen::Matrix3Xd& x = state.x_W;
   RefitSphereBvh(model.bvh, x, model.bvh_inflate_m, w.spheres);
   const int capacity = model.contact_capacity;
@@ -102,9 +101,8 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
   state.status.num_object_contacts = n_obj;
 }
 
-void AddContactForces(const ThreadModel& model, ThreadState& state, Eigen::Matrix3Xd& f_W,
+void AddContactForces(const ThreadModel& model, ThreadWorkspace& w, Eigen::Matrix3Xd& f_W,
                       bool with_stiffness, int exact_pairs) {
-  ThreadScratch& w = state.scratch;
   const ThreadDef& def = model.def;
   if (with_stiffness) {
     w.k_contact.setZero();
@@ -142,10 +140,9 @@ void AddContactForces(const ThreadModel& model, ThreadState& state, Eigen::Matri
 }
 
 int ApplyNonPenetrationGuard(const ThreadModel& model, std::span<const Collider> colliders,
-                             double h, ThreadState& state) {
+                             double h, ThreadWorkspace& w, ThreadState& state) {
   const double fraction = model.def.guard_fraction;
   if (fraction <= 0.0) return 0;
-  ThreadScratch& w = state.scratch;
   Eigen::Matrix3Xd& x = state.x_W;
   const Eigen::Matrix3Xd& x0 = w.x_prev_W;
   const double min_dist = fraction * model.def.diameter_m;
@@ -155,11 +152,11 @@ int ApplyNonPenetrationGuard(const ThreadModel& model, std::span<const Collider>
   auto push = [&](const int* nodes, const double* g, int count, const Eigen::Vector3d& n,
                   double deficit) {
     double denom = 0.0;
-    for (int k = 0; k < count; ++k) denom += g[k] * g[k] * InverseMass(model, state, nodes[k]);
+    for (int k = 0; k < count; ++k) denom += g[k] * g[k] * InverseMass(model, w, nodes[k]);
     if (!(denom > 0.0)) return;
     const double lambda = deficit / denom;
     for (int k = 0; k < count; ++k) {
-      const Eigen::Vector3d dx = (lambda * g[k] * InverseMass(model, state, nodes[k])) * n;
+      const Eigen::Vector3d dx = (lambda * g[k] * InverseMass(model, w, nodes[k])) * n;
       x.col(nodes[k]) += dx;
       state.v_W.col(nodes[k]) += dx / h;
     }

@@ -67,12 +67,17 @@ ThreadState MakeThreadState(const ThreadModel& model, const Eigen::Matrix3Xd& x_
   s.q_rad = Eigen::VectorXd::Zero(n);
   s.qdot_rad_per_s = Eigen::VectorXd::Zero(n);
   s.grasps.assign(model.def.max_grasps, Grasp{});
-  ThreadScratch& w = s.scratch;
+  return s;
+}
+
+ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
+  const int n = model.num_nodes;
+  ThreadWorkspace w;
   w.f_W = Eigen::Matrix3Xd::Zero(3, n);
-  w.x_prev_W = x_W;
-  w.v_prev_W = s.v_W;
-  w.q_prev_rad = s.q_rad;
-  w.qdot_prev_rad_per_s = s.qdot_rad_per_s;
+  w.x_prev_W = Eigen::Matrix3Xd::Zero(3, n);
+  w.v_prev_W = Eigen::Matrix3Xd::Zero(3, n);
+  w.q_prev_rad = Eigen::VectorXd::Zero(n);
+  w.qdot_prev_rad_per_s = Eigen::VectorXd::Zero(n);
   w.tau_N_m = Eigen::VectorXd::Zero(n);
   w.k_contact = Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, n);
   w.c_contact_N_s_per_m = Eigen::VectorXd::Zero(n);
@@ -96,7 +101,7 @@ ThreadState MakeThreadState(const ThreadModel& model, const Eigen::Matrix3Xd& x_
   w.friction_p = Eigen::VectorXd::Zero(std::max(1, 2 * friction));
   w.friction_vt = Eigen::VectorXd::Zero(std::max(1, 2 * friction));
   w.friction_bound = Eigen::VectorXd::Zero(std::max(1, friction));
-  return s;
+  return w;
 }
 
 ThreadState MakeStraightThreadState(const ThreadModel& model, const Eigen::Vector3d& p0_W,

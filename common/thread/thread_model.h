@@ -84,8 +84,11 @@ struct ThreadStatus {
   double max_strain = 0.0;        // max |l - r| / r after the step
 };
 
-// Work arrays, sized once by MakeThreadState; no step resizes them.
-struct ThreadScratch {
+// The step's caches and work arrays (contact lists, the sphere BVH's spheres, the banded
+// system and its factor, the low-rank terms, the per-node grasp-slot map), sized once by
+// MakeThreadWorkspace; no step resizes them. Nothing in it carries over from one step to the
+// next: a state stepped with a fresh workspace continues exactly as with a warm one.
+struct ThreadWorkspace {
   Eigen::Matrix3Xd f_W;       // force per node
   Eigen::Matrix3Xd x_prev_W;  // state at the start of the step, for rollback
   Eigen::Matrix3Xd v_prev_W;
@@ -94,7 +97,7 @@ struct ThreadScratch {
   Eigen::VectorXd tau_N_m;                             // torsion torque per node
   Eigen::Matrix<double, 9, Eigen::Dynamic> k_contact;  // per node 3x3 contact stiffness bound
   Eigen::VectorXd c_contact_N_s_per_m;                 // per node extra contact damping
-  Eigen::VectorXi grasp_slot;                          // per node: grasp slot or -1
+  Eigen::VectorXi grasp_slot;  // per node: grasp slot or -1 (from state.grasps, each step)
   SphereBvhSpheres spheres;
   std::vector<LinkPair> pairs;
   std::vector<SelfContact> self_contacts;
@@ -122,6 +125,8 @@ struct ThreadScratch {
   Eigen::VectorXd friction_bound;
 };
 
+// Everything of the thread that determines its future, and nothing else (the workspace holds
+// the rest): a plain copyable value.
 struct ThreadState {
   double time_s = 0.0;
   Eigen::Matrix3Xd x_W;            // node positions
@@ -130,8 +135,10 @@ struct ThreadState {
   Eigen::VectorXd qdot_rad_per_s;  // torsion rates
   std::vector<Grasp> grasps;       // max_grasps slots
   ThreadStatus status;
-  ThreadScratch scratch;
 };
+
+// The workspace of a model's step, sized once.
+ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model);
 
 // A state at rest with the nodes at the given positions (3 x num_nodes), no grasp.
 ThreadState MakeThreadState(const ThreadModel& model, const Eigen::Matrix3Xd& x_W);

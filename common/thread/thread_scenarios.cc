@@ -71,6 +71,7 @@ SwingPullReport RunSwingPull(const ThreadDef& def, const SwingPullOptions& optio
   const ThreadModel model = MakeThreadModel(def);
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   const int slot_fixed = GraspNode(model, 0, state);
   const int slot_end = GraspNode(model, model.num_nodes - 1, state);
   MICRODEX_CHECK(slot_fixed >= 0 && slot_end >= 0);
@@ -99,7 +100,7 @@ SwingPullReport RunSwingPull(const ThreadDef& def, const SwingPullOptions& optio
     SetGraspTarget(state, slot_end, SwingPullTarget(k * h), 0.0);
     const std::int64_t trouble_before =
         state.status.nonfinite_resets + state.status.factorization_failures;
-    StepThreadWith(model, options.integrator, h, colliders, state);
+    StepThreadWith(model, options.integrator, h, colliders, ws, state);
     ++report.steps;
     if (state.status.nonfinite_resets + state.status.factorization_failures > trouble_before) {
       report.finite = false;
@@ -208,7 +209,7 @@ constexpr double kMaxHandSpeed_m_per_s = 0.02;
 
 KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& state,
                                  KnotTyingHands hands, const KnotThrowOptions& options)
-    : options_(options), hands_(hands) {
+    : options_(options), hands_(hands), ws_(MakeThreadWorkspace(model)) {
   options.Validate();
   MICRODEX_CHECK(hands.standing_slot >= 0 && hands.driver_slot >= 0);
   const int driver_node = state.grasps[hands.driver_slot].node;
@@ -325,7 +326,7 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
       phase_ = Phase::kPull;
       for (Collider& c : colliders_) c.enabled = false;
     }
-    StepThread(model, colliders_, state);
+    StepThread(model, colliders_, ws_, state);
     return true;
   }
   // Pull: both hands apart along x until each feels the pull tension.
@@ -335,7 +336,7 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
                  driver.roll_rad);
   SetGraspTarget(state, hands_.standing_slot, standing.p_WT - (sx_ * dx) * Eigen::Vector3d::UnitX(),
                  standing.roll_rad);
-  StepThread(model, colliders_, state);
+  StepThread(model, colliders_, ws_, state);
   if ((driver.f_T_W.norm() >= options_.pull_tension_N &&
        standing.f_T_W.norm() >= options_.pull_tension_N) ||
       pulled_m_ >= options_.max_pull_m) {

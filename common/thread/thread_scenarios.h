@@ -118,6 +118,7 @@ class KnotThrowScript {
   };
   KnotThrowOptions options_;
   KnotTyingHands hands_;
+  ThreadWorkspace ws_;
   std::vector<Collider> colliders_;
   std::vector<Waypoint> path_;
   int segment_ = 0;

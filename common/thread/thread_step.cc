@@ -11,8 +11,8 @@
 namespace microdex::thread {
 namespace {
 
-int ExactPairCount(const ThreadModel& model, const ThreadState& state) {
-  return std::min(state.scratch.num_self_contacts, model.exact_pair_capacity);
+int ExactPairCount(const ThreadModel& model, const ThreadWorkspace& w) {
+  return std::min(w.num_self_contacts, model.exact_pair_capacity);
 }
 
 // The nodes of self contact c, their weights g (node motion to gap change) and the pair's
@@ -30,7 +30,8 @@ PairTerm MakePairTerm(const SelfContact& sc) {
 
 // A solve column of the low-rank terms: the contact's nodes and weights along dir, with grasped
 // nodes' weights zeroed (their rows are identity rows holding a prescribed dv).
-NodeColumn MakeSolveColumn(const PairTerm& t, const Eigen::Vector3d& dir, const ThreadScratch& w) {
+NodeColumn MakeSolveColumn(const PairTerm& t, const Eigen::Vector3d& dir,
+                           const ThreadWorkspace& w) {
   NodeColumn c;
   c.count = 4;
   c.dir = dir;
@@ -43,7 +44,7 @@ NodeColumn MakeSolveColumn(const PairTerm& t, const Eigen::Vector3d& dir, const 
 
 // When there are more self contacts than the exact coupling or friction take, the deepest ones
 // (largest force) go first. std::sort does not allocate.
-void SortSelfContactsByDepth(const ThreadModel& model, ThreadScratch& w) {
+void SortSelfContactsByDepth(const ThreadModel& model, ThreadWorkspace& w) {
   const int n = w.num_self_contacts;
   const int exact = model.exact_pair_capacity, friction = model.friction_capacity;
   if (!((exact > 0 && n > exact) || (friction > 0 && n > friction))) return;
@@ -54,8 +55,8 @@ void SortSelfContactsByDepth(const ThreadModel& model, ThreadScratch& w) {
 // Stage: the friction contacts of this step: two unit tangents per contact (the columns with all
 // node weights: relative tangential velocity t^T sum_k g_k v_k) and the impulse bound
 // mu f_n h, f_n the normal force (5.9) at the start of the step.
-void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadWorkspace& w,
+                             ThreadState& state) {
   const ThreadDef& def = model.def;
   int nf = 0;
   auto add = [&](const int* nodes, const double* g, int count, const Eigen::Vector3d& n,
@@ -104,10 +105,9 @@ void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadState& st
 // Gauss-Seidel over the contacts: each contact takes the impulse that stops its slip, projected
 // onto the disc |p_c| <= mu f_n h (stick inside, slide at the rim). The implicit system's G,
 // not the node masses, is what resists: a node of a stiff chain is held by its neighbours.
-void SolveFriction(ThreadState& state, Eigen::VectorXd& dv) {
+void SolveFriction(ThreadWorkspace& w, ThreadState& state, Eigen::VectorXd& dv) {
   constexpr int kMaxSweeps = 50;
   constexpr double kTolerance = 1e-4;  // of the largest impulse bound, per sweep
-  ThreadScratch& w = state.scratch;
   const int nf = state.status.num_friction_contacts;
   const int nt = 2 * nf;
   const Eigen::Map<const Eigen::VectorXd> v(state.v_W.data(), state.v_W.size());
@@ -158,8 +158,8 @@ void SolveFriction(ThreadState& state, Eigen::VectorXd& dv) {
 // so stopping the slip with impulses distributed by inverse masses, capped at mu f_n h, is
 // Coulomb friction. Positions follow (x = x_prev + h v); grasped nodes do not move and pass
 // their share to the tool.
-void ApplyExplicitFriction(const ThreadModel& model, double h, ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+void ApplyExplicitFriction(const ThreadModel& model, double h, ThreadWorkspace& w,
+                           ThreadState& state) {
   const int nf = state.status.num_friction_contacts;
   for (int c = 0; c < nf; ++c) {
     const NodeColumn& c1 = w.friction_columns[2 * c];
@@ -197,8 +197,8 @@ void ApplyExplicitFriction(const ThreadModel& model, double h, ThreadState& stat
 
 // Stage: forces at the start of the step (5.3) without damping; torques (5.6). When system is
 // given, also h^2 K into it (stretch, bend) and the contact stiffness bounds into scratch.
-void CalcForces(const ThreadModel& model, ThreadState& state, BandedSpd* system, double h2) {
-  ThreadScratch& w = state.scratch;
+void CalcForces(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state, BandedSpd* system,
+                double h2) {
   w.f_W.setZero();
   AddStretchForces(model, state.x_W, w.f_W, system, h2);
   AddBendForces(model, state.x_W, w.f_W, system, h2);
@@ -206,15 +206,15 @@ void CalcForces(const ThreadModel& model, ThreadState& state, BandedSpd* system,
   AddGravityForces(model, w.f_W);
   // The implicit step couples the first self contacts exactly (ExactPairCount); the explicit
   // baseline keeps the thesis's per-node contact damping for all of them.
-  const int exact = system != nullptr ? ExactPairCount(model, state) : 0;
-  AddContactForces(model, state, w.f_W, /*with_stiffness=*/true, exact);
+  const int exact = system != nullptr ? ExactPairCount(model, w) : 0;
+  AddContactForces(model, w, w.f_W, /*with_stiffness=*/true, exact);
   CalcTwistTorques(model, state.q_rad, w.tau_N_m);
 }
 
 // Stage: (5.2) semi-implicit Euler. Grasped nodes move to their target; the tool's force is
 // what the node's equation of motion leaves over: f_T = (F - C v) - m a.
-void IntegrateSemiImplicit(const ThreadModel& model, double h, ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+void IntegrateSemiImplicit(const ThreadModel& model, double h, ThreadWorkspace& w,
+                           ThreadState& state) {
   for (int i = 0; i < model.num_nodes; ++i) {
     const double c = model.drag_N_s_per_m[i] + w.c_contact_N_s_per_m[i];
     const Eigen::Vector3d f = w.f_W.col(i) - c * state.v_W.col(i);  // (5.3) with (5.8)
@@ -239,8 +239,8 @@ void IntegrateSemiImplicit(const ThreadModel& model, double h, ThreadState& stat
 //   (M + h C + h^2 K) dv = h (F - C v) - h^2 K v,   v += dv,   x += h v,
 // K the clipped stretch Hessian, the small-angle bending stiffness and the contact bounds.
 // Grasped nodes are eliminated (their dv is prescribed); the tool force is their row's residual.
-bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspace& w,
+                               ThreadState& state) {
   const int n = model.num_nodes;
   const int p = model.half_bandwidth;
   BandedSpd& A = w.system;
@@ -263,7 +263,7 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& 
   // Exactly coupled self contacts: A += d u u^T, b -= d (u^T v) u with u = g (x) n and
   // d = h c + h^2 k (contact damping and stiffness of the pair, relative motion only). Columns
   // of grasped nodes hold a prescribed dv: their part moves to the free rows' right-hand side.
-  const int m = ExactPairCount(model, state);
+  const int m = ExactPairCount(model, w);
   state.status.num_exact_pairs = m;
   state.status.num_bound_pairs = w.num_self_contacts - m;
   for (int q = 0; q < m; ++q) {
@@ -344,7 +344,7 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& 
     const std::span<const NodeColumn> cols(w.columns.data(), m + 2 * nf);
     if (!w.low_rank.Prepare(A, cols, m, w.pair_d.data())) return false;
     w.low_rank.CorrectSolution(dv);
-    if (nf > 0) SolveFriction(state, dv);
+    if (nf > 0) SolveFriction(w, state, dv);
   }
   // Reaction: r = (A dv - b)_g / h is what the tool pushes with; the thread pushes back.
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
@@ -431,12 +431,12 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadState& 
 // links, each moving a link's free end nodes along it in inverse proportion to their masses
 // until its length is inside the band; grasped nodes do not move. Velocities follow the
 // positions (x = x_prev + h v), as in the guard.
-int LimitStrain(const ThreadModel& model, double h, ThreadState& state) {
+int LimitStrain(const ThreadModel& model, double h, ThreadWorkspace& w, ThreadState& state) {
   constexpr int kSweeps = 32;  // a correction travels one link per sweep; most steps need none
   const double limit = model.def.strain_limit;
   if (limit <= 0.0) return 0;
   Eigen::Matrix3Xd& x = state.x_W;
-  const Eigen::VectorXi& grasped = state.scratch.grasp_slot;
+  const Eigen::VectorXi& grasped = w.grasp_slot;
   int corrections = 0;
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     bool changed = false;
@@ -460,14 +460,13 @@ int LimitStrain(const ThreadModel& model, double h, ThreadState& state) {
   }
   if (corrections > 0) {
     for (int i = 0; i < model.num_nodes; ++i) {
-      if (grasped[i] < 0) state.v_W.col(i) = (x.col(i) - state.scratch.x_prev_W.col(i)) / h;
+      if (grasped[i] < 0) state.v_W.col(i) = (x.col(i) - w.x_prev_W.col(i)) / h;
     }
   }
   return corrections;
 }
 
-void RollBack(ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+void RollBack(ThreadWorkspace& w, ThreadState& state) {
   state.x_W = w.x_prev_W;
   state.v_W.setZero();
   state.q_rad = w.q_prev_rad;
@@ -475,52 +474,62 @@ void RollBack(ThreadState& state) {
   for (Grasp& g : state.grasps) g.f_T_W.setZero();
 }
 
+// Stage: the per-node grasp-slot map of the workspace, from the state's grasps.
+void RefreshGraspSlots(const ThreadState& state, ThreadWorkspace& w) {
+  w.grasp_slot.setConstant(-1);
+  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
+    const int node = state.grasps[slot].node;
+    if (node >= 0) w.grasp_slot[node] = slot;
+  }
+}
+
 }  // namespace
 
 void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
-                    std::span<const Collider> colliders, ThreadState& state) {
-  ThreadScratch& w = state.scratch;
+                    std::span<const Collider> colliders, ThreadWorkspace& w, ThreadState& state) {
+  RefreshGraspSlots(state, w);
   w.x_prev_W = state.x_W;
   w.v_prev_W = state.v_W;
   w.q_prev_rad = state.q_rad;
   w.qdot_prev_rad_per_s = state.qdot_rad_per_s;
-  FindThreadContacts(model, colliders, state);
+  FindThreadContacts(model, colliders, w, state);
   SortSelfContactsByDepth(model, w);
-  PrepareFrictionContacts(model, h, state);
+  PrepareFrictionContacts(model, h, w, state);
   bool ok = true;
   if (integrator == Integrator::kSemiImplicitEuler) {
-    CalcForces(model, state, nullptr, 0.0);
-    IntegrateSemiImplicit(model, h, state);
-    ApplyExplicitFriction(model, h, state);
+    CalcForces(model, w, state, nullptr, 0.0);
+    IntegrateSemiImplicit(model, h, w, state);
+    ApplyExplicitFriction(model, h, w, state);
   } else {
     w.system.SetZero();
-    CalcForces(model, state, &w.system, h * h);
-    ok = IntegrateLinearlyImplicit(model, h, state);
+    CalcForces(model, w, state, &w.system, h * h);
+    ok = IntegrateLinearlyImplicit(model, h, w, state);
     if (!ok) ++state.status.factorization_failures;
   }
   if (ok) {
-    state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, state);
+    state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, w, state);
     if (integrator == Integrator::kLinearlyImplicitEuler) {
       // After the guard: its projections stretch links too; the limit's moves along the
       // links are small and a second guard pass keeps the pairs apart.
-      const int limited = LimitStrain(model, h, state);
+      const int limited = LimitStrain(model, h, w, state);
       state.status.strain_corrections += limited;
       if (limited > 0) {
-        state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, state);
+        state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, w, state);
       }
     }
     ok = state.x_W.allFinite() && state.v_W.allFinite() && state.q_rad.allFinite() &&
          state.qdot_rad_per_s.allFinite();
     if (!ok) ++state.status.nonfinite_resets;
   }
-  if (!ok) RollBack(state);
+  if (!ok) RollBack(w, state);
   state.status.max_strain = CalcMaxStrain(model, state.x_W);
   state.time_s += h;
   ++state.status.steps;
 }
 
-void StepThread(const ThreadModel& model, std::span<const Collider> colliders, ThreadState& state) {
-  StepThreadWith(model, model.def.integrator, model.def.time_step_s, colliders, state);
+void StepThread(const ThreadModel& model, std::span<const Collider> colliders, ThreadWorkspace& w,
+                ThreadState& state) {
+  StepThreadWith(model, model.def.integrator, model.def.time_step_s, colliders, w, state);
 }
 
 }  // namespace microdex::thread

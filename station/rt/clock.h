@@ -1,6 +1,6 @@
 #pragma once
 // The haptic loop's time source, injected so tests run the loop without wall-clock time
-// (STYLE.md §13). MonotonicClock is the real one: absolute deadlines on CLOCK_MONOTONIC with
+// (time is a dependency like any other). MonotonicClock is the real one: absolute deadlines on CLOCK_MONOTONIC with
 // clock_nanosleep(TIMER_ABSTIME), source stamps from CLOCK_REALTIME. Neither allocates.
 
 #include <cstdint>

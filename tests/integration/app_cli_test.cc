@@ -1,4 +1,4 @@
-// The command-line contracts (DESIGN.md): bad input exits 2 with one line on stderr naming
+// The command-line contracts (README.md): bad input exits 2 with one line on stderr naming
 // the input; options of later issues are refused clearly rather than ignored.
 #include <gtest/gtest.h>
 

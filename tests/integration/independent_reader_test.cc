@@ -34,8 +34,8 @@ using eprosima::fastrtps::types::ReturnCode_t;
 constexpr int kDomain = 82;
 
 // Plain Fast DDS: the participant from the default profile of the loopback XML file given
-// by FASTRTPS_DEFAULT_PROFILES_FILE, endpoints from the XML profile names of DESIGN.md's
-// topic table.
+// by FASTRTPS_DEFAULT_PROFILES_FILE, endpoints from the XML profile names of the topic
+// table in common/net/README.md.
 class RawParticipant {
  public:
   RawParticipant() {

@@ -77,7 +77,7 @@ TEST_F(StationInstructorTest, DiscoveryCuesLivelinessRestartAndShutdown) {
   EXPECT_NE(st2->info.scene.find("needle_tube.yaml"), std::string::npos);
 
   // 2. A cue to st-2 only: applied there, acknowledged with its step, nowhere else.
-  const std::uint64_t cue = console.SendCue("st-2", net::CueKind::kConvergentField, 300);
+  const std::uint64_t cue = console.SendCue("st-2", cues::CueKind::kConvergentField, 300);
   std::vector<net::TaskEvent> events;
   std::uint64_t applied_step = 0;
   ASSERT_TRUE(WaitUntil(

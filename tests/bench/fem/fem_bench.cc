@@ -132,12 +132,12 @@ void TimeRun(const TissueModel& model, const Case& c, bool reuse_values, const O
     const double depth = kPress_m * (1 + 0.1 * std::sin(2 * std::numbers::pi * k / 16));
     StepTissue(model, BarTool(c, depth), ws, state);
     if (k < 2) continue;  // warm-up: first analysis, first warm start
-    total.push_back(state.stats.total_us);
-    select.push_back(state.stats.select_us);
-    assemble.push_back(state.stats.assemble_us);
-    solve.push_back(state.stats.solve_us);
-    forces.push_back(state.stats.forces_us);
-    iterations.push_back(state.stats.iterations);
+    total.push_back(ws.stats.total_us);
+    select.push_back(ws.stats.select_us);
+    assemble.push_back(ws.stats.assemble_us);
+    solve.push_back(ws.stats.solve_us);
+    forces.push_back(ws.stats.forces_us);
+    iterations.push_back(ws.stats.iterations);
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (static_cast<int>(total.size()) >= opt.min_steps ||
@@ -244,9 +244,9 @@ int RunFem(int argc, char** argv) {
             TissueState state = MakeTissueState(model);
             StepTissue(model, BarTool(c, kPress_m), ws, state);
             run.status = ToString(state.status);
-            run.unknowns = state.stats.unknowns;
+            run.unknowns = ws.stats.unknowns;
             run.contacts = state.num_contacts;
-            run.residual = state.stats.relative_residual;
+            run.residual = ws.stats.relative_residual;
             run.force_N = -state.f_T_S.z();  // force of the tool on the tissue
             if (navier) {
               run.force_error =
@@ -336,18 +336,18 @@ int RunFem(int argc, char** argv) {
           for (int j = 0; j < kBlock; ++j) {
             const double depth = kPress_m * (1 + 0.1 * std::sin(2 * std::numbers::pi * j / 16));
             StepTissue(model, BarTool(pose(0), depth), ws_static, state_static);
-            if (state_static.step > 2) us_static.push_back(state_static.stats.total_us);
+            if (state_static.step > 2) us_static.push_back(ws_static.stats.total_us);
           }
         }
         StepTissue(model, BarTool(pose(k), kPress_m), ws, state);
         if (k < 5) continue;
-        us.push_back(state.stats.total_us);
-        select.push_back(state.stats.select_us);
-        assemble.push_back(state.stats.assemble_us);
-        solve.push_back(state.stats.solve_us);
-        reused += state.stats.pattern_reused;
+        us.push_back(ws.stats.total_us);
+        select.push_back(ws.stats.select_us);
+        assemble.push_back(ws.stats.assemble_us);
+        solve.push_back(ws.stats.solve_us);
+        reused += ws.stats.pattern_reused;
         failed += !IsGood(state.status);
-        unknowns += state.stats.unknowns;
+        unknowns += ws.stats.unknowns;
       }
       moving.push_back({level, ToString(v.solver), ToString(v.ordering), Median(us),
                         Percentile(us, 0.99), *std::max_element(us.begin(), us.end()),

@@ -1,4 +1,5 @@
-// microdex-bench knot: the recognised knot of an OBJ polyline (../shared/DESIGN.md), and
+// microdex-bench knot: the recognised knot of an OBJ polyline (README.md "Command-line
+// contracts"), and
 // --speed, the cost of recognition against thread length (README_knots.md "Speed").
 #include <CLI/CLI.hpp>
 #include <algorithm>

@@ -1,5 +1,5 @@
 // microdex-bench needle: error against run time of the needle–vessel clearance methods
-// (thesis Fig. 4.6), and the --cases validation tool (../shared/DESIGN.md "Needle cases").
+// (thesis Fig. 4.6), and the --cases validation tool (README.md "Needle cases CSV").
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -715,7 +715,7 @@ int RunNeedle(int argc, char** argv) {
   app.add_option("--reps", opt.reps, "timing repetitions (median taken)");
   app.add_option("--seed", opt.seed, "random seed of the poses");
   app.add_option("--mesh-dir", opt.mesh_dir, "where the OBJ meshes are read / generated");
-  app.add_option("--cases", cases, "evaluate the cases of this CSV (DESIGN.md columns)");
+  app.add_option("--cases", cases, "evaluate the cases of this CSV (columns: README.md)");
   app.add_option("--out", out, "output CSV of --cases");
   try {
     app.parse(argc, argv);

@@ -339,6 +339,7 @@ int RunSpeed(bool quick, const std::string& json, const ContactOverrides& contac
       const ThreadModel model = MakeThreadModel(def);
       ThreadState state =
           MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+      ThreadWorkspace ws = MakeThreadWorkspace(model);
       const KnotTyingHands hands = SetUpKnotTying(model, state);
       KnotThrowOptions tie;
       tie.passes = 2;
@@ -490,6 +491,7 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj,
               model.def.object_friction_coefficient);
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   KnotTyingHands hands = SetUpKnotTying(model, state);
   double min_d = std::numeric_limits<double>::infinity();
   const char* dump = std::getenv("MICRODEX_TIE_DUMP");
@@ -641,6 +643,7 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
   const ThreadModel model = MakeThreadModel(def);
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_int_distribution<int> node(0, model.num_nodes - 1);
@@ -667,7 +670,7 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
       ReleaseGrasp(state, slots[s]);
       slots[s] = GraspNode(model, node(rng), state);
     }
-    StepThread(model, colliders, state);
+    StepThread(model, colliders, ws, state);
     if (!state.x_W.allFinite() || !state.v_W.allFinite() || !state.q_rad.allFinite()) {
       ++nonfinite_states;
     }
@@ -681,7 +684,7 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
   ReleaseGrasp(state, slots[1]);
   int recovered_at = -1;
   for (int k = 0; k < 2000; ++k) {
-    StepThread(model, colliders, state);
+    StepThread(model, colliders, ws, state);
     if (CalcMaxStrain(model, state.x_W) < 0.01) {
       recovered_at = k + 1;
       break;

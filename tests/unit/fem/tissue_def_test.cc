@@ -53,6 +53,8 @@ TEST(TissueDefFile, SceneFilesLoadInSiUnits) {
   const TissueDef skin = LoadTissueDef(SourceDir() + "/assets/scenes/tissue_skin_patch.yaml");
   EXPECT_DOUBLE_EQ(skin.length_x_m, 0.02);
   EXPECT_DOUBLE_EQ(skin.thickness_m, 0.002);
+  EXPECT_EQ(skin.solver, SolverKind::kPcgIc);
+  EXPECT_EQ(TissueDef{}.solver, SolverKind::kPcgIc) << "the default is the station's solver";
   for (const TissueDef& def : {study, fat, skin}) EXPECT_NO_THROW(BuildTissueModel(def));
 }
 

@@ -175,12 +175,12 @@ TEST(NetConvert, TissueStateRoundTripAndBound) {
 }
 
 TEST(NetConvert, CueCommandKindsAndRejection) {
-  for (std::uint32_t k = 0; k < kCueKindCount; ++k) {
+  for (std::uint32_t k = 0; k < cues::kCueKindCount; ++k) {
     CueCommand in;
     in.header = MakeHeader();
     in.header.station_id = kAllStations;
     in.cue_id = 17 + k;
-    in.kind = static_cast<CueKind>(k);
+    in.kind = static_cast<cues::CueKind>(k);
     in.param = 120.5;
     in.issuer = "instructor";
     msg::CueCommand m;
@@ -190,8 +190,8 @@ TEST(NetConvert, CueCommandKindsAndRejection) {
     EXPECT_EQ(out.kind, in.kind);
     EXPECT_EQ(out.cue_id, in.cue_id);
     EXPECT_EQ(out.header.station_id, "all");
-    CueKind parsed;
-    ASSERT_TRUE(ParseCueKind(CueKindName(in.kind), &parsed));
+    cues::CueKind parsed;
+    ASSERT_TRUE(cues::ParseCueKind(cues::CueKindName(in.kind), &parsed));
     EXPECT_EQ(parsed, in.kind);
   }
   msg::CueCommand m;
@@ -201,8 +201,8 @@ TEST(NetConvert, CueCommandKindsAndRejection) {
   std::string why;
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("kind"), std::string::npos) << why;
-  CueKind parsed;
-  EXPECT_FALSE(ParseCueKind("vortex", &parsed));
+  cues::CueKind parsed;
+  EXPECT_FALSE(cues::ParseCueKind("vortex", &parsed));
 }
 
 TEST(NetConvert, EmptyStationIdIsRejectedOverlongIsCut) {

@@ -135,7 +135,7 @@ TEST(Instructor, PresenceMirrorsDepartureAndLivelinessLoss) {
 TEST(CueSpec, ParsesAndRejectsNamingTheArgument) {
   const CueSpec c = ParseCueSpec("st-2:convergent:300@12.5");
   EXPECT_EQ(c.station, "st-2");
-  EXPECT_EQ(c.kind, net::CueKind::kConvergentField);
+  EXPECT_EQ(c.kind, cues::CueKind::kConvergentField);
   EXPECT_EQ(c.param, 300);
   EXPECT_EQ(c.at_s, 12.5);
   EXPECT_EQ(ParseCueSpec("all:clear:0").at_s, 0);

@@ -38,7 +38,13 @@ struct Rig {
       : scene(NeedleScene()),
         device(scene, Def(skill, seed)),
         clock(1'000'000'000, lateness_ns),
-        loop(scene, device, MakeModules(scene), rings, clock) {}
+        loop(scene, device, rings, clock, Config()) {}
+  // The state hash after every step, so that the allocation test covers it too.
+  static HapticLoopConfig Config() {
+    HapticLoopConfig c;
+    c.hash_period_steps = 1;
+    return c;
+  }
   static SimTraineeDef Def(double skill, std::uint64_t seed) {
     SimTraineeDef d;
     d.skill = skill;
@@ -69,10 +75,10 @@ TEST(HapticLoop, TickNeverAllocatesAfterWarmUp) {
   Rig rig(/*skill=*/0.0);  // a novice: contacts, wall forces, contact events
   rig.Steps(500);          // warm-up
   // Cues enter as they would from the publisher thread.
-  ASSERT_TRUE(rig.rings.cues.TryPush({1, net::CueKind::kDivergentField, 300, 0}));
-  ASSERT_TRUE(rig.rings.cues.TryPush({2, net::CueKind::kAmplifiedTremor, 3, 1500}));
-  ASSERT_TRUE(rig.rings.cues.TryPush({3, net::CueKind::kConvergentField, 500, 3000}));
-  ASSERT_TRUE(rig.rings.cues.TryPush({4, net::CueKind::kClear, 0, 4000}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({1, cues::CueKind::kDivergentField, 300, 0}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({2, cues::CueKind::kAmplifiedTremor, 3, 1500}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({3, cues::CueKind::kConvergentField, 500, 3000}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({4, cues::CueKind::kClear, 0, 4000}));
   std::atomic<bool> stop{false};
   testing::StartCountingAllocations();
   // 5000 steps without draining: the ring (4096) fills and drops are counted, not allocated.
@@ -116,8 +122,8 @@ TEST(HapticLoop, CueAppliedAtItsStepAndAcknowledged) {
   Rig rig;
   std::vector<TickSnapshot> snaps;
   rig.Steps(100, &snaps);
-  ASSERT_TRUE(rig.rings.cues.TryPush({42, net::CueKind::kConvergentField, 250, 777}));
-  ASSERT_TRUE(rig.rings.cues.TryPush({43, net::CueKind::kAmplifiedTremor, 4, 0}));  // now
+  ASSERT_TRUE(rig.rings.cues.TryPush({42, cues::CueKind::kConvergentField, 250, 777}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({43, cues::CueKind::kAmplifiedTremor, 4, 0}));  // now
   rig.Steps(1000, &snaps);
   int acks_42 = 0, acks_43 = 0;
   for (const auto& s : snaps) {
@@ -125,14 +131,14 @@ TEST(HapticLoop, CueAppliedAtItsStepAndAcknowledged) {
       if (s.acks[i].cue_id == 42) {
         ++acks_42;
         EXPECT_EQ(s.step, 777u);
-        EXPECT_EQ(s.acks[i].kind, net::CueKind::kConvergentField);
+        EXPECT_EQ(s.acks[i].kind, cues::CueKind::kConvergentField);
       }
       if (s.acks[i].cue_id == 43) {
         ++acks_43;
         EXPECT_EQ(s.step, 100u) << "a cue due at once is applied at the next step";
       }
     }
-    const bool field = (s.active_cues >> unsigned(net::CueKind::kConvergentField)) & 1u;
+    const bool field = (s.active_cues >> unsigned(cues::CueKind::kConvergentField)) & 1u;
     EXPECT_EQ(field, s.step >= 777) << "at step " << s.step;
   }
   EXPECT_EQ(acks_42, 1);
@@ -142,7 +148,7 @@ TEST(HapticLoop, CueAppliedAtItsStepAndAcknowledged) {
 TEST(HapticLoop, ConvergentFieldPullsTowardsThePath) {
   // The simulated hand yields to the force, so a convergent field must shrink the distance
   // of the tool to its ideal circle and a divergent one grow it (same seed, same script).
-  auto mean_error = [](net::CueKind kind, double k) {
+  auto mean_error = [](cues::CueKind kind, double k) {
     Rig rig(0.0, 11);
     if (k > 0) {
       EXPECT_TRUE(rig.rings.cues.TryPush({1, kind, k, 0}));
@@ -159,16 +165,16 @@ TEST(HapticLoop, ConvergentFieldPullsTowardsThePath) {
     }
     return sum / static_cast<double>(snaps.size());
   };
-  const double none = mean_error(net::CueKind::kClear, 0);
-  const double conv = mean_error(net::CueKind::kConvergentField, 400);
-  const double div = mean_error(net::CueKind::kDivergentField, 200);
+  const double none = mean_error(cues::CueKind::kClear, 0);
+  const double conv = mean_error(cues::CueKind::kConvergentField, 400);
+  const double div = mean_error(cues::CueKind::kDivergentField, 200);
   EXPECT_LT(conv, 0.8 * none);
   EXPECT_GT(div, 1.1 * none);
 }
 
 TEST(HapticLoop, ForceIsFiniteAndSaturated) {
   Rig rig(0.0, 3);
-  ASSERT_TRUE(rig.rings.cues.TryPush({1, net::CueKind::kDivergentField, 2000, 0}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({1, cues::CueKind::kDivergentField, 2000, 0}));
   std::vector<TickSnapshot> snaps;
   rig.Steps(5000, &snaps);
   double max_force = 0;
@@ -184,7 +190,7 @@ TEST(HapticLoop, ForceIsFiniteAndSaturated) {
 TEST(HapticLoop, SameSeedSameRunBitForBit) {
   auto run = [](std::uint64_t seed) {
     Rig rig(0.3, seed);
-    EXPECT_TRUE(rig.rings.cues.TryPush({5, net::CueKind::kDivergentField, 150, 1234}));
+    EXPECT_TRUE(rig.rings.cues.TryPush({5, cues::CueKind::kDivergentField, 150, 1234}));
     std::vector<TickSnapshot> snaps;
     rig.Steps(3000, &snaps);
     return snaps;
@@ -212,8 +218,7 @@ struct SceneRig {
   explicit SceneRig(scene::SceneModel s)
       : scene(std::move(s)),
         device(scene, Rig::Def(0.0, 11)),
-        loop(scene, device, MakeModules(scene), rings, clock,
-             /*frame_period_steps=*/16) {}
+        loop(scene, device, rings, clock, Rig::Config()) {}
   void Steps(std::uint64_t n) {
     std::atomic<bool> stop{false};
     const std::uint64_t end = loop.step() + n;
@@ -227,7 +232,7 @@ struct SceneRig {
   template <class M>
   const M* Find() const {
     for (std::size_t i = 0; i < loop.module_count(); ++i) {
-      if (auto* t = dynamic_cast<const M*>(&loop.module(i))) return t;
+      if (auto* t = dynamic_cast<const M*>(&loop.simulation().module(i))) return t;
     }
     return nullptr;
   }
@@ -252,7 +257,7 @@ TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
     rig.Steps(1000);  // warm-up: the pattern cache, the first frames
     const TissueModule* tissue = rig.Find<TissueModule>();
     const std::uint32_t revision0 = tissue ? tissue->mesh_revision() : 0;
-    ASSERT_TRUE(rig.rings.cues.TryPush({1, net::CueKind::kConvergentField, 200, 1500}));
+    ASSERT_TRUE(rig.rings.cues.TryPush({1, cues::CueKind::kConvergentField, 200, 1500}));
     std::atomic<bool> stop{false};
     testing::StartCountingAllocations();
     rig.loop.Run(stop, rig.loop.step() + 4500);
@@ -261,11 +266,11 @@ TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
     EXPECT_GT(rig.loop.ring_dropped(), 0u);
     if (rig.scene.thread) {
       EXPECT_TRUE(rig.rings.frames.thread.Update()) << "no thread frame was published";
-      EXPECT_GT(rig.Find<ThreadModule>()->state().status.steps, 5000);
+      EXPECT_GT(rig.loop.state().thread->thread.status.steps, 5000);
     }
     if (tissue) {
       EXPECT_GT(tissue->mesh_revision(), revision0 + 100) << "the mesh selection hardly changed";
-      EXPECT_EQ(tissue->state().num_failed_steps, 0u);
+      EXPECT_EQ(rig.loop.state().tissue->tissue.num_failed_steps, 0u);
       EXPECT_TRUE(rig.rings.frames.tissue.Update()) << "no tissue frame was published";
     }
   }
@@ -298,7 +303,7 @@ TEST(HapticLoop, HapticAndPublisherSidesRunConcurrently) {
       acks += static_cast<std::uint64_t>(s.ack_count);
     }
     if (!cue_sent && received > 100) {
-      cue_sent = rig.rings.cues.TryPush({9, net::CueKind::kAmplifiedTremor, 2, 0});
+      cue_sent = rig.rings.cues.TryPush({9, cues::CueKind::kAmplifiedTremor, 2, 0});
     }
     if (rig.rings.frames.thread.Update()) {
       const ThreadFrame& f = rig.rings.frames.thread.front();
@@ -347,13 +352,13 @@ TEST(HapticLoop, CholmodAllocatesInTheTickWhenTheMeshChanges) {
 }
 
 TEST(HapticLoop, CueLimits) {
-  EXPECT_STREQ(CheckCue(net::CueKind::kClear, 0), "");
-  EXPECT_STREQ(CheckCue(net::CueKind::kConvergentField, 100), "");
-  EXPECT_STRNE(CheckCue(net::CueKind::kConvergentField, 0), "");
-  EXPECT_STRNE(CheckCue(net::CueKind::kDivergentField, 1e6), "");
-  EXPECT_STRNE(CheckCue(net::CueKind::kAmplifiedTremor, 0.5), "");
-  EXPECT_STRNE(CheckCue(net::CueKind::kAmplifiedTremor, std::nan("")), "");
-  EXPECT_STRNE(CheckCue(static_cast<net::CueKind>(17), 1), "");
+  EXPECT_STREQ(CheckCue(cues::CueKind::kClear, 0), "");
+  EXPECT_STREQ(CheckCue(cues::CueKind::kConvergentField, 100), "");
+  EXPECT_STRNE(CheckCue(cues::CueKind::kConvergentField, 0), "");
+  EXPECT_STRNE(CheckCue(cues::CueKind::kDivergentField, 1e6), "");
+  EXPECT_STRNE(CheckCue(cues::CueKind::kAmplifiedTremor, 0.5), "");
+  EXPECT_STRNE(CheckCue(cues::CueKind::kAmplifiedTremor, std::nan("")), "");
+  EXPECT_STRNE(CheckCue(static_cast<cues::CueKind>(17), 1), "");
 }
 
 }  // namespace

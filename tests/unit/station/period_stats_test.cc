@@ -47,7 +47,7 @@ TEST(Score, Corners) {
   scene::SceneModel scene;
   scene.modules = {"needle", "tremor"};
   scene.vessel.tube_radius_m = 0.5e-3;
-  ScoreTotals t;
+  state::ScoreState t;
   t.time_s = 10;
   t.clearance_samples = 100;
   t.clearance_sum_m = 100 * 0.5e-3;  // always on the core circle

@@ -35,7 +35,7 @@ haptic: {rate_hz: 1000, max_force_N: 2.0}
 
 // Moves the grasped end from the thread's rest position to p_end in `ramp` steps, then holds
 // it for `hold` steps; returns the rendered force of the last step.
-Eigen::Vector3d PullTo(ThreadModule& m, const Eigen::Vector3d& p_start,
+Eigen::Vector3d PullTo(ThreadModule& m, state::StationState& s, const Eigen::Vector3d& p_start,
                        const Eigen::Vector3d& p_end, int ramp, int hold) {
   ToolInput in;
   Eigen::Vector3d f = Eigen::Vector3d::Zero();
@@ -45,7 +45,7 @@ Eigen::Vector3d PullTo(ThreadModule& m, const Eigen::Vector3d& p_start,
     in.X_WT = Eigen::Isometry3d::Identity();
     in.X_WT.translation() = p_start + u * (p_end - p_start);
     f.setZero();
-    m.Step(in, f);
+    m.Step(in, s, f);
   }
   return f;
 }
@@ -60,66 +60,74 @@ TEST(ThreadModule, PulledStraightItPullsBackWithHookesTension) {
   const double area_m2 = std::numbers::pi * def.diameter_m * def.diameter_m / 4;
   for (double strain : {0.005, 0.02}) {
     ThreadModule pulled(scene);
+    state::StationState s;
+    pulled.InitState(s);
     const Eigen::Vector3d f =
-        PullTo(pulled, anchor + length_m * x, anchor + length_m * (1 + strain) * x, 300, 700);
+        PullTo(pulled, s, anchor + length_m * x, anchor + length_m * (1 + strain) * x, 300, 700);
     const double tension_N = def.youngs_modulus_Pa * area_m2 * strain;
     // Towards the anchor (−x), magnitude E A ε; the linear stretch law is exact for a
     // straight uniform chain, the rest is gravity on 2.6e-10 kg nodes (1e-8 of the force).
     EXPECT_NEAR(f.x(), -tension_N, 0.01 * tension_N) << "strain " << strain;
     EXPECT_NEAR(f.y(), 0, 1e-3 * tension_N);
     EXPECT_NEAR(f.z(), 0, 1e-3 * tension_N);
-    EXPECT_NEAR(pulled.error_estimate(), strain, 0.02 * strain);
-    EXPECT_EQ(pulled.fault(), strain > scene.thread->max_strain);
+    EXPECT_NEAR(pulled.Status(s).error_estimate, strain, 0.02 * strain);
+    EXPECT_EQ(pulled.Status(s).fault, strain > scene.thread->max_strain);
     // The anchored node has not moved.
-    EXPECT_LT((pulled.state().x_W.col(0) - anchor).norm(), 1e-12);
+    EXPECT_LT((s.thread->thread.x_W.col(0) - anchor).norm(), 1e-12);
   }
 }
 
 TEST(ThreadModule, SlackThreadPullsWithAlmostNothing) {
   const scene::SceneModel scene = ThreadScene();
   ThreadModule m(scene);
+  state::StationState s;
+  m.InitState(s);
   const Eigen::Vector3d anchor = scene.thread->p_W_anchor;
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
   const double length_m = scene.thread->def.length_m;
-  const Eigen::Vector3d f = PullTo(m, anchor + length_m * x, anchor + 0.9 * length_m * x, 300, 700);
+  const Eigen::Vector3d f = PullTo(m, s, anchor + length_m * x, anchor + 0.9 * length_m * x, 300, 700);
   // 10 % slack: only bending of the buckled nylon (κ_b ~ 1e-7 N m over mm) and its weight.
   EXPECT_LT(f.norm(), 1e-3);
-  EXPECT_FALSE(m.fault());
-  EXPECT_EQ(m.warnings(), 0u);
+  EXPECT_FALSE(m.Status(s).fault);
+  EXPECT_EQ(m.Status(s).warnings, 0u);
 }
 
 TEST(ThreadModule, OverstretchIsAFaultAndTheForceStaysSaturated) {
   const scene::SceneModel scene = ThreadScene();
   ThreadModule m(scene);
+  state::StationState s;
+  m.InitState(s);
   const Eigen::Vector3d anchor = scene.thread->p_W_anchor;
   const double length_m = scene.thread->def.length_m;
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
   // 30 % strain would be 0.44 N; 200 % is far beyond the 2 N saturation.
-  const Eigen::Vector3d f = PullTo(m, anchor + length_m * x, anchor + 3 * length_m * x, 500, 100);
+  const Eigen::Vector3d f = PullTo(m, s, anchor + length_m * x, anchor + 3 * length_m * x, 500, 100);
   EXPECT_TRUE(f.allFinite());
   EXPECT_LE(f.norm(), scene.haptic.max_force_N * (1 + 1e-12));
-  EXPECT_TRUE(m.fault());
+  EXPECT_TRUE(m.Status(s).fault);
 }
 
 TEST(ThreadModule, FrameCarriesTheNodes) {
   const scene::SceneModel scene = ThreadScene();
   ThreadModule m(scene);
+  state::StationState s;
+  m.InitState(s);
   auto frames = std::make_unique<LargeFrames>();
   EXPECT_FALSE(frames->thread.Update());
   const Eigen::Vector3d anchor = scene.thread->p_W_anchor;
-  PullTo(m, anchor + 0.03 * Eigen::Vector3d::UnitX(), Eigen::Vector3d(0.02, 0.01, 0.004), 50, 10);
-  m.WriteFrame(60, 1234, *frames);
+  PullTo(m, s, anchor + 0.03 * Eigen::Vector3d::UnitX(), Eigen::Vector3d(0.02, 0.01, 0.004), 50, 10);
+  m.WriteFrame(s, 60, 1234, *frames);
   ASSERT_TRUE(frames->thread.Update());
   const ThreadFrame& f = frames->thread.front();
   EXPECT_EQ(f.step, 60u);
   EXPECT_EQ(f.stamp_ns, 1234);
   ASSERT_EQ(f.num_nodes, scene.thread->def.num_nodes);
   for (int i = 0; i < f.num_nodes; ++i) {
-    for (int a = 0; a < 3; ++a) EXPECT_EQ(f.p_W[i][a], m.state().x_W(a, i));
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(f.p_W[i][a], s.thread->thread.x_W(a, i));
   }
   EXPECT_EQ(f.grasped_node, f.num_nodes - 1);
-  EXPECT_EQ(f.max_strain, m.error_estimate());
-  EXPECT_EQ(f.f_grasp_W[0], m.f_tool_W().x());
+  EXPECT_EQ(f.max_strain, m.Status(s).error_estimate);
+  EXPECT_EQ(f.f_grasp_W[0], s.thread->f_tool_W.x());
 }
 
 TEST(ThreadModule, SlackThreadStartsAsAnArcOfRestLengthLinks) {
@@ -154,7 +162,7 @@ TEST(ThreadModule, SlackThreadStartsAsAnArcOfRestLengthLinks) {
 
 TEST(ThreadModule, ThreadBeyondThePublishedBoundIsRefused) {
   scene::SceneModel scene = ThreadScene();
-  scene.thread->def.num_nodes = static_cast<int>(net::kMaxThreadNodes) + 1;
+  scene.thread->def.num_nodes = static_cast<int>(kMaxFrameThreadNodes) + 1;
   try {
     ThreadModule m(scene);
     FAIL() << "a thread of more than kMaxThreadNodes nodes was accepted";

@@ -72,6 +72,7 @@ CapstanResult RunCapstan(double mu, double theta) {
     }
   }
   ThreadState state = MakeThreadState(model, x);
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   const std::vector<Collider> colliders = {
       Collider::Capsule(Eigen::Vector3d(0, 0, -2e-3), Eigen::Vector3d(0, 0, 2e-3), kCylinder_m)};
   const int low = GraspNode(model, 0, state);
@@ -91,7 +92,7 @@ CapstanResult RunCapstan(double mu, double theta) {
                    gl.p_WT + (h * kGain_m_per_s_N * (tension_low - kLowTension_N)) * t_low, 0.0);
     // The high hand first takes up the thread to the low tension, then pulls on steadily.
     SetGraspTarget(state, high, gh.p_WT + (h * kPullSpeed_m_per_s) * t_high, 0.0);
-    StepThread(model, colliders, state);
+    StepThread(model, colliders, ws, state);
     r.max_strain = std::max(r.max_strain, state.status.max_strain);
     const int nf = state.status.num_friction_contacts;
     // Frictionless (mu = 0): no friction contacts, always slipping.
@@ -162,6 +163,7 @@ Eigen::Vector3d RigidMoveForce(int exact_pairs, double* drag_N) {
   Eigen::Matrix3Xd x(3, n);
   for (int i = 0; i < n; ++i) x.col(i) = pts[i];
   ThreadState state = MakeThreadState(model, x);
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   // Grasp each strand 3 links either side of the crossing.
   std::vector<int> slots;
   for (double tc : {-t_cross, t_cross}) {
@@ -173,7 +175,7 @@ Eigen::Vector3d RigidMoveForce(int exact_pairs, double* drag_N) {
     slots.push_back(GraspNode(model, centre + 3, state));
   }
   const std::vector<Collider> none;
-  for (int k = 0; k < 300; ++k) StepThread(model, none, state);  // settle
+  for (int k = 0; k < 300; ++k) StepThread(model, none, ws, state);  // settle
   EXPECT_GT(state.status.num_self_contacts, 0);
   const double speed = 1e-3;
   const double h = model.def.time_step_s;
@@ -183,7 +185,7 @@ Eigen::Vector3d RigidMoveForce(int exact_pairs, double* drag_N) {
     for (int s : slots) {
       SetGraspTarget(state, s, state.grasps[s].p_WT + Eigen::Vector3d(0, 0, speed * h), 0.0);
     }
-    StepThread(model, none, state);
+    StepThread(model, none, ws, state);
     if (k >= 100) {
       for (int s : slots) sum += state.grasps[s].f_T_W;
       ++samples;

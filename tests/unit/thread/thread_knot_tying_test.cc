@@ -100,6 +100,7 @@ TEST(KnotTying, DoubleOverhandPulledTight) {
   const ThreadModel model = MakeThreadModel(KnotTyingDef(257));
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   const KnotTyingHands hands = SetUpKnotTying(model, state);
   ASSERT_EQ(Recognize(model, state), KnotType::kNone);
   KnotThrowOptions options;
@@ -120,6 +121,7 @@ void TieTwoThrows(int first_passes, bool second_right, KnotType expected_first, 
   const ThreadModel model = MakeThreadModel(KnotTyingDef(385));
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   KnotTyingHands hands = SetUpKnotTying(model, state);
   KnotThrowOptions first;
   first.passes = first_passes;

@@ -41,6 +41,7 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
     const ThreadModel model = MakeThreadModel(def);
     ThreadState state =
         MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+    ThreadWorkspace ws = MakeThreadWorkspace(model);
     // Fold the thread into a U so that self-contacts are found, and add a capsule under it.
     for (int i = 33; i < model.num_nodes; ++i) {
       state.x_W.col(i) = Eigen::Vector3d(state.x_W(0, 64 - i), 30e-6, 0.0);
@@ -49,7 +50,7 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
         Eigen::Vector3d(0.005, -0.01, -40e-6), Eigen::Vector3d(0.005, 0.01, -40e-6), 20e-6)};
     const int a = GraspNode(model, 0, state);
     const int b = GraspNode(model, 64, state);
-    for (int k = 0; k < 10; ++k) StepThread(model, colliders, state);
+    for (int k = 0; k < 10; ++k) StepThread(model, colliders, ws, state);
     int most_exact = 0, most_friction = 0;
     ::microdex::testing::StartCountingAllocations();
     for (int k = 0; k < 200; ++k) {
@@ -57,7 +58,7 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
       SetGraspTarget(state, b, Eigen::Vector3d(-1e-6 * k, 30e-6, 1e-6 * k), 0.0);
       if (k == 100) ReleaseGrasp(state, b);
       if (k == 150) GraspNode(model, 40, state);
-      StepThread(model, colliders, state);
+      StepThread(model, colliders, ws, state);
       most_exact = std::max(most_exact, state.status.num_exact_pairs);
       most_friction = std::max(most_friction, state.status.num_friction_contacts);
     }
@@ -116,12 +117,13 @@ TEST(ThreadStability, StiffNylonPresetSwungAtOneMs) {
     const ThreadModel model = MakeThreadModel(StiffNylon10_0());
     ThreadState state =
         MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+    ThreadWorkspace ws = MakeThreadWorkspace(model);
     const int slot = GraspNode(model, 0, state);
     bool ok = true;
     for (int k = 1; k <= 500; ++k) {
       const double t = 1e-3 * k;
       SetGraspTarget(state, slot, Eigen::Vector3d(0.0, 0.01 * std::sin(10 * t), 0.0), 0.0);
-      StepThreadWith(model, integ, 1e-3, {}, state);
+      StepThreadWith(model, integ, 1e-3, {}, ws, state);
       ok = ok && state.status.nonfinite_resets == 0 && state.status.factorization_failures == 0 &&
            state.status.max_strain < 0.1;
     }
@@ -141,10 +143,11 @@ TEST(ThreadGrasp, HangingThreadPullsTheToolWithItsWeight) {
     const ThreadModel model = MakeThreadModel(def);
     ThreadState state =
         MakeStraightThreadState(model, Eigen::Vector3d::Zero(), -Eigen::Vector3d::UnitZ());
+    ThreadWorkspace ws = MakeThreadWorkspace(model);
     const int slot = GraspNode(model, 0, state);
     const double h = integ == Integrator::kSemiImplicitEuler ? 5e-5 : 1e-3;
     const int steps = static_cast<int>(2.0 / h);
-    for (int k = 0; k < steps; ++k) StepThreadWith(model, integ, h, {}, state);
+    for (int k = 0; k < steps; ++k) StepThreadWith(model, integ, h, {}, ws, state);
     const double weight_N = model.mass_kg.sum() * 9.81;
     const Eigen::Vector3d f = GraspForce(state, slot, 1.0);
     // The grasped node's own weight is carried by the tool too.
@@ -157,6 +160,7 @@ TEST(ThreadGrasp, GraspAndReleaseAnyNodeAtRunTime) {
   const ThreadModel model = MakeThreadModel(StiffNylon10_0());
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   EXPECT_EQ(GraspNode(model, -1, state), -1);
   EXPECT_EQ(GraspNode(model, model.num_nodes, state), -1);
   const int a = GraspNode(model, 10, state);
@@ -164,17 +168,17 @@ TEST(ThreadGrasp, GraspAndReleaseAnyNodeAtRunTime) {
   EXPECT_EQ(GraspNode(model, 10, state), a);
   const Eigen::Vector3d target = state.x_W.col(10) + Eigen::Vector3d(0, 1e-3, 0);
   SetGraspTarget(state, a, target, 0.5);
-  StepThread(model, {}, state);
+  StepThread(model, {}, ws, state);
   EXPECT_LT((state.x_W.col(10) - target).norm(), 1e-12);
   EXPECT_NEAR(state.q_rad[10], 0.5, 1e-12);
   EXPECT_GT(state.grasps[a].f_T_W.norm(), 0.0);  // the thread resists the tug
   // The roll propagates along the thread (5.6).
-  for (int k = 0; k < 200; ++k) StepThread(model, {}, state);
+  for (int k = 0; k < 200; ++k) StepThread(model, {}, ws, state);
   EXPECT_GT(state.q_rad[20], 0.01);
   ReleaseGrasp(state, a);
   const Eigen::Vector3d before = state.x_W.col(10);
   SetGraspTarget(state, a, Eigen::Vector3d(1, 1, 1), 0.0);  // ignored: released
-  StepThread(model, {}, state);
+  StepThread(model, {}, ws, state);
   EXPECT_LT((state.x_W.col(10) - before).norm(), 1e-3);
   for (int i = 0; i < model.def.max_grasps; ++i) EXPECT_GE(GraspNode(model, i, state), 0);
   EXPECT_EQ(GraspNode(model, 50, state), -1);  // all slots taken
@@ -190,6 +194,7 @@ TEST(ThreadAdversarial, JerkyExtremeMotionNeverNaNAndRecovers) {
   const ThreadModel model = MakeThreadModel(def);
   ThreadState state =
       MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_int_distribution<int> node(0, model.num_nodes - 1);
@@ -213,7 +218,7 @@ TEST(ThreadAdversarial, JerkyExtremeMotionNeverNaNAndRecovers) {
       slots[s] = GraspNode(model, node(rng), state);
       ASSERT_GE(slots[s], 0);
     }
-    StepThread(model, colliders, state);
+    StepThread(model, colliders, ws, state);
     if (!state.x_W.allFinite() || !state.v_W.allFinite() || !state.q_rad.allFinite()) {
       ++nonfinite;
     }
@@ -226,7 +231,7 @@ TEST(ThreadAdversarial, JerkyExtremeMotionNeverNaNAndRecovers) {
   ReleaseGrasp(state, slots[1]);
   int recovered_at = -1;
   for (int k = 0; k < 2000; ++k) {
-    StepThread(model, colliders, state);
+    StepThread(model, colliders, ws, state);
     if (CalcMaxStrain(model, state.x_W) < 0.01) {
       recovered_at = k;
       break;

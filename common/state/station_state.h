@@ -1,0 +1,148 @@
+#pragma once
+// StationState: everything that changes while a station runs, as one plain value (copyable,
+// comparable, hashable; no pointer into another object). The scene and the modules' models
+// are immutable after loading; caches derived from the state (the thread's factorisation and
+// sphere BVH, the tissue's mesh selection, patterns and factors) live in the modules'
+// workspaces and are rebuilt from the state, so a copy of this value is all a mirror, a
+// recording, a replay or a "what if" branch needs.
+//
+// One step of a station (station/station_step.h) reads the device sample and the cue requests
+// of that step and writes this value; nothing else holds simulation state. The snapshot the
+// haptic thread hands to the publisher is a projection of it (ProjectSnapshot).
+//
+// Every field is listed once, in VisitStationState (station_state_visit.h): the hash, the
+// equality and the tests walk that one list.
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "common/cues/cue_kind.h"
+#include "common/cues/tremor_filter.h"
+#include "common/fem/tissue_step.h"
+#include "common/geometry/arc_torus.h"
+#include "common/thread/thread_model.h"
+
+namespace microdex::state {
+
+inline constexpr int kMaxPendingCues = 32;
+inline constexpr int kMaxAcksPerStep = 4;
+
+// A cue as it enters the simulation: applied at the first step >= apply_at_step.
+struct CueRequest {
+  std::uint64_t cue_id = 0;
+  cues::CueKind kind = cues::CueKind::kClear;
+  double param = 0;
+  std::uint64_t apply_at_step = 0;
+};
+
+// A cue applied during a step (reported back with that step).
+struct CueAck {
+  std::uint64_t cue_id = 0;
+  cues::CueKind kind = cues::CueKind::kClear;
+  double param = 0;
+};
+
+// The device as the station last read it, and the tool after the cues.
+struct ToolState {
+  Eigen::Isometry3d X_WT_device = Eigen::Isometry3d::Identity();  // raw device sample
+  double gripper = 0;                                              // 0 open .. 1 closed
+  std::uint32_t buttons = 0;
+  Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  // tool after cues (what modules see)
+  Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // force sent to the device: finite, saturated
+  std::uint32_t force_warnings = 0;  // non-finite forces replaced by zero, running count
+};
+
+// The learning cues in force and the ones waiting for their step.
+struct CueState {
+  double field_stiffness_N_per_m = 0;  // > 0 convergent, < 0 divergent, 0 none
+  double tremor_gain = 1;              // amplified tremor, 1: off
+  // The 8–12 Hz band of the raw device motion, filtered every step (so that switching the
+  // amplification on is seamless); the tremor module's RMS reads the same band.
+  cues::TremorFilterState tremor_filter;
+  Eigen::Vector3d tremor_band_m = Eigen::Vector3d::Zero();  // this step's band-passed position
+  std::array<CueRequest, kMaxPendingCues> pending{};
+  int pending_count = 0;
+  std::array<CueAck, kMaxAcksPerStep> acks{};  // applied during this step
+  int ack_count = 0;
+};
+
+// Running totals of the task score (station/score.h), updated every step.
+struct ScoreState {
+  double time_s = 0;
+  double time_in_contact_s = 0;
+  std::uint32_t contacts = 0;  // fault episodes
+  double clearance_sum_m = 0;  // needle module only
+  std::uint64_t clearance_samples = 0;
+  double min_clearance_m = 0;  // +inf until the first sample
+  double path_length_m = 0;
+  double ideal_path_length_m = 0;
+  double tremor_sq_sum_m2 = 0;
+  std::uint64_t tremor_samples = 0;
+  // A fault episode (needle contact, overstretched thread, tissue pressed too hard) ends after
+  // kContactReleaseSteps steps without fault, so tremor at the limit is not hundreds of them.
+  std::uint8_t in_episode = 0;
+  std::int32_t steps_free = 0;
+  std::uint8_t have_prev = 0;
+  std::array<double, 3> p_WT_device_prev{};  // (plain arrays: the snapshot copies this struct
+  std::array<double, 3> p_WT_ideal_prev{};   // as plain data)
+  // This step.
+  std::uint8_t fault = 0;
+  double fault_value = 0;          // of the first module at fault (clearance, strain, force)
+  std::int8_t contact_event = 0;   // +1 a fault episode began, -1 one ended
+};
+inline constexpr int kContactReleaseSteps = 50;
+
+// The needle–vessel module: the needle's pose and its clearance to the tube.
+struct NeedleState {
+  Eigen::Isometry3d X_WN = Eigen::Isometry3d::Identity();
+  geometry::ArcTorusClearance clearance;
+  double error_estimate_m = 0;  // |SP − sampled|, refreshed every kErrorCheckPeriod steps; NaN
+  std::uint32_t warnings = 0;   // failed queries
+};
+
+// The tremor module: the running mean square of the band (about one second).
+struct TremorState {
+  double band_m = 0;  // |band-passed position| this step
+  double mean_square_m2 = 0;
+};
+
+// The suture-thread module.
+struct ThreadModuleState {
+  thread::ThreadState thread;
+  Eigen::Vector3d f_tool_W = Eigen::Vector3d::Zero();  // thread on the tool, saturated, N
+};
+
+// The tissue module.
+struct TissueModuleState {
+  fem::TissueState tissue;
+  Eigen::Vector3d f_tool_W = Eigen::Vector3d::Zero();  // tissue on the tool, N (unsaturated)
+};
+
+struct StationState {
+  std::uint64_t step = 0;  // steps taken; the next step has this index
+  // The station's random numbers (SplitMix64; NextRandom). Seeded from the station's seed;
+  // a module that draws random numbers draws them here, so a copy continues identically.
+  std::uint64_t seed = 0;
+  std::uint64_t rng = 0;
+  ToolState tool;
+  CueState cues;
+  ScoreState score;
+  // One section per module of the scene; empty when the scene does not name the module.
+  std::optional<NeedleState> needle;
+  std::optional<TremorState> tremor;
+  std::optional<ThreadModuleState> thread;
+  std::optional<TissueModuleState> tissue;
+};
+
+// Seeds the generator (the sections are filled by the modules).
+void SeedStationState(std::uint64_t seed, StationState& state);
+// The next 64 random bits of the station's generator (SplitMix64: the same on every platform).
+std::uint64_t NextRandom(StationState& state);
+
+// Field by field, bit for bit (NaN equals the same NaN; 0.0 differs from −0.0): the equality
+// that determinism means. Allocates (not for the haptic thread).
+bool operator==(const StationState& a, const StationState& b);
+
+}  // namespace microdex::state

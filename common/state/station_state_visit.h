@@ -1,0 +1,212 @@
+#pragma once
+// The one list of StationState's fields, in their fixed order. The hash (state_hash.h), the
+// equality and the tests walk it; a field added to the state and not listed here is caught by
+// the test that changes every listed field and compares copies
+// (tests/unit/state/station_state_test.cc).
+//
+// VisitStationState(state, v) calls v(name, p, n) for each field, where p points to n
+// consecutive scalars (double, float, integers, bool; enums as their underlying integer).
+// State is `StationState` or `const StationState`. Counted arrays are visited up to their
+// count only (the slots beyond it are unused capacity, not state); an optional section is
+// preceded by its presence flag.
+
+#include <algorithm>
+#include <cstddef>
+#include <type_traits>
+
+#include "common/state/station_state.h"
+
+namespace microdex::state {
+namespace visit_internal {
+
+template <typename T, typename Same>
+using Like = std::conditional_t<std::is_const_v<Same>, const T, T>;
+
+// An enum as its underlying integer.
+template <typename E, typename V>
+void Enum(const char* name, E& e, V& v) {
+  using U = std::underlying_type_t<std::remove_const_t<E>>;
+  v(name, reinterpret_cast<Like<U, E>*>(&e), 1);
+}
+
+template <typename M, typename V>
+void Matrix(const char* name, M& m, V& v) {
+  v(name, m.data(), static_cast<std::size_t>(m.size()));
+}
+
+template <typename X, typename V>
+void Pose(const char* name, X& X_AB, V& v) {
+  v(name, X_AB.matrix().data(), 16);
+}
+
+// The first `count` elements of a vector or array, each through f(element); count clamped
+// to the container's size.
+template <typename C, typename F>
+void Counted(C& c, int count, F f) {
+  const std::size_t n = std::min(static_cast<std::size_t>(std::max(count, 0)), c.size());
+  for (std::size_t i = 0; i < n; ++i) f(c[i]);
+}
+
+template <typename S, typename V>
+void Tool(S& t, V& v) {
+  Pose("tool.X_WT_device", t.X_WT_device, v);
+  v("tool.gripper", &t.gripper, 1);
+  v("tool.buttons", &t.buttons, 1);
+  Pose("tool.X_WT", t.X_WT, v);
+  Matrix("tool.f_T_W", t.f_T_W, v);
+  v("tool.force_warnings", &t.force_warnings, 1);
+}
+
+template <typename S, typename V>
+void Cues(S& c, V& v) {
+  v("cues.field_stiffness_N_per_m", &c.field_stiffness_N_per_m, 1);
+  v("cues.tremor_gain", &c.tremor_gain, 1);
+  Matrix("cues.tremor_filter.hp_z1", c.tremor_filter.hp_z1, v);
+  Matrix("cues.tremor_filter.hp_z2", c.tremor_filter.hp_z2, v);
+  Matrix("cues.tremor_filter.lp_z1", c.tremor_filter.lp_z1, v);
+  Matrix("cues.tremor_filter.lp_z2", c.tremor_filter.lp_z2, v);
+  v("cues.tremor_filter.started", &c.tremor_filter.started, 1);
+  Matrix("cues.tremor_band_m", c.tremor_band_m, v);
+  v("cues.pending_count", &c.pending_count, 1);
+  Counted(c.pending, c.pending_count, [&](auto& r) {
+    v("cues.pending[].cue_id", &r.cue_id, 1);
+    Enum("cues.pending[].kind", r.kind, v);
+    v("cues.pending[].param", &r.param, 1);
+    v("cues.pending[].apply_at_step", &r.apply_at_step, 1);
+  });
+  v("cues.ack_count", &c.ack_count, 1);
+  Counted(c.acks, c.ack_count, [&](auto& a) {
+    v("cues.acks[].cue_id", &a.cue_id, 1);
+    Enum("cues.acks[].kind", a.kind, v);
+    v("cues.acks[].param", &a.param, 1);
+  });
+}
+
+template <typename S, typename V>
+void Score(S& s, V& v) {
+  v("score.time_s", &s.time_s, 1);
+  v("score.time_in_contact_s", &s.time_in_contact_s, 1);
+  v("score.contacts", &s.contacts, 1);
+  v("score.clearance_sum_m", &s.clearance_sum_m, 1);
+  v("score.clearance_samples", &s.clearance_samples, 1);
+  v("score.min_clearance_m", &s.min_clearance_m, 1);
+  v("score.path_length_m", &s.path_length_m, 1);
+  v("score.ideal_path_length_m", &s.ideal_path_length_m, 1);
+  v("score.tremor_sq_sum_m2", &s.tremor_sq_sum_m2, 1);
+  v("score.tremor_samples", &s.tremor_samples, 1);
+  v("score.in_episode", &s.in_episode, 1);
+  v("score.steps_free", &s.steps_free, 1);
+  v("score.have_prev", &s.have_prev, 1);
+  v("score.p_WT_device_prev", s.p_WT_device_prev.data(), 3);
+  v("score.p_WT_ideal_prev", s.p_WT_ideal_prev.data(), 3);
+  v("score.fault", &s.fault, 1);
+  v("score.fault_value", &s.fault_value, 1);
+  v("score.contact_event", &s.contact_event, 1);
+}
+
+template <typename S, typename V>
+void Needle(S& n, V& v) {
+  Pose("needle.X_WN", n.X_WN, v);
+  Enum("needle.clearance.status", n.clearance.status, v);
+  v("needle.clearance.clearance_m", &n.clearance.clearance_m, 1);
+  v("needle.clearance.contact", &n.clearance.contact, 1);
+  v("needle.clearance.s_rad", &n.clearance.s_rad, 1);
+  Matrix("needle.clearance.p_WD", n.clearance.p_WD, v);
+  Matrix("needle.clearance.p_WB", n.clearance.p_WB, v);
+  v("needle.error_estimate_m", &n.error_estimate_m, 1);
+  v("needle.warnings", &n.warnings, 1);
+}
+
+template <typename S, typename V>
+void Tremor(S& t, V& v) {
+  v("tremor.band_m", &t.band_m, 1);
+  v("tremor.mean_square_m2", &t.mean_square_m2, 1);
+}
+
+template <typename S, typename V>
+void Thread(S& m, V& v) {
+  auto& t = m.thread;
+  v("thread.time_s", &t.time_s, 1);
+  Matrix("thread.x_W", t.x_W, v);
+  Matrix("thread.v_W", t.v_W, v);
+  Matrix("thread.q_rad", t.q_rad, v);
+  Matrix("thread.qdot_rad_per_s", t.qdot_rad_per_s, v);
+  int num_grasps = static_cast<int>(t.grasps.size());
+  v("thread.grasps.size", &num_grasps, 1);
+  Counted(t.grasps, num_grasps, [&](auto& g) {
+    v("thread.grasps[].node", &g.node, 1);
+    Matrix("thread.grasps[].p_WT", g.p_WT, v);
+    v("thread.grasps[].roll_rad", &g.roll_rad, 1);
+    Matrix("thread.grasps[].f_T_W", g.f_T_W, v);
+  });
+  auto& s = t.status;
+  v("thread.status.steps", &s.steps, 1);
+  v("thread.status.nonfinite_resets", &s.nonfinite_resets, 1);
+  v("thread.status.factorization_failures", &s.factorization_failures, 1);
+  v("thread.status.contact_overflows", &s.contact_overflows, 1);
+  v("thread.status.guard_corrections", &s.guard_corrections, 1);
+  v("thread.status.strain_corrections", &s.strain_corrections, 1);
+  v("thread.status.num_candidate_pairs", &s.num_candidate_pairs, 1);
+  v("thread.status.num_self_contacts", &s.num_self_contacts, 1);
+  v("thread.status.num_object_contacts", &s.num_object_contacts, 1);
+  v("thread.status.num_exact_pairs", &s.num_exact_pairs, 1);
+  v("thread.status.num_bound_pairs", &s.num_bound_pairs, 1);
+  v("thread.status.num_friction_contacts", &s.num_friction_contacts, 1);
+  v("thread.status.num_sliding_contacts", &s.num_sliding_contacts, 1);
+  v("thread.status.max_strain", &s.max_strain, 1);
+  Matrix("thread.f_tool_W", m.f_tool_W, v);
+}
+
+template <typename S, typename V>
+void Tissue(S& m, V& v) {
+  auto& t = m.tissue;
+  // The field on the whole grid: entries outside the last mesh still seed the next solve.
+  v("tissue.w_m", t.w_m.data(), t.w_m.size());
+  v("tissue.node_step", t.node_step.data(), t.node_step.size());
+  v("tissue.step", &t.step, 1);
+  v("tissue.num_leaves", &t.num_leaves, 1);
+  Counted(t.leaves, t.num_leaves, [&](auto& l) {
+    v("tissue.leaves[].ci", &l.ci, 1);
+    v("tissue.leaves[].cj", &l.cj, 1);
+    v("tissue.leaves[].level", &l.level, 1);
+    v("tissue.leaves[].hanging_mask", &l.hanging_mask, 1);
+  });
+  v("tissue.num_contacts", &t.num_contacts, 1);
+  const std::size_t nc = std::min(static_cast<std::size_t>(std::max(t.num_contacts, 0)),
+                                  std::min(t.contact_nodes.size(), t.contact_force_N.size()));
+  v("tissue.contact_nodes", t.contact_nodes.data(), nc);
+  v("tissue.contact_force_N", t.contact_force_N.data(), nc);
+  Matrix("tissue.f_T_S", t.f_T_S, v);
+  Matrix("tissue.tau_T_S", t.tau_T_S, v);
+  Enum("tissue.status", t.status, v);
+  v("tissue.num_failed_steps", &t.num_failed_steps, 1);
+  Matrix("tissue.f_tool_W", m.f_tool_W, v);
+}
+
+// An optional section: its presence flag, then its fields when present.
+template <typename O, typename V, typename F>
+void Section(const char* name, O& section, V& v, F fields) {
+  bool present = section.has_value();
+  v(name, &present, 1);
+  if (section.has_value()) fields(*section, v);
+}
+
+}  // namespace visit_internal
+
+template <typename S, typename V>
+void VisitStationState(S& s, V& v) {
+  static_assert(std::is_same_v<std::remove_const_t<S>, StationState>);
+  namespace vi = visit_internal;
+  v("step", &s.step, 1);
+  v("seed", &s.seed, 1);
+  v("rng", &s.rng, 1);
+  vi::Tool(s.tool, v);
+  vi::Cues(s.cues, v);
+  vi::Score(s.score, v);
+  vi::Section("needle", s.needle, v, [](auto& n, V& w) { vi::Needle(n, w); });
+  vi::Section("tremor", s.tremor, v, [](auto& t, V& w) { vi::Tremor(t, w); });
+  vi::Section("thread", s.thread, v, [](auto& t, V& w) { vi::Thread(t, w); });
+  vi::Section("tissue", s.tissue, v, [](auto& t, V& w) { vi::Tissue(t, w); });
+}
+
+}  // namespace microdex::state

@@ -1,0 +1,262 @@
+#include "station/station_step.h"
+
+#include <cmath>
+#include <limits>
+
+#include "common/base/check.h"
+
+namespace microdex::station {
+
+const char* CheckCue(cues::CueKind kind, double param) {
+  switch (kind) {
+    case cues::CueKind::kClear:
+      return "";
+    case cues::CueKind::kConvergentField:
+    case cues::CueKind::kDivergentField:
+      if (!(param > 0 && param <= kMaxFieldStiffness_N_per_m)) {
+        return "stiffness: expected 0 < k <= 2000 N/m";
+      }
+      return "";
+    case cues::CueKind::kAmplifiedTremor:
+      if (!(param >= 1 && param <= kMaxTremorGain)) return "gain: expected 1 <= gain <= 20";
+      return "";
+  }
+  return "unknown cue kind";
+}
+
+Simulation::Simulation(const scene::SceneModel& scene)
+    : scene_(scene), dt_s_(1.0 / scene.haptic.rate_hz), modules_(MakeModules(scene)) {
+  MICRODEX_CHECK(modules_.size() <= static_cast<std::size_t>(kMaxStationModules));
+  path_.is_segment = scene.task.path == scene::PathKind::kLine;
+  path_.circle.X_WC = scene.vessel.X_WV;
+  path_.circle.radius_m = scene.needle.radius_m;
+  path_.segment.a_W = scene.task.line_start_m;
+  path_.segment.b_W = scene.task.line_end_m;
+  cues::TremorFilterDef tf;
+  tf.sample_rate_hz = scene.haptic.rate_hz;
+  tremor_filter_ = cues::MakeTremorFilter(tf);
+  step_time_s_.assign(modules_.size(), 0.0);
+}
+
+state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
+  state::StationState s;
+  state::SeedStationState(seed, s);
+  s.score.min_clearance_m = std::numeric_limits<double>::infinity();
+  for (const auto& m : modules_) m->InitState(s);
+  return s;
+}
+
+namespace {
+
+// Applies one cue to the cue state and acknowledges it with this step.
+void ApplyCue(const state::CueRequest& cue, state::CueState& c) {
+  switch (cue.kind) {
+    case cues::CueKind::kClear:
+      c.field_stiffness_N_per_m = 0;
+      c.tremor_gain = 1;
+      break;
+    case cues::CueKind::kConvergentField:
+      c.field_stiffness_N_per_m = cue.param;
+      break;
+    case cues::CueKind::kDivergentField:
+      c.field_stiffness_N_per_m = -cue.param;
+      break;
+    case cues::CueKind::kAmplifiedTremor:
+      c.tremor_gain = cue.param;
+      break;
+  }
+  c.acks[c.ack_count++] = {cue.cue_id, cue.kind, cue.param};
+}
+
+// Reads the input's cue requests and state.cues; writes state.cues (pending, in force, acks).
+// In arrival order, those due at this step are applied, at most kMaxAcksPerStep per step (the
+// rest wait for the next step and are acknowledged with it); requests beyond the pending
+// capacity are dropped (the caller hands over no more than there is room for).
+void TakeCues(std::span<const state::CueRequest> arrived, std::uint64_t step,
+              state::CueState& c) {
+  c.ack_count = 0;
+  for (const state::CueRequest& r : arrived) {
+    if (c.pending_count < state::kMaxPendingCues) c.pending[c.pending_count++] = r;
+  }
+  int kept = 0;
+  for (int i = 0; i < c.pending_count; ++i) {
+    if (c.pending[i].apply_at_step <= step && c.ack_count < state::kMaxAcksPerStep) {
+      ApplyCue(c.pending[i], c);
+    } else {
+      c.pending[kept++] = c.pending[i];
+    }
+  }
+  c.pending_count = kept;
+}
+
+// Reads the device sample and state.cues; writes state.tool's device fields, the tremor band
+// (filtered every step so that switching amplification on is seamless) and the tool pose.
+void CalcToolAfterCues(const cues::TremorFilterModel& filter, const DeviceSample& d,
+                       state::StationState& s) {
+  s.tool.X_WT_device = d.X_WT;
+  s.tool.gripper = d.gripper;
+  s.tool.buttons = d.buttons;
+  const Eigen::Vector3d p_device = d.X_WT.translation();
+  s.cues.tremor_band_m = cues::StepTremorFilter(filter, p_device, s.cues.tremor_filter);
+  s.tool.X_WT = d.X_WT;
+  if (s.cues.tremor_gain != 1) {
+    s.tool.X_WT.translation() = p_device + (s.cues.tremor_gain - 1) * s.cues.tremor_band_m;
+  }
+}
+
+// Reads state.cues and the tool; returns the field's force on the tool.
+Eigen::Vector3d CalcCueForce(const cues::IdealPath& path, double max_force_N,
+                             const state::StationState& s) {
+  if (s.cues.field_stiffness_N_per_m == 0) return Eigen::Vector3d::Zero();
+  return cues::CalcPathFieldForce(path, s.tool.X_WT.translation(),
+                                  s.cues.field_stiffness_N_per_m, max_force_N);
+}
+
+// Reads the tool; writes state.tool.f_T_W: finite and saturated, always.
+void SaturateForce(Eigen::Vector3d f, double max_force_N, state::StationState& s) {
+  if (!f.allFinite()) {
+    f.setZero();
+    ++s.tool.force_warnings;
+  }
+  const double fn = f.norm();
+  if (fn > max_force_N) f *= max_force_N / fn;
+  s.tool.f_T_W = f;
+}
+
+// Reads the tool, the needle and tremor sections and this step's fault; writes state.score.
+void UpdateScore(const scene::SceneModel& scene, double dt_s, state::StationState& s) {
+  state::ScoreState& t = s.score;
+  t.time_s += dt_s;
+  const Eigen::Vector3d p_device = s.tool.X_WT_device.translation();
+  const Eigen::Vector3d p_ideal =
+      scene.CalcIdealToolPose(static_cast<double>(s.step) * dt_s).translation();
+  Eigen::Map<Eigen::Vector3d> p_device_prev(t.p_WT_device_prev.data());
+  Eigen::Map<Eigen::Vector3d> p_ideal_prev(t.p_WT_ideal_prev.data());
+  if (t.have_prev) {
+    t.path_length_m += (p_device - p_device_prev).norm();
+    t.ideal_path_length_m += (p_ideal - p_ideal_prev).norm();
+  }
+  p_device_prev = p_device;
+  p_ideal_prev = p_ideal;
+  t.have_prev = 1;
+  t.contact_event = 0;
+  if (s.needle && s.needle->clearance.status == geometry::ClearanceStatus::kOk) {
+    const double c = s.needle->clearance.clearance_m;
+    t.clearance_sum_m += c;
+    ++t.clearance_samples;
+    t.min_clearance_m = std::min(t.min_clearance_m, c);
+  }
+  if (t.fault) {
+    t.time_in_contact_s += dt_s;
+    t.steps_free = 0;
+    if (!t.in_episode) {
+      t.in_episode = 1;
+      ++t.contacts;
+      t.contact_event = 1;
+    }
+  } else if (t.in_episode && ++t.steps_free >= state::kContactReleaseSteps) {
+    t.in_episode = 0;
+    t.contact_event = -1;
+  }
+  if (s.tremor) {
+    t.tremor_sq_sum_m2 += s.tremor->band_m * s.tremor->band_m;
+    ++t.tremor_samples;
+  }
+}
+
+}  // namespace
+
+void StepStation(Simulation& sim, const StationInput& in, state::StationState& s) {
+  const scene::SceneModel& scene = sim.scene_;
+  TakeCues(in.cues, s.step, s.cues);
+  CalcToolAfterCues(sim.tremor_filter_, in.device, s);
+  Eigen::Vector3d f = CalcCueForce(sim.path_, scene.haptic.max_force_N, s);
+
+  // StepModules: reads the tool, writes each module's section and its force.
+  ToolInput tool;
+  tool.step = s.step;
+  tool.dt_s = sim.dt_s_;
+  tool.X_WT = s.tool.X_WT;
+  tool.p_WT_device = s.tool.X_WT_device.translation();
+  s.score.fault = 0;
+  s.score.fault_value = 0;
+  for (std::size_t i = 0; i < sim.modules_.size(); ++i) {
+    Module& m = *sim.modules_[i];
+    const std::int64_t t0 = sim.step_clock_ != nullptr ? sim.step_clock_->NowNs() : 0;
+    m.Step(tool, s, f);
+    if (sim.step_clock_ != nullptr) {
+      sim.step_time_s_[i] = static_cast<double>(sim.step_clock_->NowNs() - t0) * 1e-9;
+    }
+    if (!s.score.fault) {
+      const ModuleStatus st = m.Status(s);
+      if (st.fault) {
+        s.score.fault = 1;
+        s.score.fault_value = st.fault_value;
+      }
+    }
+  }
+
+  SaturateForce(f, scene.haptic.max_force_N, s);
+  UpdateScore(scene, sim.dt_s_, s);
+  ++s.step;
+}
+
+namespace {
+
+Vec3 ToVec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+Quat ToQuat(const Eigen::Isometry3d& X) {
+  const Eigen::Quaterniond q(X.rotation());
+  return {q.w(), q.x(), q.y(), q.z()};
+}
+
+}  // namespace
+
+void ProjectSnapshot(const Simulation& sim, const state::StationState& s, TickSnapshot& out) {
+  out.step = s.step - 1;  // the step just taken
+  out.p_WT_device = ToVec3(s.tool.X_WT_device.translation());
+  out.q_WT_device = ToQuat(s.tool.X_WT_device);
+  out.gripper = s.tool.gripper;
+  out.buttons = s.tool.buttons;
+  out.p_WT = ToVec3(s.tool.X_WT.translation());
+  out.q_WT = ToQuat(s.tool.X_WT);
+  out.f_T_W = ToVec3(s.tool.f_T_W);
+  out.active_cues = 0;
+  const auto bit = [](cues::CueKind k) { return 1u << static_cast<unsigned>(k); };
+  if (s.cues.field_stiffness_N_per_m > 0) out.active_cues |= bit(cues::CueKind::kConvergentField);
+  if (s.cues.field_stiffness_N_per_m < 0) out.active_cues |= bit(cues::CueKind::kDivergentField);
+  if (s.cues.tremor_gain != 1) out.active_cues |= bit(cues::CueKind::kAmplifiedTremor);
+  out.has_needle = s.needle ? 1 : 0;
+  if (s.needle) {
+    const geometry::ArcTorusClearance& c = s.needle->clearance;
+    const bool ok = c.status == geometry::ClearanceStatus::kOk;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    NeedleSnapshot& n = out.needle;
+    n.p_WN = ToVec3(s.needle->X_WN.translation());
+    n.q_WN = ToQuat(s.needle->X_WN);
+    n.status = c.status;
+    n.clearance_m = ok ? c.clearance_m : nan;
+    n.contact = ok && c.contact ? 1 : 0;
+    n.s_rad = ok ? c.s_rad : nan;
+    n.p_WD = ToVec3(c.p_WD);
+    n.p_WB = ToVec3(c.p_WB);
+  }
+  out.has_tremor = s.tremor ? 1 : 0;
+  if (s.tremor) {
+    out.tremor_band_m = s.tremor->band_m;
+    out.tremor_rms_m = std::sqrt(s.tremor->mean_square_m2);
+  }
+  out.module_count = static_cast<int>(sim.module_count());
+  for (std::size_t i = 0; i < sim.module_count(); ++i) {
+    const ModuleStatus st = sim.module(i).Status(s);
+    out.modules[i] = {sim.last_step_time_s(i), st.error_estimate, st.warnings};
+  }
+  out.ack_count = s.cues.ack_count;
+  for (int i = 0; i < s.cues.ack_count; ++i) out.acks[i] = s.cues.acks[i];
+  out.fault = s.score.fault;
+  out.fault_value = s.score.fault_value;
+  out.contact_event = s.score.contact_event;
+  out.force_warnings = s.tool.force_warnings;
+  out.score = s.score;
+}
+
+}  // namespace microdex::station

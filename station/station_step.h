@@ -1,0 +1,86 @@
+#pragma once
+// One step of a station's simulation: (simulation, input, state) → state.
+//
+// The Simulation is what does not change while the station runs — the scene, the scene's
+// modules (their models and their caches), the guidance path and the tremor filter — built
+// once from the scene. state::StationState is everything that does. StepStation is the one
+// place where the device sample and the instructor's cues enter the simulation:
+//
+//   StepStation
+//     TakeCues         queue the cue requests of this input; apply those due (state.cues)
+//     CalcToolAfterCues  tremor band of the raw device motion, amplified tremor → tool pose
+//     CalcCueForce     guidance / destabilising field on the tool
+//     StepModules      each module of the scene, in the scene's order (module sections)
+//     SaturateForce    finite and saturated, always (state.tool)
+//     UpdateScore      running totals and fault episodes (state.score)
+//
+// Given a scene, a seed and the input stream (device samples and cue requests), the states
+// are bit-for-bit the same on the same build: tests/unit/station/station_step_test.cc.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "common/cues/path_force_field.h"
+#include "common/cues/tremor_filter.h"
+#include "common/scene/scene.h"
+#include "common/state/station_state.h"
+#include "station/device.h"
+#include "station/module.h"
+#include "station/rt/clock.h"
+#include "station/snapshot.h"
+
+namespace microdex::station {
+
+// What enters a step from outside: the device sample and the cue requests that arrived since
+// the previous step (each applied at the first step >= its apply_at_step).
+struct StationInput {
+  DeviceSample device;
+  std::span<const state::CueRequest> cues;
+};
+
+class Simulation {
+ public:
+  // Builds the scene's modules (throws std::runtime_error naming a module this build lacks).
+  explicit Simulation(const scene::SceneModel& scene);
+
+  // The state at the task's start: every module's section, the generator seeded.
+  state::StationState MakeInitialState(std::uint64_t seed) const;
+
+  const scene::SceneModel& scene() const { return scene_; }
+  double dt_s() const { return dt_s_; }
+  std::size_t module_count() const { return modules_.size(); }
+  const Module& module(std::size_t i) const { return *modules_[i]; }
+  Module& module(std::size_t i) { return *modules_[i]; }
+
+  // When set, StepStation times each module's step with this clock (telemetry only).
+  void set_step_clock(rt::Clock* clock) { step_clock_ = clock; }
+  // Wall time of module i's last step (0 without a step clock).
+  double last_step_time_s(std::size_t i) const { return step_time_s_[i]; }
+
+ private:
+  friend void StepStation(Simulation&, const StationInput&, state::StationState&);
+
+  const scene::SceneModel& scene_;
+  double dt_s_;
+  std::vector<std::unique_ptr<Module>> modules_;
+  cues::IdealPath path_;
+  cues::TremorFilterModel tremor_filter_;
+  rt::Clock* step_clock_ = nullptr;
+  std::vector<double> step_time_s_;
+};
+
+// Advances the state by one step. Never allocates, locks, logs or throws.
+void StepStation(Simulation& sim, const StationInput& in, state::StationState& state);
+
+// The snapshot's share of the state after a step (everything but the tick's timing).
+void ProjectSnapshot(const Simulation& sim, const state::StationState& state, TickSnapshot& out);
+
+// Cue limits: a request outside them is rejected before it reaches the simulation.
+inline constexpr double kMaxFieldStiffness_N_per_m = 2000;
+inline constexpr double kMaxTremorGain = 20;
+// Empty when the cue can be applied; otherwise why not.
+const char* CheckCue(cues::CueKind kind, double param);
+
+}  // namespace microdex::station
