@@ -26,9 +26,9 @@ namespace microdex::station {
 struct StationRings {
   explicit StationRings(std::size_t snapshot_capacity = 4096, std::size_t cue_capacity = 64)
       : snapshots(snapshot_capacity), cues(cue_capacity) {}
-  rt::SpscRing<TickSnapshot> snapshots;      // producer: haptic thread; consumer: publisher thread
-  rt::SpscRing<state::CueRequest> cues;      // producer: publisher thread; consumer: haptic thread
-  LargeFrames frames;                        // producer: haptic thread; consumer: publisher thread
+  rt::SpscRing<TickSnapshot> snapshots;  // producer: haptic thread; consumer: publisher thread
+  rt::SpscRing<state::CueRequest> cues;  // producer: publisher thread; consumer: haptic thread
+  LargeFrames frames;                    // producer: haptic thread; consumer: publisher thread
 };
 
 struct HapticLoopConfig {
@@ -43,8 +43,8 @@ struct HapticLoopConfig {
 
 class HapticLoop {
  public:
-  HapticLoop(const scene::SceneModel& scene, Device& device, StationRings& rings,
-             rt::Clock& clock, const HapticLoopConfig& config = {});
+  HapticLoop(const scene::SceneModel& scene, Device& device, StationRings& rings, rt::Clock& clock,
+             const HapticLoopConfig& config = {});
 
   // One step, started at tick_start_ns (monotonic) with the given period since the previous
   // start; stamp_ns is the CLOCK_REALTIME source stamp.

@@ -72,8 +72,7 @@ void ApplyCue(const state::CueRequest& cue, state::CueState& c) {
 // In arrival order, those due at this step are applied, at most kMaxAcksPerStep per step (the
 // rest wait for the next step and are acknowledged with it); requests beyond the pending
 // capacity are dropped (the caller hands over no more than there is room for).
-void TakeCues(std::span<const state::CueRequest> arrived, std::uint64_t step,
-              state::CueState& c) {
+void TakeCues(std::span<const state::CueRequest> arrived, std::uint64_t step, state::CueState& c) {
   c.ack_count = 0;
   for (const state::CueRequest& r : arrived) {
     if (c.pending_count < state::kMaxPendingCues) c.pending[c.pending_count++] = r;
@@ -108,8 +107,8 @@ void CalcToolAfterCues(const cues::TremorFilterModel& filter, const DeviceSample
 Eigen::Vector3d CalcCueForce(const cues::IdealPath& path, double max_force_N,
                              const state::StationState& s) {
   if (s.cues.field_stiffness_N_per_m == 0) return Eigen::Vector3d::Zero();
-  return cues::CalcPathFieldForce(path, s.tool.X_WT.translation(),
-                                  s.cues.field_stiffness_N_per_m, max_force_N);
+  return cues::CalcPathFieldForce(path, s.tool.X_WT.translation(), s.cues.field_stiffness_N_per_m,
+                                  max_force_N);
 }
 
 // Reads the tool; writes state.tool.f_T_W: finite and saturated, always.

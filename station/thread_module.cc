@@ -89,9 +89,8 @@ void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
   const Eigen::Matrix3d& R = in.X_WT.linear();
   const double roll_rad = std::atan2(R(2, 1), R(2, 2));
   thread::SetGraspTarget(t.thread, tool_slot_, in.X_WT.translation(), roll_rad);
-  thread::StepThread(model_,
-                     std::span<const thread::Collider>(colliders_.data(), num_colliders_), ws_,
-                     t.thread);
+  thread::StepThread(model_, std::span<const thread::Collider>(colliders_.data(), num_colliders_),
+                     ws_, t.thread);
   t.f_tool_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
   f_T_W += t.f_tool_W;
 }
@@ -102,8 +101,8 @@ ModuleStatus ThreadModule::Status(const state::StationState& s) const {
   out.fault = st.max_strain > max_strain_;
   out.fault_value = st.max_strain;
   out.error_estimate = st.max_strain;
-  out.warnings =
-      static_cast<std::uint32_t>(st.nonfinite_resets + st.factorization_failures + st.contact_overflows);
+  out.warnings = static_cast<std::uint32_t>(st.nonfinite_resets + st.factorization_failures +
+                                            st.contact_overflows);
   return out;
 }
 

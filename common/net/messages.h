@@ -3,11 +3,12 @@
 // Physics, the station and the instructor use these; only common/net sees microdex::msg.
 // Bounds (kMax...) are those of the IDL; FromMsg rejects a sample that exceeds them.
 
-#include "common/cues/cue_kind.h"
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "common/cues/cue_kind.h"
 
 namespace microdex::net {
 

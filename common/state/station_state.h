@@ -47,7 +47,7 @@ struct CueAck {
 // The device as the station last read it, and the tool after the cues.
 struct ToolState {
   Eigen::Isometry3d X_WT_device = Eigen::Isometry3d::Identity();  // raw device sample
-  double gripper = 0;                                              // 0 open .. 1 closed
+  double gripper = 0;                                             // 0 open .. 1 closed
   std::uint32_t buttons = 0;
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  // tool after cues (what modules see)
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // force sent to the device: finite, saturated
@@ -89,8 +89,8 @@ struct ScoreState {
   std::array<double, 3> p_WT_ideal_prev{};   // as plain data)
   // This step.
   std::uint8_t fault = 0;
-  double fault_value = 0;          // of the first module at fault (clearance, strain, force)
-  std::int8_t contact_event = 0;   // +1 a fault episode began, -1 one ended
+  double fault_value = 0;         // of the first module at fault (clearance, strain, force)
+  std::int8_t contact_event = 0;  // +1 a fault episode began, -1 one ended
 };
 inline constexpr int kContactReleaseSteps = 50;
 

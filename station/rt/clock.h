@@ -1,7 +1,8 @@
 #pragma once
 // The haptic loop's time source, injected so tests run the loop without wall-clock time
-// (time is a dependency like any other). MonotonicClock is the real one: absolute deadlines on CLOCK_MONOTONIC with
-// clock_nanosleep(TIMER_ABSTIME), source stamps from CLOCK_REALTIME. Neither allocates.
+// (time is a dependency like any other). MonotonicClock is the real one: absolute deadlines on
+// CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME), source stamps from CLOCK_REALTIME. Neither
+// allocates.
 
 #include <cstdint>
 

@@ -111,8 +111,8 @@ int RunState(int argc, char** argv) {
   if (scenes.empty()) {
     const char* dir = std::getenv("MICRODEX_SOURCE_DIR");
     const std::string base = std::string(dir ? dir : MICRODEX_BENCH_SOURCE_DIR) + "/assets/scenes/";
-    for (const char* f : {"needle_tube.yaml", "thread_pull.yaml", "tissue_press.yaml",
-                          "suture_on_tissue.yaml"}) {
+    for (const char* f :
+         {"needle_tube.yaml", "thread_pull.yaml", "tissue_press.yaml", "suture_on_tissue.yaml"}) {
       scenes.push_back(base + f);
     }
   }
@@ -143,8 +143,8 @@ int RunState(int argc, char** argv) {
     for (std::size_t i = 0; i < results.size(); ++i) {
       const SceneResult& r = results[i];
       const double ratio = r.hash_median_ns / r.step_median_ns;
-      f << (i ? ",\n" : "\n") << "    {\"scene\": \"" << r.scene << "\", \"state_bytes\": "
-        << r.state_bytes << ", \"step_median_ns\": " << r.step_median_ns
+      f << (i ? ",\n" : "\n") << "    {\"scene\": \"" << r.scene
+        << "\", \"state_bytes\": " << r.state_bytes << ", \"step_median_ns\": " << r.step_median_ns
         << ", \"hash_median_ns\": " << r.hash_median_ns << ", \"hash_per_step\": " << ratio
         << ", \"hash_share_at_1hz\": " << ratio / 1000 << "}";
     }

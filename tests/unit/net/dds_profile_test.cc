@@ -1,6 +1,6 @@
 // The loopback profile keeps every packet on the host, the endpoint profiles carry the QoS of
-// the topic table (common/net/README.md), and stations of different courses (partition) or domains do
-// not see each other.
+// the topic table (common/net/README.md), and stations of different courses (partition) or domains
+// do not see each other.
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <gtest/gtest.h>

@@ -114,10 +114,10 @@ TEST(StateHash, ChangingAnyFieldAnywhereChangesHashAndEquality) {
   EXPECT_TRUE(s == reference) << "every element was restored";
   EXPECT_EQ(CalcStateHash(s), p.base_hash);
   // Every section was present and visited.
-  for (const char* field : {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step",
-                            "cues.acks[].cue_id", "score.contacts", "needle.X_WN",
-                            "tremor.mean_square_m2", "thread.x_W", "thread.grasps[].p_WT",
-                            "tissue.w_m", "tissue.leaves[].ci", "tissue.contact_force_N"}) {
+  for (const char* field :
+       {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step", "cues.acks[].cue_id",
+        "score.contacts", "needle.X_WN", "tremor.mean_square_m2", "thread.x_W",
+        "thread.grasps[].p_WT", "tissue.w_m", "tissue.leaves[].ci", "tissue.contact_force_N"}) {
     EXPECT_TRUE(p.names.count(field)) << field;
   }
   EXPECT_GT(p.elements, 500u);

@@ -95,7 +95,8 @@ TEST(Scene, IdealPathStaysOnTheCoreCircle) {
     EXPECT_NEAR(X_WT.translation().head<2>().norm(), s.needle.radius_m, 1e-15);
     arc.X_WN = X_WT * s.X_TN();
     // The ideal needle lies on the core circle: its clearance is the tube radius.
-    EXPECT_NEAR(geometry::CalcArcTorusClearanceSampled(arc, torus, 65).clearance_m, s.vessel.tube_radius_m, 1e-12);
+    EXPECT_NEAR(geometry::CalcArcTorusClearanceSampled(arc, torus, 65).clearance_m,
+                s.vessel.tube_radius_m, 1e-12);
   }
 }
 

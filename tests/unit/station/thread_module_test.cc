@@ -85,7 +85,8 @@ TEST(ThreadModule, SlackThreadPullsWithAlmostNothing) {
   const Eigen::Vector3d anchor = scene.thread->p_W_anchor;
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
   const double length_m = scene.thread->def.length_m;
-  const Eigen::Vector3d f = PullTo(m, s, anchor + length_m * x, anchor + 0.9 * length_m * x, 300, 700);
+  const Eigen::Vector3d f =
+      PullTo(m, s, anchor + length_m * x, anchor + 0.9 * length_m * x, 300, 700);
   // 10 % slack: only bending of the buckled nylon (κ_b ~ 1e-7 N m over mm) and its weight.
   EXPECT_LT(f.norm(), 1e-3);
   EXPECT_FALSE(m.Status(s).fault);
@@ -101,7 +102,8 @@ TEST(ThreadModule, OverstretchIsAFaultAndTheForceStaysSaturated) {
   const double length_m = scene.thread->def.length_m;
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
   // 30 % strain would be 0.44 N; 200 % is far beyond the 2 N saturation.
-  const Eigen::Vector3d f = PullTo(m, s, anchor + length_m * x, anchor + 3 * length_m * x, 500, 100);
+  const Eigen::Vector3d f =
+      PullTo(m, s, anchor + length_m * x, anchor + 3 * length_m * x, 500, 100);
   EXPECT_TRUE(f.allFinite());
   EXPECT_LE(f.norm(), scene.haptic.max_force_N * (1 + 1e-12));
   EXPECT_TRUE(m.Status(s).fault);
@@ -115,7 +117,8 @@ TEST(ThreadModule, FrameCarriesTheNodes) {
   auto frames = std::make_unique<LargeFrames>();
   EXPECT_FALSE(frames->thread.Update());
   const Eigen::Vector3d anchor = scene.thread->p_W_anchor;
-  PullTo(m, s, anchor + 0.03 * Eigen::Vector3d::UnitX(), Eigen::Vector3d(0.02, 0.01, 0.004), 50, 10);
+  PullTo(m, s, anchor + 0.03 * Eigen::Vector3d::UnitX(), Eigen::Vector3d(0.02, 0.01, 0.004), 50,
+         10);
   m.WriteFrame(s, 60, 1234, *frames);
   ASSERT_TRUE(frames->thread.Update());
   const ThreadFrame& f = frames->thread.front();
