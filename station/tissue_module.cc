@@ -19,6 +19,7 @@ TissueModule::TissueModule(const scene::SceneModel& scene)
   const std::size_t side = (std::size_t{1} << display_level_) + 1;
   MICRODEX_CHECK(side * side <= kMaxFrameTissueNodes);  // display_level <= 6 (scene)
   grid_m_.assign(side * side, 0.0);
+  field_scratch_m_.assign(model_.num_grid_nodes, 0.0);
 }
 
 void TissueModule::InitState(state::StationState& s) const {
@@ -57,7 +58,8 @@ void TissueModule::WriteFrame(const state::StationState& s, std::uint64_t step,
                               std::int64_t stamp_ns, LargeFrames& frames) {
   const fem::TissueState& state = s.tissue->tissue;
   TissueFrame& f = frames.tissue.back();
-  fem::CalcDisplacementGrid(model_, state, display_level_, grid_m_);  // same size: no allocation
+  // Same sizes every call: no allocation.
+  fem::CalcDisplacementGrid(model_, state, display_level_, field_scratch_m_, grid_m_);
   const std::uint32_t side = (1u << display_level_) + 1;
   f.step = step;
   f.stamp_ns = stamp_ns;
@@ -71,7 +73,7 @@ void TissueModule::WriteFrame(const state::StationState& s, std::uint64_t step,
   // magnitude is at a contact node (maximum principle).
   double w_max = 0;
   for (int c = 0; c < state.num_contacts; ++c) {
-    w_max = std::max(w_max, std::abs(state.w_m[state.contact_nodes[c]]));
+    w_max = std::max(w_max, std::abs(field_scratch_m_[state.contact_nodes[c]]));
   }
   f.max_displacement_m = w_max;
   frames.tissue.Publish();

@@ -50,7 +50,8 @@ class TissueModule final : public Module {
   double half_bar_m_;
   int display_level_;
   double max_force_N_;
-  std::vector<double> grid_m_;  // display grid, sized once
+  std::vector<double> grid_m_;           // display grid, sized once
+  std::vector<double> field_scratch_m_;  // the field on the whole grid (ScatterField), sized once
   std::uint32_t mesh_revision_ = 0;
 };
 

@@ -330,8 +330,8 @@ const char* ToString(TissueStatus status) {
 
 TissueState MakeTissueState(const TissueModel& model) {
   TissueState state;
-  state.w_m.assign(model.num_grid_nodes, 0.0);
-  state.node_step.assign(model.num_grid_nodes, 0u);
+  state.field_nodes.assign(model.max_mesh_nodes, 0);
+  state.field_w_m.assign(model.max_mesh_nodes, 0.0);
   state.leaves.resize(model.max_leaves);
   state.contact_nodes.resize(model.def.max_contact_nodes);
   state.contact_force_N.resize(model.def.max_contact_nodes);
@@ -343,6 +343,8 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   const int n = model.max_mesh_nodes;  // bound on the free unknowns of a step
   node_dof.assign(num_nodes, -1);
   contact_stamp.assign(num_nodes, 0u);
+  grid_w_m.assign(num_nodes, 0.0);
+  grid_stamp.assign(num_nodes, 0u);
   dof_node.resize(n);
   order_keys.resize(n);
   order_scratch.resize(n);
@@ -475,9 +477,17 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
         status = TissueStatus::kFactorisationFailed;
     } else {
       const bool warm = def.solver != SolverKind::kCg && state.step > 0;
+      if (warm) {
+        ++ws.field_stamp;
+        for (int k = 0; k < state.num_field_nodes; ++k) {
+          const int node = state.field_nodes[k];
+          ws.grid_w_m[node] = state.field_w_m[k];
+          ws.grid_stamp[node] = ws.field_stamp;
+        }
+      }
       for (int i = 0; i < n; ++i) {
         const int node = ws.dof_node[i];
-        ws.x[i] = warm && state.node_step[node] == state.step ? state.w_m[node] : 0.0;
+        ws.x[i] = warm && ws.grid_stamp[node] == ws.field_stamp ? ws.grid_w_m[node] : 0.0;
       }
       Preconditioner preconditioner = Preconditioner::kNone;
       bool factored = true;
@@ -557,9 +567,10 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   ++state.step;
   for (int k = 0; k < mesh.num_active_nodes; ++k) {
     const int node = mesh.active_nodes[k];
-    state.w_m[node] = NodeValue(ws, ws.node_dof[node]);
-    state.node_step[node] = state.step;
+    state.field_nodes[k] = node;
+    state.field_w_m[k] = NodeValue(ws, ws.node_dof[node]);
   }
+  state.num_field_nodes = mesh.num_active_nodes;
   std::copy_n(mesh.leaves.begin(), mesh.num_leaves, state.leaves.begin());
   state.num_leaves = mesh.num_leaves;
   std::copy_n(ws.contact_nodes.begin(), ws.num_contacts, state.contact_nodes.begin());
@@ -574,9 +585,17 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   ws.stats = stats;
 }
 
+void ScatterField(const TissueState& state, std::vector<double>& grid_w_m) {
+  for (int k = 0; k < state.num_field_nodes; ++k) {
+    grid_w_m[state.field_nodes[k]] = state.field_w_m[k];
+  }
+}
+
 void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, int level,
-                          std::vector<double>& out_m) {
+                          std::vector<double>& grid_w_m, std::vector<double>& out_m) {
   MICRODEX_CHECK(level >= 0 && level <= 12);  // the display grid may be finer or coarser
+  grid_w_m.resize(model.num_grid_nodes);
+  ScatterField(state, grid_w_m);
   const int cells = 1 << level;
   const int side = cells + 1;
   out_m.assign(static_cast<size_t>(side) * side, 0.0);
@@ -606,7 +625,7 @@ void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, in
           constexpr double kInsideTol = -1e-9;
           if (l0 < kInsideTol || l1 < kInsideTol || l2 < kInsideTol) continue;
           out_m[static_cast<size_t>(j) * side + i] =
-              l0 * state.w_m[nd[0]] + l1 * state.w_m[nd[1]] + l2 * state.w_m[nd[2]];
+              l0 * grid_w_m[nd[0]] + l1 * grid_w_m[nd[1]] + l2 * grid_w_m[nd[2]];
           break;
         }
       }

@@ -49,12 +49,15 @@ struct TissueStepStats {
 };
 
 // Plain copyable state of the tissue. Arrays are sized at MakeTissueState; the step only
-// writes into them.
+// writes into them. The field is kept on the last good mesh only (its vertices in the mesh's
+// first-use order): nothing else of the grid is ever read again, so the state stays the size
+// of the mesh (a few thousand nodes), not of the finest grid.
 struct TissueState {
-  std::vector<double> w_m;               // [num_grid_nodes] displacement (z), last good step
-  std::vector<std::uint32_t> node_step;  // [num_grid_nodes] w_m valid where == step
-  std::uint32_t step = 0;                // count of good steps
-  std::vector<Leaf> leaves;              // [max_leaves] mesh of the last good step (display)
+  std::vector<std::int32_t> field_nodes;  // [max_mesh_nodes] grid nodes of the last good mesh
+  std::vector<double> field_w_m;          // [max_mesh_nodes] displacement (z) at each, m
+  int num_field_nodes = 0;
+  std::uint32_t step = 0;    // count of good steps
+  std::vector<Leaf> leaves;  // [max_leaves] mesh of the last good step (display)
   int num_leaves = 0;
   std::vector<std::int32_t> contact_nodes;  // [max_contact_nodes]
   std::vector<double> contact_force_N;      // [max_contact_nodes] tool → tissue, (3.12)
@@ -109,6 +112,10 @@ struct TissueWorkspace {
   bool ic_valid = false;
   CgWorkspace cg;
   std::unique_ptr<CholmodSolver> cholmod;
+  // The state's field scattered on the grid for the warm start (a cache of the state).
+  std::vector<double> grid_w_m;           // [num_grid_nodes]
+  std::vector<std::uint64_t> grid_stamp;  // [num_grid_nodes] == field_stamp: grid_w_m valid
+  std::uint64_t field_stamp = 0;
   // The last step's cost and solver report (wall-clock timings: telemetry, not state).
   TissueStepStats stats;
   // When false every step re-assembles the values and re-factorises even if the pattern is
@@ -123,9 +130,15 @@ struct TissueWorkspace {
 void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
                 TissueState& state);
 
+// Writes the state's field into `grid_w_m` ([num_grid_nodes]) at the last good mesh's nodes;
+// the other entries are left as they were.
+void ScatterField(const TissueState& state, std::vector<double>& grid_w_m);
+
 // Displacement of the last good step at the nodes of a uniform grid of `level`
 // (out: (2^level + 1)², row-major in y, 0 ≤ level ≤ 12), interpolated on the step's triangles.
+// `grid_w_m` is scratch of num_grid_nodes entries (ScatterField); neither vector is resized
+// when it has the right size already.
 void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, int level,
-                          std::vector<double>& out_m);
+                          std::vector<double>& grid_w_m, std::vector<double>& out_m);
 
 }  // namespace microdex::fem

@@ -160,9 +160,12 @@ void Thread(S& m, V& v) {
 template <typename S, typename V>
 void Tissue(S& m, V& v) {
   auto& t = m.tissue;
-  // The field on the whole grid: entries outside the last mesh still seed the next solve.
-  v("tissue.w_m", t.w_m.data(), t.w_m.size());
-  v("tissue.node_step", t.node_step.data(), t.node_step.size());
+  // The field on the last good mesh (the only part of the grid the next step reads).
+  v("tissue.num_field_nodes", &t.num_field_nodes, 1);
+  const std::size_t nf = std::min(static_cast<std::size_t>(std::max(t.num_field_nodes, 0)),
+                                  std::min(t.field_nodes.size(), t.field_w_m.size()));
+  v("tissue.field_nodes", t.field_nodes.data(), nf);
+  v("tissue.field_w_m", t.field_w_m.data(), nf);
   v("tissue.step", &t.step, 1);
   v("tissue.num_leaves", &t.num_leaves, 1);
   Counted(t.leaves, t.num_leaves, [&](auto& l) {

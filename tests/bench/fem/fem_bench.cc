@@ -267,8 +267,8 @@ int RunFem(int argc, char** argv) {
                 dist.ref_N.push_back(ref);
               }
               if (on_line && den > 0) run.nodal_rms = std::sqrt(num / den);
-              std::vector<double> field;
-              CalcDisplacementGrid(model, state, kFieldLevel, field);
+              std::vector<double> field, scratch;
+              CalcDisplacementGrid(model, state, kFieldLevel, scratch, field);
               double sum2 = 0;
               int count = 0;
               for (int j = 0; j < field_side; ++j) {

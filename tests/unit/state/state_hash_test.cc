@@ -114,10 +114,10 @@ TEST(StateHash, ChangingAnyFieldAnywhereChangesHashAndEquality) {
   EXPECT_TRUE(s == reference) << "every element was restored";
   EXPECT_EQ(CalcStateHash(s), p.base_hash);
   // Every section was present and visited.
-  for (const char* field :
-       {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step", "cues.acks[].cue_id",
-        "score.contacts", "needle.X_WN", "tremor.mean_square_m2", "thread.x_W",
-        "thread.grasps[].p_WT", "tissue.w_m", "tissue.leaves[].ci", "tissue.contact_force_N"}) {
+  for (const char* field : {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step",
+                            "cues.acks[].cue_id", "score.contacts", "needle.X_WN",
+                            "tremor.mean_square_m2", "thread.x_W", "thread.grasps[].p_WT",
+                            "tissue.field_w_m", "tissue.leaves[].ci", "tissue.contact_force_N"}) {
     EXPECT_TRUE(p.names.count(field)) << field;
   }
   EXPECT_GT(p.elements, 500u);
@@ -158,7 +158,7 @@ TEST(StateHash, IsXxh3OfTheFieldBytesInVisitOrder) {
   const std::uint32_t version = kStateHashVersion;
   c("version", &version, 1);
   VisitStationState(busy.s, c);
-  EXPECT_GT(c.bytes.size(), 30000u);
+  EXPECT_GT(c.bytes.size(), 10000u);
   EXPECT_EQ(CalcStateHash(busy.s), XXH3_64bits(c.bytes.data(), c.bytes.size()));
 }
 
