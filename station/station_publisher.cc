@@ -7,8 +7,8 @@
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
+#include "common/knot/recognition.h"
 #include "common/net/convert.h"
-#include "common/thread/knot_recognition.h"
 #include "cue_commandPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
@@ -323,7 +323,7 @@ void StationPublisher::RecognizeKnot() {
   const auto& nodes = w_->thread_plain.nodes;
   if (nodes.size() < 2) return;
   try {
-    knot_ = std::string(thread::KnotName(thread::RecognizeKnot(nodes)));
+    knot_ = std::string(knot::KnotName(knot::RecognizeKnot(nodes)));
   } catch (const std::exception&) {
     knot_ = "unknown";  // degenerate polyline (e.g. coincident nodes)
   }

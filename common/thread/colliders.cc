@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "common/thread/segment_distance.h"
+#include "common/geometry/segment_distance.h"
 
 namespace microdex::thread {
 namespace {
@@ -66,7 +66,7 @@ LinkColliderGap CalcLinkColliderGap(const Collider& collider, const Eigen::Vecto
       return out;
     }
     case ColliderKind::kSphere: {
-      out.s = ClosestSegmentPointParam(x0, x1, collider.a_W);
+      out.s = geometry::ClosestSegmentPointParam(x0, x1, collider.a_W);
       const Eigen::Vector3d p = x0 + out.s * (x1 - x0);
       const Eigen::Vector3d d = p - collider.a_W;
       const double dist = d.norm();
@@ -75,7 +75,8 @@ LinkColliderGap CalcLinkColliderGap(const Collider& collider, const Eigen::Vecto
       return out;
     }
     case ColliderKind::kCapsule: {
-      const SegmentClosest c = ClosestSegmentSegment(x0, x1, collider.a_W, collider.b_W);
+      const geometry::SegmentClosest c =
+          geometry::ClosestSegmentSegment(x0, x1, collider.a_W, collider.b_W);
       out.s = c.s;
       const Eigen::Vector3d d = c.p - c.q;
       out.n_W = c.distance_m > 0.0 ? Eigen::Vector3d(d / c.distance_m)

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "common/thread/segment_distance.h"
+#include "common/geometry/segment_distance.h"
 #include "common/thread/sphere_bvh.h"
 
 namespace microdex::thread {
@@ -63,7 +63,7 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
     const Eigen::Vector3d a1 = x.col(pair.a + 1);
     const Eigen::Vector3d b0 = x.col(pair.b);
     const Eigen::Vector3d b1 = x.col(pair.b + 1);
-    const SegmentClosest c = ClosestSegmentSegment(a0, a1, b0, b1);
+    const geometry::SegmentClosest c = geometry::ClosestSegmentSegment(a0, a1, b0, b1);
     const double gap = c.distance_m - 2.0 * model.radius_m;
     if (gap >= cutoff) continue;
     SelfContact& sc = w.self_contacts[n_self++];
@@ -166,10 +166,10 @@ int ApplyNonPenetrationGuard(const ThreadModel& model, std::span<const Collider>
   for (int pass = 0; pass < 2; ++pass) {
     for (int k = 0; k < num_pairs; ++k) {
       const LinkPair& pair = w.pairs[k];
-      const SegmentClosest now =
-          ClosestSegmentSegment(x.col(pair.a), x.col(pair.a + 1), x.col(pair.b), x.col(pair.b + 1));
-      const SegmentClosest before = ClosestSegmentSegment(x0.col(pair.a), x0.col(pair.a + 1),
-                                                          x0.col(pair.b), x0.col(pair.b + 1));
+      const geometry::SegmentClosest now = geometry::ClosestSegmentSegment(
+          x.col(pair.a), x.col(pair.a + 1), x.col(pair.b), x.col(pair.b + 1));
+      const geometry::SegmentClosest before = geometry::ClosestSegmentSegment(
+          x0.col(pair.a), x0.col(pair.a + 1), x0.col(pair.b), x0.col(pair.b + 1));
       const bool interior = now.s > kInterior && now.s < 1.0 - kInterior && now.t > kInterior &&
                             now.t < 1.0 - kInterior && before.s > kInterior &&
                             before.s < 1.0 - kInterior && before.t > kInterior &&
@@ -215,8 +215,8 @@ double CalcMinNonAdjacentDistance(const ThreadModel& model, const Eigen::Matrix3
   double best = std::numeric_limits<double>::infinity();
   for (int a = 0; a < model.num_links; ++a) {
     for (int b = a + 2; b < model.num_links; ++b) {
-      const SegmentClosest c =
-          ClosestSegmentSegment(x_W.col(a), x_W.col(a + 1), x_W.col(b), x_W.col(b + 1));
+      const geometry::SegmentClosest c =
+          geometry::ClosestSegmentSegment(x_W.col(a), x_W.col(a + 1), x_W.col(b), x_W.col(b + 1));
       best = std::min(best, c.distance_m);
     }
   }

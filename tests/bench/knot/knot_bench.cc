@@ -1,6 +1,6 @@
 // microdex-bench knot: the recognised knot of an OBJ polyline (README.md "Command-line
 // contracts"), and
-// --speed, the cost of recognition against thread length (README_knots.md "Speed").
+// --speed, the cost of recognition against thread length (common/knot/README.md "Speed").
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -12,16 +12,16 @@
 #include <vector>
 
 #include "bench_registry.h"
-#include "common/thread/knot_invariants.h"
-#include "common/thread/knot_obj.h"
-#include "common/thread/knot_recognition.h"
-#include "common/thread/knot_shapes.h"
+#include "common/knot/invariants.h"
+#include "common/knot/obj.h"
+#include "common/knot/recognition.h"
+#include "tests/support/knot_shapes.h"
 
 namespace microdex::bench {
 namespace {
 
-using thread::knot_shapes::Curve;
-namespace shapes = thread::knot_shapes;
+using knot::shapes::Curve;
+namespace shapes = knot::shapes;
 
 // Thread diameter of the speed cases (10-0 nylon); nodes one diameter apart.
 constexpr double kDiameter_m = 3e-5;
@@ -29,27 +29,26 @@ constexpr double kDiameter_m = 3e-5;
 int PrintKnot(const std::string& path, bool verbose) {
   std::vector<Eigen::Vector3d> nodes;
   try {
-    nodes = thread::ReadObjPolyline(path);
+    nodes = knot::ReadObjPolyline(path);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "microdex-bench knot: %s\n", e.what());
     return 2;
   }
-  thread::KnotAnalysis a;
+  knot::KnotAnalysis a;
   try {
-    a = thread::AnalyzeKnot(nodes, {.locate = verbose});
+    a = knot::AnalyzeKnot(nodes, {.locate = verbose});
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "microdex-bench knot: %s: %s\n", path.c_str(), e.what());
     return 2;
   }
-  std::printf("%s\n", std::string(thread::KnotName(a.type)).c_str());
+  std::printf("%s\n", std::string(knot::KnotName(a.type)).c_str());
   if (verbose) {
     std::fprintf(stderr,
                  "nodes %zu, reduced vertices %d, crossings %d -> %d, Alexander %s, "
                  "determinant %lld, signature %d, Jones %s, projections %d/%d agree",
                  nodes.size(), a.reduced_vertices, a.raw_crossings, a.crossings,
-                 thread::knot::ToString(a.alexander).c_str(), static_cast<long long>(a.determinant),
-                 a.signature,
-                 a.jones_computed ? thread::knot::ToString(a.jones).c_str() : "(skipped)",
+                 knot::ToString(a.alexander).c_str(), static_cast<long long>(a.determinant),
+                 a.signature, a.jones_computed ? knot::ToString(a.jones).c_str() : "(skipped)",
                  a.projections_agreeing, a.projections_tried);
     if (a.located) {
       std::fprintf(stderr, ", core s = [%.6g, %.6g] m", a.core_start_s_m, a.core_end_s_m);
@@ -112,19 +111,19 @@ int RunSpeed(const std::vector<int>& sizes, int repeats, const std::string& json
       const double spacing = length / (n - 1);
       Curve thread = shapes::ResampleOpen(shape, spacing);
       for (auto& p : thread) p *= kDiameter_m / spacing;
-      thread::KnotType type = thread::KnotType::kUnknown;
+      knot::KnotType type = knot::KnotType::kUnknown;
       const double recognize_us =
-          MedianMicroseconds([&] { type = thread::RecognizeKnot(thread); }, repeats);
+          MedianMicroseconds([&] { type = knot::RecognizeKnot(thread); }, repeats);
       const double analyze_us =
-          MedianMicroseconds([&] { (void)thread::AnalyzeKnot(thread); }, std::max(3, repeats / 4));
-      thread::KnotType unreduced_type = thread::KnotType::kUnknown;
+          MedianMicroseconds([&] { (void)knot::AnalyzeKnot(thread); }, std::max(3, repeats / 4));
+      knot::KnotType unreduced_type = knot::KnotType::kUnknown;
       const double unreduced_us = MedianMicroseconds(
           [&] {
             unreduced_type =
-                thread::RecognizeKnot(thread, {.reduce_polygon = false, .locate = false});
+                knot::RecognizeKnot(thread, {.reduce_polygon = false, .locate = false});
           },
           std::max(3, repeats / 4));
-      const std::string result(thread::KnotName(type));
+      const std::string result(knot::KnotName(type));
       if (result != c.expected) ++wrong;
       std::printf("%-13s %6zu %-15s %12.1f %12.1f %14.1f %8.1f\n", c.name.c_str(), thread.size(),
                   result.c_str(), recognize_us, analyze_us, unreduced_us,
@@ -136,7 +135,7 @@ int RunSpeed(const std::vector<int>& sizes, int repeats, const std::string& json
                     "\"unreduced_us\": %.2f, \"unreduced_result\": \"%s\"}",
                     first ? "" : ",", c.name.c_str(), thread.size(), result.c_str(), c.expected,
                     recognize_us, analyze_us, unreduced_us,
-                    std::string(thread::KnotName(unreduced_type)).c_str());
+                    std::string(knot::KnotName(unreduced_type)).c_str());
       json += row;
       first = false;
     }

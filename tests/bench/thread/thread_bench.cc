@@ -24,17 +24,24 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/geometry/segment_distance.h"
+#include "common/knot/recognition.h"
 #include "common/thread/grasp.h"
-#include "common/thread/knot_recognition.h"
-#include "common/thread/segment_distance.h"
 #include "common/thread/sphere_bvh.h"
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
-#include "common/thread/thread_scenarios.h"
 #include "common/thread/thread_step.h"
+#include "tests/support/thread_scenarios.h"
 
 namespace microdex::thread {
 namespace {
+
+using geometry::ClosestSegmentSegment;
+using geometry::SegmentClosest;
+using knot::AnalyzeKnot;
+using knot::KnotAnalysis;
+using knot::KnotName;
+using knot::KnotOptions;
 
 using Clock = std::chrono::steady_clock;
 

@@ -8,11 +8,13 @@
 #include <random>
 #include <vector>
 
-#include "common/thread/knot_shapes.h"
-#include "common/thread/segment_distance.h"
+#include "common/geometry/segment_distance.h"
+#include "tests/support/knot_shapes.h"
 
 namespace microdex::thread {
 namespace {
+
+using geometry::ClosestSegmentSegment;
 
 Eigen::Matrix3Xd RandomWalk(int nodes, double step_m, unsigned seed) {
   std::mt19937 rng(seed);
@@ -210,7 +212,7 @@ TEST(SphereBvh, FindCollisionEqualsAllPairsOnRandomWalks) {
 }
 
 TEST(SphereBvh, FindCollisionEqualsAllPairsOnKnots) {
-  namespace ks = knot_shapes;
+  namespace ks = knot::shapes;
   // Thread-like scale: links of two diameters, spheres grown by radius + cutoff + margin.
   constexpr double kLink_m = 50e-6;
   constexpr double kInflate_m = 37.5e-6;

@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "common/thread/thread_scenarios.h"
+#include "tests/support/thread_scenarios.h"
 
 namespace microdex::thread {
 namespace {

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "common/thread/grasp.h"
-#include "common/thread/thread_scenarios.h"
 #include "common/thread/thread_step.h"
+#include "tests/support/thread_scenarios.h"
 
 namespace microdex::thread {
 namespace {

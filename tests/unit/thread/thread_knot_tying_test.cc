@@ -13,12 +13,20 @@
 #include <utility>
 #include <vector>
 
-#include "common/thread/knot_recognition.h"
-#include "common/thread/segment_distance.h"
-#include "common/thread/thread_scenarios.h"
+#include "common/geometry/segment_distance.h"
+#include "common/knot/recognition.h"
+#include "tests/support/thread_scenarios.h"
 
 namespace microdex::thread {
 namespace {
+
+using geometry::ClosestSegmentSegment;
+using geometry::SegmentClosest;
+using knot::AnalyzeKnot;
+using knot::KnotAnalysis;
+using knot::KnotOptions;
+using knot::KnotType;
+using knot::RecognizeKnot;
 
 // Brute-force smallest centreline distance between non-adjacent links, over all pairs closer
 // than limit_m (a pair's bounding spheres prune the exact segment test); limit_m if none is.

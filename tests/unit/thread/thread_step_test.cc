@@ -15,8 +15,8 @@
 #include "common/thread/grasp.h"
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
-#include "common/thread/thread_scenarios.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/thread_scenarios.h"
 
 namespace microdex::thread {
 namespace {

@@ -1,28 +1,14 @@
 #pragma once
 // Knot invariants of a planar diagram, computed exactly: the Alexander polynomial, the
 // determinant and signature (Goeritz matrix, Gordon-Litherland) and the Jones polynomial
-// (Kauffman bracket state sum). Conventions in common/thread/README_knots.md.
+// (Kauffman bracket state sum). Conventions in common/knot/README.md.
 
 #include <cstdint>
-#include <string>
 
-#include "common/thread/knot_diagram.h"
-#include "common/thread/knot_recognition.h"
+#include "common/knot/diagram.h"
+#include "common/knot/laurent_polynomial.h"
 
-namespace microdex::thread::knot {
-
-// Polynomial helpers (LaurentPolynomial in knot_recognition.h).
-LaurentPolynomial MakePolynomial(int min_power, std::vector<std::int64_t> coefficients);
-// Strips zero coefficients at both ends; the zero polynomial is {0, {}}.
-LaurentPolynomial Trimmed(LaurentPolynomial p);
-LaurentPolynomial Multiply(const LaurentPolynomial& a, const LaurentPolynomial& b);
-LaurentPolynomial Add(const LaurentPolynomial& a, const LaurentPolynomial& b);
-// p(x) -> p(1/x): the invariant of the mirror image for the Jones polynomial.
-LaurentPolynomial Mirror(const LaurentPolynomial& p);
-// Value at an integer point (|x| = 1 for negative powers to stay exact).
-std::int64_t EvaluateAtPlusMinusOne(const LaurentPolynomial& p, int x);
-// E.g. "t^-1 - 1 + t".
-std::string ToString(const LaurentPolynomial& p, const char* variable = "t");
+namespace microdex::knot {
 
 // Alexander polynomial from the Fox-calculus matrix of the Wirtinger presentation (one row
 // per crossing: 1 - t, t, -1 on the over-arc, incoming and outgoing under-arc of a positive
@@ -46,4 +32,4 @@ GoeritzResult GoeritzSignature(const PlanarDiagram& pd, int shade_color = 0);
 // Exponential in the crossing count (2^n states): call for small diagrams only.
 LaurentPolynomial JonesPolynomial(const PlanarDiagram& pd);
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

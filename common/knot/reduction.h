@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 
 // Returns the indices (increasing) of the vertices of `closed` that remain; at least 3.
 // The tests are conservative: a triangle that comes within a relative tolerance of an edge
@@ -21,4 +21,4 @@ bool SegmentMayMeetTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                             const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                             const Eigen::Vector3d& c, double tol_m);
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

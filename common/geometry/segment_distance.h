@@ -3,7 +3,7 @@
 
 #include <Eigen/Core>
 
-namespace microdex::thread {
+namespace microdex::geometry {
 
 struct SegmentClosest {
   double s = 0.0;  // parameter on the first segment, p = a0 + s (a1 - a0), s in [0, 1]
@@ -22,4 +22,4 @@ SegmentClosest ClosestSegmentSegment(const Eigen::Vector3d& a0, const Eigen::Vec
 double ClosestSegmentPointParam(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
                                 const Eigen::Vector3d& p);
 
-}  // namespace microdex::thread
+}  // namespace microdex::geometry

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace microdex::thread {
+namespace microdex::knot {
 
 // Reads the polyline of `path`. Throws std::runtime_error "PATH:LINE: reason" (or "PATH:
 // reason" when no line is to blame) for a missing file, a malformed vertex or index, an
@@ -20,4 +20,4 @@ std::vector<Eigen::Vector3d> ReadObjPolyline(const std::filesystem::path& path);
 void WriteObjPolyline(const std::filesystem::path& path, std::span<const Eigen::Vector3d> nodes,
                       const std::vector<std::string>& comment = {});
 
-}  // namespace microdex::thread
+}  // namespace microdex::knot

@@ -1,6 +1,6 @@
 // Knot recognition pipeline: prepare -> close -> reduce -> project (several directions) ->
 // Reidemeister I/II -> invariants -> vote -> classify -> locate the knotted core.
-#include "common/thread/knot_recognition.h"
+#include "common/knot/recognition.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -12,13 +12,13 @@
 #include <string>
 
 #include "common/base/check.h"
-#include "common/thread/knot_closure.h"
-#include "common/thread/knot_diagram.h"
-#include "common/thread/knot_invariants.h"
-#include "common/thread/knot_projection.h"
-#include "common/thread/knot_reduction.h"
+#include "common/knot/closure.h"
+#include "common/knot/diagram.h"
+#include "common/knot/invariants.h"
+#include "common/knot/projection.h"
+#include "common/knot/reduction.h"
 
-namespace microdex::thread {
+namespace microdex::knot {
 namespace {
 
 constexpr std::array<std::string_view, 9> kKnotNames = {
@@ -52,7 +52,7 @@ struct KnotClass {
   LaurentPolynomial jones;
 };
 
-// Invariants of the classified knots (README_knots.md derives them). Right-handed trefoil
+// Invariants of the classified knots (README.md derives them). Right-handed trefoil
 // V = t + t^3 - t^4 (Jones' skein relation with L+ a positive crossing). The double
 // overhand closes to the cinquefoil 5_1 = T(2,5) (an end passed twice through the loop is a
 // 2-braid with five crossings); positive: V = t^2 + t^4 - t^5 + t^6 - t^7, signature -4.
@@ -380,4 +380,4 @@ KnotPlacement CalcKnotPlacement(const KnotAnalysis& analysis, const KnotTargetDe
   return out;
 }
 
-}  // namespace microdex::thread
+}  // namespace microdex::knot

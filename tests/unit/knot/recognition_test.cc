@@ -2,7 +2,7 @@
 // recogniser (common/thread/knot_shapes: parametric curves, braid closures, overhands as
 // tied), with the chirality of each reference checked here by brute-force crossing signs, and
 // robustness to rigid motions, scale, 1 % noise, projection seeds and where the ends lie.
-#include "common/thread/knot_recognition.h"
+#include "common/knot/recognition.h"
 
 #include <gtest/gtest.h>
 
@@ -11,12 +11,12 @@
 #include <numbers>
 #include <random>
 
-#include "common/thread/knot_shapes.h"
+#include "tests/support/knot_shapes.h"
 
-namespace microdex::thread {
+namespace microdex::knot {
 namespace {
 
-using knot_shapes::Curve;
+using shapes::Curve;
 
 // Thread diameter of 10-0 nylon; nodes are one diameter apart.
 constexpr double kDiameter_m = 3e-5;
@@ -55,16 +55,16 @@ std::vector<int> CrossingSignsAlongZ(const Curve& c, bool closed) {
 // An open thread at real scale: resampled at `spacing` (shape units), scaled so that the
 // spacing is one thread diameter.
 Curve ToThread(const Curve& open, double spacing) {
-  Curve c = knot_shapes::ResampleOpen(open, spacing);
+  Curve c = shapes::ResampleOpen(open, spacing);
   for (auto& p : c) p *= kDiameter_m / spacing;
   return c;
 }
 
 Curve LongThread(const Curve& closed, double spacing = 0.1) {
-  return ToThread(knot_shapes::LongKnot(closed, 3.0), spacing);
+  return ToThread(shapes::LongKnot(closed, 3.0), spacing);
 }
 
-Curve Braid(int strands, std::vector<int> word) { return knot_shapes::BraidClosure(strands, word); }
+Curve Braid(int strands, std::vector<int> word) { return shapes::BraidClosure(strands, word); }
 
 struct Case {
   const char* name;
@@ -73,32 +73,31 @@ struct Case {
 };
 
 std::vector<Case> ReferenceCases() {
-  const Curve right = knot_shapes::TorusKnot(2, 3, 400);
-  const Curve left = knot_shapes::TorusKnot(2, 3, 400, true);
-  const Curve five_one = knot_shapes::TorusKnot(2, 5, 500);
-  const Curve five_one_mirror = knot_shapes::TorusKnot(2, 5, 500, true);
-  const Curve right_long = knot_shapes::LongKnot(right, 3.0);
-  const Curve left_long = knot_shapes::LongKnot(left, 3.0);
-  const Curve five_one_long = knot_shapes::LongKnot(five_one, 3.0);
-  const Curve five_one_mirror_long = knot_shapes::LongKnot(five_one_mirror, 3.0);
-  const Curve double_right = knot_shapes::OverhandAsTied(2, true);
-  const Curve single_right = knot_shapes::OverhandAsTied(1, true);
-  const Curve single_left = knot_shapes::OverhandAsTied(1, false);
+  const Curve right = shapes::TorusKnot(2, 3, 400);
+  const Curve left = shapes::TorusKnot(2, 3, 400, true);
+  const Curve five_one = shapes::TorusKnot(2, 5, 500);
+  const Curve five_one_mirror = shapes::TorusKnot(2, 5, 500, true);
+  const Curve right_long = shapes::LongKnot(right, 3.0);
+  const Curve left_long = shapes::LongKnot(left, 3.0);
+  const Curve five_one_long = shapes::LongKnot(five_one, 3.0);
+  const Curve five_one_mirror_long = shapes::LongKnot(five_one_mirror, 3.0);
+  const Curve double_right = shapes::OverhandAsTied(2, true);
+  const Curve single_right = shapes::OverhandAsTied(1, true);
+  const Curve single_left = shapes::OverhandAsTied(1, false);
   auto splice = [](const Curve& a, const Curve& b) {
-    return ToThread(knot_shapes::Splice(a, b, 2.0), 0.1);
+    return ToThread(shapes::Splice(a, b, 2.0), 0.1);
   };
   return {
       {"torus trefoil", LongThread(right), KnotType::kOverhandRight},
       {"mirrored torus trefoil", LongThread(left), KnotType::kOverhandLeft},
-      {"figure-eight curve", LongThread(knot_shapes::FigureEightCurve(400)),
-       KnotType::kFigureEight},
+      {"figure-eight curve", LongThread(shapes::FigureEightCurve(400)), KnotType::kFigureEight},
       {"braid figure-eight", LongThread(Braid(3, {1, -2, 1, -2})), KnotType::kFigureEight},
       {"torus 5_1", LongThread(five_one), KnotType::kDoubleOverhand},
       {"mirrored torus 5_1", LongThread(five_one_mirror), KnotType::kDoubleOverhand},
       {"braid 5_2 (three-twist knot)", LongThread(Braid(3, {1, 1, 1, 2, -1, 2})),
        KnotType::kUnknown},
       {"braid 6_1 (stevedore)", LongThread(Braid(4, {1, 1, 2, -1, -3, 2, -3})), KnotType::kUnknown},
-      {"torus 7_1", LongThread(knot_shapes::TorusKnot(2, 7, 700)), KnotType::kUnknown},
+      {"torus 7_1", LongThread(shapes::TorusKnot(2, 7, 700)), KnotType::kUnknown},
       {"granny right", splice(right_long, right_long), KnotType::kGranny},
       {"granny left", splice(left_long, left_long), KnotType::kGranny},
       {"square", splice(right_long, left_long), KnotType::kSquare},
@@ -112,17 +111,17 @@ std::vector<Case> ReferenceCases() {
       {"overhand tied right", ToThread(single_right, 0.1), KnotType::kOverhandRight},
       {"overhand tied left", ToThread(single_left, 0.1), KnotType::kOverhandLeft},
       {"double overhand tied right", ToThread(double_right, 0.1), KnotType::kDoubleOverhand},
-      {"double overhand tied left", ToThread(knot_shapes::OverhandAsTied(2, false), 0.1),
+      {"double overhand tied left", ToThread(shapes::OverhandAsTied(2, false), 0.1),
        KnotType::kDoubleOverhand},
       {"surgeons tied", splice(double_right, single_left), KnotType::kSurgeons},
       {"surgeon-like granny tied", splice(double_right, single_right), KnotType::kUnknown},
       {"square tied", splice(single_left, single_right), KnotType::kSquare},
       {"granny tied", splice(single_right, single_right), KnotType::kGranny},
       {"straight", ToThread({{0, 0, 0}, {10, 0, 0}}, 0.1), KnotType::kNone},
-      {"coil", ToThread(knot_shapes::Coil(15, 1.0, 0.4, 40), 0.1), KnotType::kNone},
-      {"messy unknot 1", ToThread(knot_shapes::AscendingRandomWalk(300, 0.5, 0.02, 1), 0.1),
+      {"coil", ToThread(shapes::Coil(15, 1.0, 0.4, 40), 0.1), KnotType::kNone},
+      {"messy unknot 1", ToThread(shapes::AscendingRandomWalk(300, 0.5, 0.02, 1), 0.1),
        KnotType::kNone},
-      {"messy unknot 2", ToThread(knot_shapes::AscendingRandomWalk(300, 0.5, 0.02, 2), 0.1),
+      {"messy unknot 2", ToThread(shapes::AscendingRandomWalk(300, 0.5, 0.02, 2), 0.1),
        KnotType::kNone},
   };
 }
@@ -150,12 +149,12 @@ TEST(KnotRecognitionTest, ReferenceChiralityByBruteForceSigns) {
   auto all_equal = [](const std::vector<int>& s, int v, std::size_t count) {
     return s.size() == count && std::all_of(s.begin(), s.end(), [v](int x) { return x == v; });
   };
-  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(knot_shapes::TorusKnot(2, 3, 400), true), 1, 3));
-  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(knot_shapes::TorusKnot(2, 3, 400, true), true), -1, 3));
-  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(knot_shapes::OverhandAsTied(1, true), false), 1, 3));
-  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(knot_shapes::OverhandAsTied(1, false), false), -1, 3));
-  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(knot_shapes::OverhandAsTied(2, true), false), 1, 5));
-  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(knot_shapes::OverhandAsTied(2, false), false), -1, 5));
+  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(shapes::TorusKnot(2, 3, 400), true), 1, 3));
+  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(shapes::TorusKnot(2, 3, 400, true), true), -1, 3));
+  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(shapes::OverhandAsTied(1, true), false), 1, 3));
+  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(shapes::OverhandAsTied(1, false), false), -1, 3));
+  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(shapes::OverhandAsTied(2, true), false), 1, 5));
+  EXPECT_TRUE(all_equal(CrossingSignsAlongZ(shapes::OverhandAsTied(2, false), false), -1, 5));
   EXPECT_TRUE(all_equal(CrossingSignsAlongZ(Braid(2, {1, 1, 1}), true), 1, 3));
 }
 
@@ -241,9 +240,9 @@ Curve WithHookedEnds(const Curve& long_thread, std::mt19937_64& rng, int keep_ta
 TEST(KnotRecognitionTest, EndsNearTheKnotPointingAnywhere) {
   std::mt19937_64 rng(99);
   const std::vector<std::pair<Curve, KnotType>> knots = {
-      {LongThread(knot_shapes::TorusKnot(2, 3, 400)), KnotType::kOverhandRight},
-      {LongThread(knot_shapes::FigureEightCurve(400)), KnotType::kFigureEight},
-      {LongThread(knot_shapes::TorusKnot(2, 5, 500)), KnotType::kDoubleOverhand},
+      {LongThread(shapes::TorusKnot(2, 3, 400)), KnotType::kOverhandRight},
+      {LongThread(shapes::FigureEightCurve(400)), KnotType::kFigureEight},
+      {LongThread(shapes::TorusKnot(2, 5, 500)), KnotType::kDoubleOverhand},
   };
   for (const auto& [thread, expected] : knots) {
     for (int trial = 0; trial < 8; ++trial) {
@@ -258,7 +257,7 @@ TEST(KnotRecognitionTest, EndsNearTheKnotPointingAnywhere) {
 TEST(KnotRecognitionTest, WanderingTails) {
   std::mt19937_64 rng(5);
   std::normal_distribution<double> g;
-  const Curve knot = knot_shapes::ResampleClosed(knot_shapes::TorusKnot(2, 3, 400), 0.1);
+  const Curve knot = shapes::ResampleClosed(shapes::TorusKnot(2, 3, 400), 0.1);
   // Open the knot at its highest and lowest... at two neighbouring nodes of largest z.
   int top = 0;
   for (int i = 0; i < static_cast<int>(knot.size()); ++i) {
@@ -303,13 +302,13 @@ TEST(KnotRecognitionTest, WanderingTails) {
 
 TEST(KnotRecognitionTest, LocatesTheKnottedCore) {
   // A trefoil in the middle of a long thread: the core lies within the knot's own arc.
-  const Curve closed = knot_shapes::ResampleClosed(knot_shapes::TorusKnot(2, 3, 400), 0.1);
-  const Curve long_knot = knot_shapes::LongKnot(closed, 10.0);
+  const Curve closed = shapes::ResampleClosed(shapes::TorusKnot(2, 3, 400), 0.1);
+  const Curve long_knot = shapes::LongKnot(closed, 10.0);
   const Curve thread = ToThread(long_knot, 0.1);
   // Arc length of the knot body: from the tail's end (4 tail vertices before it) on.
   const double scale = kDiameter_m / 0.1;
-  const double tail_before = knot_shapes::Length(std::span(long_knot).first(5)) * scale;
-  const double body = knot_shapes::Length(closed) * scale;
+  const double tail_before = shapes::Length(std::span(long_knot).first(5)) * scale;
+  const double body = shapes::Length(closed) * scale;
   const KnotAnalysis a = AnalyzeKnot(thread);
   ASSERT_EQ(a.type, KnotType::kOverhandRight);
   ASSERT_TRUE(a.located);
@@ -322,7 +321,7 @@ TEST(KnotRecognitionTest, LocatesTheKnottedCore) {
   for (const auto& p : closed) box.extend(p * scale);
   EXPECT_TRUE(box.contains(a.p_core_W)) << a.p_core_W.transpose();
   // No knot, nothing located.
-  const KnotAnalysis none = AnalyzeKnot(ToThread(knot_shapes::Coil(5, 1.0, 0.4, 40), 0.1));
+  const KnotAnalysis none = AnalyzeKnot(ToThread(shapes::Coil(5, 1.0, 0.4, 40), 0.1));
   EXPECT_EQ(none.type, KnotType::kNone);
   EXPECT_FALSE(none.located);
 }
@@ -330,7 +329,7 @@ TEST(KnotRecognitionTest, LocatesTheKnottedCore) {
 TEST(KnotRecognitionTest, PlacementAroundAVessel) {
   // A knot carried around a vessel axis by known angles keeps its distance to the axis and
   // its angle advances by the same amount.
-  const Curve base = LongThread(knot_shapes::TorusKnot(2, 3, 400));
+  const Curve base = LongThread(shapes::TorusKnot(2, 3, 400));
   const KnotAnalysis a0 = AnalyzeKnot(base);
   ASSERT_TRUE(a0.located);
   KnotTargetDef target;
@@ -378,4 +377,4 @@ TEST(KnotRecognitionTest, RejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace microdex::thread
+}  // namespace microdex::knot

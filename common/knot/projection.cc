@@ -1,4 +1,4 @@
-#include "common/thread/knot_projection.h"
+#include "common/knot/projection.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -7,7 +7,7 @@
 
 #include "common/base/check.h"
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 namespace {
 
 // Relative tolerance of the genericity tests (times the polygon's extent).
@@ -125,4 +125,4 @@ std::optional<GaussCode> ProjectPolygon(std::span<const Eigen::Vector3d> vertice
   return code;
 }
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

@@ -5,7 +5,7 @@
 #include <array>
 #include <vector>
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 
 // One passage of the closed curve through a crossing of its projection.
 struct Passage {
@@ -62,4 +62,4 @@ GaussCode SimplifyReidemeister(const GaussCode& code);
 // Sum of the crossing signs.
 int Writhe(const GaussCode& code);
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

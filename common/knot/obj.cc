@@ -1,4 +1,4 @@
-#include "common/thread/knot_obj.h"
+#include "common/knot/obj.h"
 
 #include <charconv>
 #include <cstdio>
@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace microdex::thread {
+namespace microdex::knot {
 namespace {
 
 [[noreturn]] void Fail(const std::filesystem::path& path, int line, const std::string& reason) {
@@ -131,4 +131,4 @@ void WriteObjPolyline(const std::filesystem::path& path, std::span<const Eigen::
   if (!out) throw std::runtime_error(path.string() + ": write failed");
 }
 
-}  // namespace microdex::thread
+}  // namespace microdex::knot

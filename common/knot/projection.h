@@ -5,9 +5,9 @@
 #include <optional>
 #include <span>
 
-#include "common/thread/knot_diagram.h"
+#include "common/knot/diagram.h"
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 
 // Projects the closed polygon `vertices` (the last vertex joins the first) on the plane
 // normal to `toward_viewer_W` (unit; the viewer looks along -toward_viewer_W, "over" is the
@@ -18,4 +18,4 @@ namespace microdex::thread::knot {
 std::optional<GaussCode> ProjectPolygon(std::span<const Eigen::Vector3d> vertices,
                                         const Eigen::Vector3d& toward_viewer_W);
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

@@ -1,4 +1,4 @@
-#include "common/thread/thread_scenarios.h"
+#include "tests/support/thread_scenarios.h"
 
 #include <algorithm>
 #include <cmath>

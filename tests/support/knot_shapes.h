@@ -10,7 +10,7 @@
 #include <span>
 #include <vector>
 
-namespace microdex::thread::knot_shapes {
+namespace microdex::knot::shapes {
 
 using Curve = std::vector<Eigen::Vector3d>;
 
@@ -57,4 +57,4 @@ Curve Coil(int turns, double radius, double pitch, int samples_per_turn);
 // the unknot, whatever the crossings of its projection.
 Curve AscendingRandomWalk(int steps, double step, double rise_per_step, std::uint64_t seed);
 
-}  // namespace microdex::thread::knot_shapes
+}  // namespace microdex::knot::shapes

@@ -5,7 +5,7 @@
 // The open polyline is closed far outside its bounding ball, reduced by ambient-isotopy
 // triangle moves, projected on generic directions, simplified by Reidemeister I/II moves and
 // classified by exact invariants (Alexander polynomial, signature, Jones polynomial). See
-// common/thread/README_knots.md for the algorithm and the conventions.
+// common/knot/README.md for the algorithm and the conventions.
 //
 // Chirality convention: "right" is the right-handed trefoil, the one whose reduced diagram
 // has three positive crossings (writhe +3), signature -2 and Jones polynomial t + t^3 - t^4.
@@ -19,7 +19,9 @@
 #include <string_view>
 #include <vector>
 
-namespace microdex::thread {
+#include "common/knot/laurent_polynomial.h"
+
+namespace microdex::knot {
 
 enum class KnotType {
   kNone,            // unknot
@@ -58,13 +60,6 @@ struct KnotOptions {
   bool locate = true;
   // Throws std::invalid_argument naming the bad field.
   void Validate() const;
-};
-
-// A Laurent polynomial with integer coefficients: sum_k coefficients[k] * x^(min_power + k).
-struct LaurentPolynomial {
-  int min_power = 0;
-  std::vector<std::int64_t> coefficients;
-  bool operator==(const LaurentPolynomial&) const = default;
 };
 
 struct KnotAnalysis {
@@ -137,4 +132,4 @@ struct KnotPlacement {
 // std::invalid_argument).
 KnotPlacement CalcKnotPlacement(const KnotAnalysis& analysis, const KnotTargetDef& target);
 
-}  // namespace microdex::thread
+}  // namespace microdex::knot

@@ -1,4 +1,4 @@
-#include "common/thread/knot_shapes.h"
+#include "tests/support/knot_shapes.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -8,7 +8,7 @@
 
 #include "common/base/check.h"
 
-namespace microdex::thread::knot_shapes {
+namespace microdex::knot::shapes {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -244,4 +244,4 @@ Curve AscendingRandomWalk(int steps, double step, double rise_per_step, std::uin
   return c;
 }
 
-}  // namespace microdex::thread::knot_shapes
+}  // namespace microdex::knot::shapes

@@ -1,4 +1,4 @@
-#include "common/thread/knot_closure.h"
+#include "common/knot/closure.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -7,7 +7,7 @@
 
 #include "common/base/check.h"
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -169,4 +169,4 @@ std::vector<Eigen::Vector3d> CloseThread(std::span<const Eigen::Vector3d> nodes,
   return closed;
 }
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

@@ -1,4 +1,4 @@
-#include "common/thread/knot_reduction.h"
+#include "common/knot/reduction.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -6,9 +6,9 @@
 #include <cmath>
 
 #include "common/base/check.h"
-#include "common/thread/segment_distance.h"
+#include "common/geometry/segment_distance.h"
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 namespace {
 
 // Tolerance of the triangle tests relative to the polygon's extent.
@@ -264,9 +264,9 @@ bool SegmentMayMeetTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
   const double nn = n.norm();
   if (nn <= kRelTol * ab.norm() * ac.norm() || nn == 0.0) {
     // Degenerate triangle: it is the union of its edges.
-    return ClosestSegmentSegment(p, q, a, b).distance_m <= tol_m ||
-           ClosestSegmentSegment(p, q, b, c).distance_m <= tol_m ||
-           ClosestSegmentSegment(p, q, a, c).distance_m <= tol_m;
+    return geometry::ClosestSegmentSegment(p, q, a, b).distance_m <= tol_m ||
+           geometry::ClosestSegmentSegment(p, q, b, c).distance_m <= tol_m ||
+           geometry::ClosestSegmentSegment(p, q, a, c).distance_m <= tol_m;
   }
   const Eigen::Vector3d nhat = n / nn;
   const double dp = nhat.dot(p - a);
@@ -315,4 +315,4 @@ std::vector<int> ReducePolygon(std::span<const Eigen::Vector3d> closed) {
   return Reducer(closed).Run();
 }
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

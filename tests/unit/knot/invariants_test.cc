@@ -1,27 +1,25 @@
-// Knot diagrams and invariants (common/thread/knot_diagram, knot_invariants, knot_projection)
+// Knot diagrams and invariants (common/knot/diagram, invariants, projection)
 // against knot-table values and against their own invariance: every projection of a curve,
 // both checkerboard colourings, before and after Reidemeister simplification, must give the
 // same Alexander polynomial, determinant, signature and Jones polynomial.
-#include "common/thread/knot_invariants.h"
+#include "common/knot/invariants.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "common/thread/knot_closure.h"
-#include "common/thread/knot_diagram.h"
-#include "common/thread/knot_projection.h"
-#include "common/thread/knot_shapes.h"
+#include "common/knot/closure.h"
+#include "common/knot/diagram.h"
+#include "common/knot/projection.h"
+#include "tests/support/knot_shapes.h"
 
-namespace microdex::thread {
+namespace microdex::knot {
 // Readable polynomials in failure messages.
-void PrintTo(const LaurentPolynomial& p, std::ostream* os) { *os << knot::ToString(p); }
-}  // namespace microdex::thread
+void PrintTo(const LaurentPolynomial& p, std::ostream* os) { *os << ToString(p); }
 
-namespace microdex::thread::knot {
 namespace {
 
-using knot_shapes::Curve;
+using shapes::Curve;
 
 Eigen::Vector3d RandomUnit(std::mt19937_64& rng) {
   std::normal_distribution<double> g;
@@ -79,19 +77,17 @@ std::vector<TableCase> TableCases() {
   const int w52[] = {1, 1, 1, 2, -1, 2};
   const int w52m[] = {-1, -1, -1, -2, 1, -2};
   return {
-      {"braid right trefoil", knot_shapes::BraidClosure(2, w31), kAlex31, -2, kJonesRightTrefoil},
-      {"braid left trefoil", knot_shapes::BraidClosure(2, w31m), kAlex31, 2,
+      {"braid right trefoil", shapes::BraidClosure(2, w31), kAlex31, -2, kJonesRightTrefoil},
+      {"braid left trefoil", shapes::BraidClosure(2, w31m), kAlex31, 2, Mirror(kJonesRightTrefoil)},
+      {"torus T(2,3)", shapes::TorusKnot(2, 3, 300), kAlex31, -2, kJonesRightTrefoil},
+      {"mirrored torus T(2,3)", shapes::TorusKnot(2, 3, 300, true), kAlex31, 2,
        Mirror(kJonesRightTrefoil)},
-      {"torus T(2,3)", knot_shapes::TorusKnot(2, 3, 300), kAlex31, -2, kJonesRightTrefoil},
-      {"mirrored torus T(2,3)", knot_shapes::TorusKnot(2, 3, 300, true), kAlex31, 2,
-       Mirror(kJonesRightTrefoil)},
-      {"braid figure-eight", knot_shapes::BraidClosure(3, w41), kAlex41, 0, kJonesFigureEight},
-      {"Lissajous figure-eight", knot_shapes::FigureEightCurve(400), kAlex41, 0, kJonesFigureEight},
-      {"braid 5_1", knot_shapes::BraidClosure(2, w51), kAlex51, -4, kJonesPositive51},
-      {"torus T(2,5)", knot_shapes::TorusKnot(2, 5, 500), kAlex51, -4, kJonesPositive51},
-      {"braid 5_2", knot_shapes::BraidClosure(3, w52), kAlex52, -2, kJonesPositive52},
-      {"mirrored braid 5_2", knot_shapes::BraidClosure(3, w52m), kAlex52, 2,
-       Mirror(kJonesPositive52)},
+      {"braid figure-eight", shapes::BraidClosure(3, w41), kAlex41, 0, kJonesFigureEight},
+      {"Lissajous figure-eight", shapes::FigureEightCurve(400), kAlex41, 0, kJonesFigureEight},
+      {"braid 5_1", shapes::BraidClosure(2, w51), kAlex51, -4, kJonesPositive51},
+      {"torus T(2,5)", shapes::TorusKnot(2, 5, 500), kAlex51, -4, kJonesPositive51},
+      {"braid 5_2", shapes::BraidClosure(3, w52), kAlex52, -2, kJonesPositive52},
+      {"mirrored braid 5_2", shapes::BraidClosure(3, w52m), kAlex52, 2, Mirror(kJonesPositive52)},
   };
 }
 
@@ -135,11 +131,11 @@ TEST(KnotInvariantsTest, ConnectedSumsMultiplyAndAdd) {
     LaurentPolynomial jones;
   };
   const std::vector<SumCase> cases = {
-      {knot_shapes::BraidClosure(3, granny), Multiply(kAlex31, kAlex31), -4,
+      {shapes::BraidClosure(3, granny), Multiply(kAlex31, kAlex31), -4,
        Multiply(kJonesRightTrefoil, kJonesRightTrefoil)},
-      {knot_shapes::BraidClosure(3, square), Multiply(kAlex31, kAlex31), 0,
+      {shapes::BraidClosure(3, square), Multiply(kAlex31, kAlex31), 0,
        Multiply(kJonesRightTrefoil, Mirror(kJonesRightTrefoil))},
-      {knot_shapes::BraidClosure(4, surgeons), Multiply(kAlex52, kAlex31), 0,
+      {shapes::BraidClosure(4, surgeons), Multiply(kAlex52, kAlex31), 0,
        Multiply(kJonesPositive52, Mirror(kJonesRightTrefoil))},
   };
   for (const SumCase& c : cases) {
@@ -177,7 +173,7 @@ TEST(KnotInvariantsTest, HandWrittenTrefoilGaussCode) {
 
 TEST(KnotInvariantsTest, ReidemeisterMovesUndoCoilAndTwists) {
   // A side view of a coil closed outside: every crossing goes by Reidemeister I/II.
-  const Curve coil = knot_shapes::Coil(12, 1.0, 0.5, 32);
+  const Curve coil = shapes::Coil(12, 1.0, 0.5, 32);
   const Curve closed = CloseThread(coil, 0.1);
   for (const Eigen::Vector3d& dir :
        {Eigen::Vector3d(1, 0.05, 0.02), Eigen::Vector3d(0.3, 1, 0.1)}) {
@@ -200,7 +196,7 @@ TEST(KnotInvariantsTest, MessyUnknotDiagramsHaveTrivialInvariants) {
   // Ascending random walks are unknots however many crossings their projections keep.
   std::mt19937_64 rng(3);
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    const Curve walk = knot_shapes::AscendingRandomWalk(150, 1.0, 0.05, seed);
+    const Curve walk = shapes::AscendingRandomWalk(150, 1.0, 0.05, seed);
     const Curve closed = CloseThread(walk, 1.0);
     const GaussCode raw = Project(closed, rng);
     EXPECT_GE(raw.num_crossings(), 10);
@@ -222,4 +218,4 @@ TEST(KnotInvariantsTest, PolynomialHelpers) {
 }
 
 }  // namespace
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

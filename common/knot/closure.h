@@ -15,7 +15,7 @@
 #include <span>
 #include <vector>
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 
 // The direction in which the closure leaves the end node (`at_last` picks the last node,
 // otherwise the first). `thread_diameter_m` > 0.
@@ -27,4 +27,4 @@ Eigen::Vector3d ChooseExitDirection(std::span<const Eigen::Vector3d> nodes, bool
 std::vector<Eigen::Vector3d> CloseThread(std::span<const Eigen::Vector3d> nodes,
                                          double thread_diameter_m);
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot

@@ -1,6 +1,6 @@
-// OBJ polylines (common/thread/knot_obj): round trip, the forms of `l` elements exporters
+// OBJ polylines (common/knot/obj): round trip, the forms of `l` elements exporters
 // write, and one-line errors naming the file and the line.
-#include "common/thread/knot_obj.h"
+#include "common/knot/obj.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-namespace microdex::thread {
+namespace microdex::knot {
 namespace {
 
 std::filesystem::path WriteTemp(const std::string& name, const std::string& text) {
@@ -74,4 +74,4 @@ TEST(KnotObjTest, ErrorsNameFileAndLine) {
 }
 
 }  // namespace
-}  // namespace microdex::thread
+}  // namespace microdex::knot

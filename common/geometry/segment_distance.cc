@@ -1,8 +1,8 @@
-#include "common/thread/segment_distance.h"
+#include "common/geometry/segment_distance.h"
 
 #include <algorithm>
 
-namespace microdex::thread {
+namespace microdex::geometry {
 
 SegmentClosest ClosestSegmentSegment(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
                                      const Eigen::Vector3d& b0, const Eigen::Vector3d& b1) {
@@ -58,4 +58,4 @@ double ClosestSegmentPointParam(const Eigen::Vector3d& a0, const Eigen::Vector3d
   return std::clamp((p - a0).dot(d) / len2, 0.0, 1.0);
 }
 
-}  // namespace microdex::thread
+}  // namespace microdex::geometry

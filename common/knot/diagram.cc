@@ -1,10 +1,10 @@
-#include "common/thread/knot_diagram.h"
+#include "common/knot/diagram.h"
 
 #include <numeric>
 
 #include "common/base/check.h"
 
-namespace microdex::thread::knot {
+namespace microdex::knot {
 namespace {
 
 // Keeps the passages whose crossing is not marked `removed`, renumbering crossings densely.
@@ -144,4 +144,4 @@ GaussCode SimplifyReidemeister(const GaussCode& code) {
 
 int Writhe(const GaussCode& code) { return std::accumulate(code.sign.begin(), code.sign.end(), 0); }
 
-}  // namespace microdex::thread::knot
+}  // namespace microdex::knot
