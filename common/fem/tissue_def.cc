@@ -1,19 +1,15 @@
 #include "common/fem/tissue_def.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <stdexcept>
-#include <type_traits>
 
-#include "common/base/yaml_field.h"
+#include "common/base/yaml_reader.h"
 
 namespace microdex::fem {
 namespace {
 
 void Require(bool ok, const char* field, const std::string& expected) {
-  if (!ok)
-    throw std::invalid_argument(std::string("TissueDef.") + field + ": expected " + expected);
+  if (!ok) throw std::invalid_argument(std::string(field) + ": expected " + expected);
 }
 
 }  // namespace
@@ -82,82 +78,44 @@ void TissueDef::Validate() const {
 
 namespace {
 
-// Reads an optional enumerated field through its parser.
+// An enumerated field; an empty text keeps the default.
 template <typename E>
-void ReadEnum(const YAML::Node& root, const std::string& path, const char* field,
-              E (*parse)(const std::string&), E& out) {
-  std::string text;
-  ReadYamlField(root, path, "tissue.", field, text);
-  if (text.empty()) return;
-  try {
-    out = parse(text);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(path + ": field 'tissue." + field + "': " + e.what());
-  }
+E ReadEnum(const YamlSection& tissue, const char* key, E (*parse)(const std::string&), E fallback) {
+  if (tissue.String(key, "").empty()) return fallback;
+  return tissue.Enum(key, parse, fallback);
 }
 
 }  // namespace
 
 TissueDef LoadTissueDef(const std::string& path) {
-  YAML::Node file;
-  try {
-    file = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw std::runtime_error(path + ": cannot open tissue parameter file");
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": malformed YAML: " + e.what());
-  }
-  const YAML::Node root = file["tissue"];
-  if (!root || !root.IsMap())
-    throw std::runtime_error(path + ": field 'tissue': expected a map of tissue parameters");
-  static constexpr const char* kKnown[] = {"name",
-                                           "length_x_m",
-                                           "length_y_m",
-                                           "shear_modulus_Pa",
-                                           "thickness_m",
-                                           "max_level",
-                                           "level",
-                                           "mesh",
-                                           "grading",
-                                           "end_resolution",
-                                           "end_levels",
-                                           "solver",
-                                           "ordering",
-                                           "cg_relative_tolerance",
-                                           "cg_max_iterations",
-                                           "max_contact_nodes",
-                                           "pattern_cache_entries"};
-  for (const auto& entry : root) {
-    const std::string key = entry.first.as<std::string>();
-    bool known = false;
-    for (const char* name : kKnown) known = known || key == name;
-    if (!known)
-      throw std::runtime_error(
-          std::string(path).append(": field 'tissue.").append(key).append("': unknown field"));
-  }
+  const YamlSection tissue = YamlReader(path).Root().Map("tissue");
+  tissue.CheckNoUnknownKeys({"name", "length_x_m", "length_y_m", "shear_modulus_Pa", "thickness_m",
+                             "max_level", "level", "mesh", "grading", "end_resolution",
+                             "end_levels", "solver", "ordering", "cg_relative_tolerance",
+                             "cg_max_iterations", "max_contact_nodes", "pattern_cache_entries"});
   TissueDef def;
-  std::string name;  // documentation only
-  ReadYamlField(root, path, "tissue.", "name", name);
-  ReadYamlField(root, path, "tissue.", "length_x_m", def.length_x_m);
-  ReadYamlField(root, path, "tissue.", "length_y_m", def.length_y_m);
-  ReadYamlField(root, path, "tissue.", "shear_modulus_Pa", def.shear_modulus_Pa);
-  ReadYamlField(root, path, "tissue.", "thickness_m", def.thickness_m);
-  ReadYamlField(root, path, "tissue.", "max_level", def.max_level);
-  ReadYamlField(root, path, "tissue.", "level", def.level);
-  ReadEnum(root, path, "mesh", &ParseMeshKind, def.mesh);
-  ReadYamlField(root, path, "tissue.", "grading", def.grading);
-  ReadYamlField(root, path, "tissue.", "end_resolution", def.end_resolution);
-  ReadYamlField(root, path, "tissue.", "end_levels", def.end_levels);
-  ReadEnum(root, path, "solver", &ParseSolverKind, def.solver);
-  ReadEnum(root, path, "ordering", &ParseOrdering, def.ordering);
-  ReadYamlField(root, path, "tissue.", "cg_relative_tolerance", def.cg_relative_tolerance);
-  ReadYamlField(root, path, "tissue.", "cg_max_iterations", def.cg_max_iterations);
-  ReadYamlField(root, path, "tissue.", "max_contact_nodes", def.max_contact_nodes);
-  ReadYamlField(root, path, "tissue.", "pattern_cache_entries", def.pattern_cache_entries);
+  (void)tissue.String("name", "");  // documentation only
+  def.length_x_m = tissue.FiniteDouble("length_x_m", def.length_x_m);
+  def.length_y_m = tissue.FiniteDouble("length_y_m", def.length_y_m);
+  def.shear_modulus_Pa = tissue.FiniteDouble("shear_modulus_Pa", def.shear_modulus_Pa);
+  def.thickness_m = tissue.FiniteDouble("thickness_m", def.thickness_m);
+  def.max_level = tissue.Int("max_level", def.max_level);
+  def.level = tissue.Int("level", def.level);
+  def.mesh = ReadEnum(tissue, "mesh", &ParseMeshKind, def.mesh);
+  def.grading = tissue.FiniteDouble("grading", def.grading);
+  def.end_resolution = tissue.FiniteDouble("end_resolution", def.end_resolution);
+  def.end_levels = tissue.Int("end_levels", def.end_levels);
+  def.solver = ReadEnum(tissue, "solver", &ParseSolverKind, def.solver);
+  def.ordering = ReadEnum(tissue, "ordering", &ParseOrdering, def.ordering);
+  def.cg_relative_tolerance =
+      tissue.FiniteDouble("cg_relative_tolerance", def.cg_relative_tolerance);
+  def.cg_max_iterations = tissue.Int("cg_max_iterations", def.cg_max_iterations);
+  def.max_contact_nodes = tissue.Int("max_contact_nodes", def.max_contact_nodes);
+  def.pattern_cache_entries = tissue.Int("pattern_cache_entries", def.pattern_cache_entries);
   try {
     def.Validate();
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(path + ": " + e.what());
+    tissue.FailInvalid(e);
   }
   return def;
 }

@@ -76,13 +76,14 @@ struct TissueDef {
   int cg_max_iterations = 20000;
   int max_contact_nodes = 4096;   // capacity of the contact list (pre-sized)
   int pattern_cache_entries = 2;  // sparsity patterns (and CHOLMOD analyses) kept
-  // Throws std::invalid_argument naming the first bad field and what was expected.
+  // Throws std::invalid_argument for the first bad field, whose message starts with the field
+  // name followed by ': ' (e.g. `shear_modulus_Pa: expected a positive modulus in Pa`).
   void Validate() const;
 };
 
 // Reads a tissue parameter file (assets/scenes/tissue_*.yaml: a map `tissue:` whose keys are
 // the TissueDef fields, SI units; absent keys keep their defaults) and validates it. Throws
-// std::runtime_error naming the file, the field and what was expected.
+// microdex::InputError "FILE:LINE: tissue.FIELD: reason" (common/base/input_error.h).
 TissueDef LoadTissueDef(const std::string& path);
 
 }  // namespace microdex::fem

@@ -1,53 +1,22 @@
 #include "common/scene/scene.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
+#include <optional>
 #include <set>
-#include <sstream>
+#include <stdexcept>
+
+#include "common/base/yaml_reader.h"
 
 namespace microdex::scene {
 namespace {
 
 constexpr double kTwoPi = 6.283185307179586;
 
-[[noreturn]] void Fail(const std::string& origin, const std::string& field,
-                       const std::string& what) {
-  throw SceneError(origin + ": " + field + ": " + what);
-}
-
-double ReadDouble(const YAML::Node& parent, const char* key, const std::string& prefix,
-                  const std::string& origin, double fallback) {
-  const YAML::Node n = parent[key];
-  if (!n) return fallback;
-  try {
-    const double v = n.as<double>();
-    if (!std::isfinite(v)) Fail(origin, prefix + key, "expected a finite number");
-    return v;
-  } catch (const YAML::Exception&) {
-    Fail(origin, prefix + key,
-         "expected a number (line " + std::to_string(n.Mark().line + 1) + ")");
-  }
-}
-
-Eigen::Vector3d ReadVec3(const YAML::Node& parent, const char* key, const std::string& prefix,
-                         const std::string& origin) {
-  const YAML::Node n = parent[key];
-  if (!n) return Eigen::Vector3d::Zero();
-  if (!n.IsSequence() || n.size() != 3) Fail(origin, prefix + key, "expected [x, y, z]");
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) {
-    try {
-      v[i] = n[i].as<double>();
-    } catch (const YAML::Exception&) {
-      Fail(origin, prefix + key, "expected three numbers");
-    }
-    if (!std::isfinite(v[i])) Fail(origin, prefix + key, "expected finite numbers");
-  }
-  return v;
+// A Validate()-style error: "FIELD: reason".
+[[noreturn]] void Invalid(const std::string& field, const std::string& what) {
+  throw std::invalid_argument(field + ": " + what);
 }
 
 Eigen::Matrix3d RotationFromRpy(const Eigen::Vector3d& rpy) {
@@ -57,24 +26,16 @@ Eigen::Matrix3d RotationFromRpy(const Eigen::Vector3d& rpy) {
       .toRotationMatrix();
 }
 
-int ReadInt(const YAML::Node& parent, const char* key, const std::string& prefix,
-            const std::string& origin, int fallback) {
-  const YAML::Node n = parent[key];
-  if (!n) return fallback;
-  try {
-    return n.as<int>();
-  } catch (const YAML::Exception&) {
-    Fail(origin, prefix + key,
-         "expected an integer (line " + std::to_string(n.Mark().line + 1) + ")");
-  }
+PathKind ParsePathKind(const std::string& text) {
+  if (text == "arc") return PathKind::kArc;
+  if (text == "line") return PathKind::kLine;
+  throw std::invalid_argument("expected arc or line");
 }
 
-std::string ReadString(const YAML::Node& parent, const char* key, const std::string& prefix,
-                       const std::string& origin, const std::string& fallback) {
-  const YAML::Node n = parent[key];
-  if (!n) return fallback;
-  if (!n.IsScalar()) Fail(origin, prefix + key, "expected a string");
-  return n.as<std::string>();
+TissueToolKind ParseToolKind(const std::string& text) {
+  if (text == "point") return TissueToolKind::kPoint;
+  if (text == "bar") return TissueToolKind::kBar;
+  throw std::invalid_argument("expected point or bar");
 }
 
 // A parameter file named in the scene: relative names are taken from the scene's folder.
@@ -85,12 +46,119 @@ std::string ResolveBeside(const std::string& origin, const std::string& name) {
   return (dir / p).lexically_normal().string();
 }
 
-void CheckKeys(const YAML::Node& map, const std::set<std::string>& allowed,
-               const std::string& prefix, const std::string& origin) {
-  for (const auto& kv : map) {
-    const std::string k = kv.first.as<std::string>();
-    if (!allowed.count(k)) Fail(origin, prefix + k, "unknown key");
+// Loads the parameter file named by section.params. A file that cannot be opened is the
+// scene's error, at the line of params; any other error names the parameter file itself.
+template <typename Def>
+Def LoadParams(const YamlSection& section, const std::string& path,
+               Def (*load)(const std::string&)) {
+  try {
+    return load(path);
+  } catch (const InputError& e) {
+    if (e.file() == path && e.line() <= 0) section.Fail("params", "cannot open file " + path);
+    throw;
   }
+}
+
+SceneModel ReadScene(const YamlReader& reader) {
+  const YamlSection root = reader.Root();
+  root.CheckNoUnknownKeys(
+      {"name", "modules", "vessel", "needle", "task", "haptic", "thread", "tissue"});
+  SceneModel s;
+  s.path = reader.file();
+  s.name = root.String("name", "");
+  root.Required("modules");
+  s.modules = root.StringList("modules");
+  if (const std::optional<YamlSection> v = root.OptionalMap("vessel")) {
+    v->CheckNoUnknownKeys(
+        {"core_radius_m", "tube_radius_m", "segment_angle_rad", "position_m", "rpy_rad"});
+    s.vessel.core_radius_m = v->FiniteDouble("core_radius_m", s.vessel.core_radius_m);
+    s.vessel.tube_radius_m = v->FiniteDouble("tube_radius_m", s.vessel.tube_radius_m);
+    s.vessel.segment_angle_rad = v->FiniteDouble("segment_angle_rad", s.vessel.segment_angle_rad);
+    const Eigen::Vector3d p = v->Vec3("position_m", Eigen::Vector3d::Zero());
+    const Eigen::Vector3d rpy = v->Vec3("rpy_rad", Eigen::Vector3d::Zero());
+    s.vessel.X_WV = Eigen::Isometry3d::Identity();
+    s.vessel.X_WV.translate(p);
+    s.vessel.X_WV.rotate(RotationFromRpy(rpy));
+  }
+  if (const std::optional<YamlSection> n = root.OptionalMap("needle")) {
+    n->CheckNoUnknownKeys({"radius_m", "sweep_rad"});
+    s.needle.radius_m = n->FiniteDouble("radius_m", s.needle.radius_m);
+    s.needle.sweep_rad = n->FiniteDouble("sweep_rad", s.needle.sweep_rad);
+  }
+  if (const std::optional<YamlSection> t = root.OptionalMap("task")) {
+    t->CheckNoUnknownKeys({"pass_duration_s", "start_azimuth_rad", "end_azimuth_rad", "path",
+                           "line_start_m", "line_end_m", "tool_rpy_rad"});
+    s.task.path = t->Enum("path", &ParsePathKind, PathKind::kArc);
+    s.task.line_start_m = t->Vec3("line_start_m", s.task.line_start_m);
+    s.task.line_end_m = t->Vec3("line_end_m", s.task.line_end_m);
+    s.task.R_WT_line = RotationFromRpy(t->Vec3("tool_rpy_rad", Eigen::Vector3d::Zero()));
+    s.task.pass_duration_s = t->FiniteDouble("pass_duration_s", s.task.pass_duration_s);
+    s.task.start_azimuth_rad = t->FiniteDouble("start_azimuth_rad", s.task.start_azimuth_rad);
+    s.task.end_azimuth_rad = t->FiniteDouble("end_azimuth_rad", s.task.end_azimuth_rad);
+  }
+  if (const std::optional<YamlSection> h = root.OptionalMap("haptic")) {
+    h->CheckNoUnknownKeys({"rate_hz", "max_force_N", "wall_stiffness_N_per_m"});
+    s.haptic.rate_hz = h->FiniteDouble("rate_hz", s.haptic.rate_hz);
+    s.haptic.max_force_N = h->FiniteDouble("max_force_N", s.haptic.max_force_N);
+    s.haptic.wall_stiffness_N_per_m =
+        h->FiniteDouble("wall_stiffness_N_per_m", s.haptic.wall_stiffness_N_per_m);
+  }
+  if (const std::optional<YamlSection> th = root.OptionalMap("thread")) {
+    th->CheckNoUnknownKeys({"params", "anchor_m", "slack_side", "floor_height_m", "max_strain"});
+    ThreadSceneDef d;
+    th->Required("params");
+    const std::string params = th->String("params", "");
+    if (params.empty()) th->Fail("params", "expected a thread parameter file");
+    d.params_path = ResolveBeside(s.path, params);
+    d.def = LoadParams(*th, d.params_path, &thread::LoadThreadDef);
+    // The thread steps once per haptic tick.
+    d.def.time_step_s = 1.0 / s.haptic.rate_hz;
+    d.p_W_anchor = th->Vec3("anchor_m", Eigen::Vector3d::Zero());
+    if (th->Has("slack_side")) {
+      const Eigen::Vector3d side = th->Vec3("slack_side", Eigen::Vector3d::Zero());
+      d.slack_side_W = side.norm() > 0 ? Eigen::Vector3d(side.normalized()) : side;
+    }
+    d.floor_height_m = th->FiniteDouble("floor_height_m", d.floor_height_m);
+    d.max_strain = th->FiniteDouble("max_strain", d.max_strain);
+    s.thread = d;
+  }
+  if (const std::optional<YamlSection> ti = root.OptionalMap("tissue")) {
+    ti->CheckNoUnknownKeys({"params", "position_m", "rpy_rad", "tool", "contact_radius_m",
+                            "bar_length_m", "display_level", "max_force_N", "level", "max_level",
+                            "solver", "grading", "cg_relative_tolerance", "cg_max_iterations"});
+    TissueSceneDef d;
+    ti->Required("params");
+    const std::string params = ti->String("params", "");
+    if (params.empty()) ti->Fail("params", "expected a tissue parameter file");
+    d.params_path = ResolveBeside(s.path, params);
+    d.def = LoadParams(*ti, d.params_path, &fem::LoadTissueDef);
+    // The scene's overrides of the parameter file (a station picks the level and solver that
+    // fit its haptic period).
+    d.def.level = ti->Int("level", d.def.level);
+    d.def.max_level = ti->Int("max_level", d.def.max_level);
+    d.def.grading = ti->FiniteDouble("grading", d.def.grading);
+    d.def.cg_relative_tolerance =
+        ti->FiniteDouble("cg_relative_tolerance", d.def.cg_relative_tolerance);
+    d.def.cg_max_iterations = ti->Int("cg_max_iterations", d.def.cg_max_iterations);
+    d.def.solver = ti->Enum("solver", &fem::ParseSolverKind, d.def.solver);
+    const Eigen::Vector3d p = ti->Vec3("position_m", Eigen::Vector3d::Zero());
+    d.X_WS = Eigen::Isometry3d::Identity();
+    d.X_WS.translate(p);
+    d.X_WS.rotate(RotationFromRpy(ti->Vec3("rpy_rad", Eigen::Vector3d::Zero())));
+    d.tool = ti->Enum("tool", &ParseToolKind, TissueToolKind::kPoint);
+    d.contact_radius_m = ti->FiniteDouble("contact_radius_m", d.contact_radius_m);
+    d.bar_length_m = ti->FiniteDouble("bar_length_m", d.bar_length_m);
+    d.display_level = ti->Int("display_level", d.display_level);
+    d.max_force_N = ti->FiniteDouble("max_force_N", d.max_force_N);
+    s.tissue = d;
+  }
+  try {
+    ValidateScene(s);
+  } catch (const std::invalid_argument& e) {
+    root.FailInvalid(e);
+  }
+  s.needle.X_WN = s.CalcIdealX_WT(s.task.start_azimuth_rad) * s.X_TN();
+  return s;
 }
 
 }  // namespace
@@ -141,274 +209,133 @@ Eigen::Isometry3d SceneModel::X_TN() const {
 }
 
 void ValidateScene(const SceneModel& s) {
-  const std::string& o = s.path.empty() ? std::string("scene") : s.path;
-  if (s.name.empty()) Fail(o, "name", "expected a non-empty name");
-  if (s.modules.empty()) Fail(o, "modules", "expected at least one module");
+  if (s.name.empty()) Invalid("name", "expected a non-empty name");
+  if (s.modules.empty()) Invalid("modules", "expected at least one module");
   std::set<std::string> seen;
   for (const auto& m : s.modules) {
     if (std::find_if(std::begin(kKnownModules), std::end(kKnownModules),
                      [&](const char* k) { return m == k; }) == std::end(kKnownModules)) {
-      Fail(o, "modules", "unknown module '" + m + "' (known: needle, tremor, thread, tissue)");
+      Invalid("modules", "unknown module '" + m + "' (known: needle, tremor, thread, tissue)");
     }
-    if (!seen.insert(m).second) Fail(o, "modules", "module '" + m + "' named twice");
+    if (!seen.insert(m).second) Invalid("modules", "module '" + m + "' named twice");
   }
   const geometry::TorusSegmentDef& v = s.vessel;
-  if (!(v.core_radius_m > 0)) Fail(o, "vessel.core_radius_m", "expected > 0");
+  if (!(v.core_radius_m > 0)) Invalid("vessel.core_radius_m", "expected > 0");
   if (!(v.tube_radius_m > 0 && v.tube_radius_m < v.core_radius_m)) {
-    Fail(o, "vessel.tube_radius_m", "expected 0 < tube radius < core radius");
+    Invalid("vessel.tube_radius_m", "expected 0 < tube radius < core radius");
   }
   if (!(v.segment_angle_rad > 0 && v.segment_angle_rad <= kTwoPi)) {
-    Fail(o, "vessel.segment_angle_rad", "expected in (0, 2π]");
+    Invalid("vessel.segment_angle_rad", "expected in (0, 2π]");
   }
   const geometry::ArcDef& n = s.needle;
-  if (!(n.radius_m > 0)) Fail(o, "needle.radius_m", "expected > 0");
+  if (!(n.radius_m > 0)) Invalid("needle.radius_m", "expected > 0");
   if (!(std::abs(n.radius_m - v.core_radius_m) < v.tube_radius_m)) {
-    Fail(o, "needle.radius_m",
-         "expected within the tube: |needle radius − core radius| < tube radius");
+    Invalid("needle.radius_m",
+            "expected within the tube: |needle radius − core radius| < tube radius");
   }
   if (!(n.sweep_rad > 0 && n.sweep_rad <= kTwoPi))
-    Fail(o, "needle.sweep_rad", "expected in (0, 2π]");
+    Invalid("needle.sweep_rad", "expected in (0, 2π]");
   const TaskDef& t = s.task;
-  if (!(t.pass_duration_s > 0.1)) Fail(o, "task.pass_duration_s", "expected > 0.1 s");
+  if (!(t.pass_duration_s > 0.1)) Invalid("task.pass_duration_s", "expected > 0.1 s");
   if (t.path == PathKind::kArc) {
     if (!(t.start_azimuth_rad >= 0 && t.start_azimuth_rad < t.end_azimuth_rad)) {
-      Fail(o, "task.start_azimuth_rad", "expected 0 <= start < end");
+      Invalid("task.start_azimuth_rad", "expected 0 <= start < end");
     }
     if (!(t.end_azimuth_rad + n.sweep_rad <= v.segment_angle_rad)) {
-      Fail(o, "task.end_azimuth_rad", "expected end + needle sweep <= vessel segment angle");
+      Invalid("task.end_azimuth_rad", "expected end + needle sweep <= vessel segment angle");
     }
   }
   if (t.path == PathKind::kLine) {
     if (!((t.line_end_m - t.line_start_m).norm() > 0)) {
-      Fail(o, "task.line_end_m", "expected a point other than task.line_start_m");
+      Invalid("task.line_end_m", "expected a point other than task.line_start_m");
     }
-    if (s.HasModule("needle")) Fail(o, "task.path", "the needle module needs path: arc");
+    if (s.HasModule("needle")) Invalid("task.path", "the needle module needs path: arc");
   }
   if (s.HasModule("thread") != s.thread.has_value()) {
-    Fail(o, "thread",
-         s.thread ? "section given but 'thread' is not in modules"
-                  : "section required by the 'thread' module");
+    Invalid("thread", s.thread ? "section given but 'thread' is not in modules"
+                               : "section required by the 'thread' module");
   }
   if (s.HasModule("tissue") != s.tissue.has_value()) {
-    Fail(o, "tissue",
-         s.tissue ? "section given but 'tissue' is not in modules"
-                  : "section required by the 'tissue' module");
+    Invalid("tissue", s.tissue ? "section given but 'tissue' is not in modules"
+                               : "section required by the 'tissue' module");
   }
   if (s.thread) {
     const ThreadSceneDef& th = *s.thread;
     try {
       th.def.Validate();
     } catch (const std::invalid_argument& e) {
-      Fail(o, "thread.params", th.params_path + ": " + e.what());
+      Invalid("thread.params",
+              std::string(e.what()) + " (" + th.params_path + " with the scene's time step)");
     }
     if (!(std::abs(th.def.time_step_s * s.haptic.rate_hz - 1.0) < 1e-9)) {
-      Fail(o, "thread.params", "time_step_s: expected the haptic period 1 / haptic.rate_hz");
+      Invalid("thread.params", "time_step_s: expected the haptic period 1 / haptic.rate_hz");
     }
-    if (th.def.max_grasps < 2) Fail(o, "thread.params", "max_grasps: expected >= 2");
+    if (th.def.max_grasps < 2) Invalid("thread.params", "max_grasps: expected >= 2");
     if (!(std::abs(th.slack_side_W.norm() - 1.0) < 1e-9)) {
-      Fail(o, "thread.slack_side", "expected a non-zero vector");
+      Invalid("thread.slack_side", "expected a non-zero vector");
     }
     const double reach_m = (s.CalcIdealToolPose(0).translation() - th.p_W_anchor).norm();
     if (!(reach_m <= th.def.length_m * (1 + 1e-9))) {
-      Fail(o, "thread.anchor_m",
-           "expected within the thread's length of the tool's start point (the thread would "
-           "start stretched)");
+      Invalid("thread.anchor_m",
+              "expected within the thread's length of the tool's start point (the thread would "
+              "start stretched)");
     }
     if (!(reach_m > 0.2 * th.def.length_m)) {
-      Fail(o, "thread.anchor_m",
-           "expected farther than a fifth of the thread's length from the "
-           "tool's start point");
+      Invalid("thread.anchor_m",
+              "expected farther than a fifth of the thread's length from the "
+              "tool's start point");
     }
-    if (!(th.max_strain > 0 && th.max_strain <= 1)) Fail(o, "thread.max_strain", "expected (0, 1]");
+    if (!(th.max_strain > 0 && th.max_strain <= 1)) Invalid("thread.max_strain", "expected (0, 1]");
   }
   if (s.tissue) {
     const TissueSceneDef& ti = *s.tissue;
     try {
       ti.def.Validate();
     } catch (const std::invalid_argument& e) {
-      Fail(o, "tissue", ti.params_path + " with the scene's overrides: " + e.what());
+      // "FIELD: reason": the scene's override of FIELD (or the tissue section when FIELD is not
+      // overridden) with the parameter file's other values.
+      throw std::invalid_argument("tissue." + std::string(e.what()) + " (" + ti.params_path +
+                                  " with the scene's overrides)");
     }
     if (!(ti.display_level >= 1 && ti.display_level <= 6)) {
-      Fail(o, "tissue.display_level", "expected 1..6 ((2^l + 1)^2 <= 16384 values)");
+      Invalid("tissue.display_level", "expected 1..6 ((2^l + 1)^2 <= 16384 values)");
     }
     if (ti.display_level > ti.def.max_level) {
-      Fail(o, "tissue.display_level", "expected <= the tissue's max_level");
+      Invalid("tissue.display_level", "expected <= the tissue's max_level");
     }
     if (!(ti.contact_radius_m >= 0 &&
           ti.contact_radius_m < 0.25 * std::min(ti.def.length_x_m, ti.def.length_y_m))) {
-      Fail(o, "tissue.contact_radius_m", "expected 0 <= radius < a quarter of the patch");
+      Invalid("tissue.contact_radius_m", "expected 0 <= radius < a quarter of the patch");
     }
     if (!(ti.bar_length_m > 0 &&
           ti.bar_length_m < std::min(ti.def.length_x_m, ti.def.length_y_m))) {
-      Fail(o, "tissue.bar_length_m", "expected 0 < length < the patch side");
+      Invalid("tissue.bar_length_m", "expected 0 < length < the patch side");
     }
-    if (!(ti.max_force_N > 0)) Fail(o, "tissue.max_force_N", "expected > 0 N");
+    if (!(ti.max_force_N > 0)) Invalid("tissue.max_force_N", "expected > 0 N");
   }
   const HapticDef& h = s.haptic;
-  if (!(h.rate_hz >= 100 && h.rate_hz <= 10000)) Fail(o, "haptic.rate_hz", "expected 100..10000");
+  if (!(h.rate_hz >= 100 && h.rate_hz <= 10000)) Invalid("haptic.rate_hz", "expected 100..10000");
   if (!(h.max_force_N > 0 && h.max_force_N <= 20))
-    Fail(o, "haptic.max_force_N", "expected (0, 20] N");
+    Invalid("haptic.max_force_N", "expected (0, 20] N");
   if (!(h.wall_stiffness_N_per_m >= 0 && h.wall_stiffness_N_per_m <= 1e5)) {
-    Fail(o, "haptic.wall_stiffness_N_per_m", "expected 0..1e5 N/m");
+    Invalid("haptic.wall_stiffness_N_per_m", "expected 0..1e5 N/m");
   }
 }
 
 SceneModel ParseScene(const std::string& yaml_text, const std::string& origin) {
-  YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw SceneError(origin + ": not YAML: " + e.what());
+    return ReadScene(YamlReader::FromText(yaml_text, origin));
+  } catch (const InputError& e) {
+    throw SceneError(e);
   }
-  if (!root.IsMap()) throw SceneError(origin + ": expected a YAML mapping at the top");
-  CheckKeys(root, {"name", "modules", "vessel", "needle", "task", "haptic", "thread", "tissue"}, "",
-            origin);
-  SceneModel s;
-  s.path = origin;
-  try {
-    if (root["name"]) s.name = root["name"].as<std::string>();
-    if (!root["modules"] || !root["modules"].IsSequence()) {
-      Fail(origin, "modules", "expected a list of module names");
-    }
-    for (const auto& m : root["modules"]) s.modules.push_back(m.as<std::string>());
-  } catch (const YAML::Exception&) {
-    Fail(origin, "name/modules", "expected strings");
-  }
-  if (const YAML::Node v = root["vessel"]) {
-    CheckKeys(v, {"core_radius_m", "tube_radius_m", "segment_angle_rad", "position_m", "rpy_rad"},
-              "vessel.", origin);
-    s.vessel.core_radius_m =
-        ReadDouble(v, "core_radius_m", "vessel.", origin, s.vessel.core_radius_m);
-    s.vessel.tube_radius_m =
-        ReadDouble(v, "tube_radius_m", "vessel.", origin, s.vessel.tube_radius_m);
-    s.vessel.segment_angle_rad =
-        ReadDouble(v, "segment_angle_rad", "vessel.", origin, s.vessel.segment_angle_rad);
-    const Eigen::Vector3d p = ReadVec3(v, "position_m", "vessel.", origin);
-    const Eigen::Vector3d rpy = ReadVec3(v, "rpy_rad", "vessel.", origin);
-    s.vessel.X_WV = Eigen::Isometry3d::Identity();
-    s.vessel.X_WV.translate(p);
-    s.vessel.X_WV.rotate(RotationFromRpy(rpy));
-  }
-  if (const YAML::Node n = root["needle"]) {
-    CheckKeys(n, {"radius_m", "sweep_rad"}, "needle.", origin);
-    s.needle.radius_m = ReadDouble(n, "radius_m", "needle.", origin, s.needle.radius_m);
-    s.needle.sweep_rad = ReadDouble(n, "sweep_rad", "needle.", origin, s.needle.sweep_rad);
-  }
-  if (const YAML::Node t = root["task"]) {
-    CheckKeys(t,
-              {"pass_duration_s", "start_azimuth_rad", "end_azimuth_rad", "path", "line_start_m",
-               "line_end_m", "tool_rpy_rad"},
-              "task.", origin);
-    const std::string path = ReadString(t, "path", "task.", origin, "arc");
-    if (path == "arc") {
-      s.task.path = PathKind::kArc;
-    } else if (path == "line") {
-      s.task.path = PathKind::kLine;
-    } else {
-      Fail(origin, "task.path", "expected arc|line");
-    }
-    if (t["line_start_m"]) s.task.line_start_m = ReadVec3(t, "line_start_m", "task.", origin);
-    if (t["line_end_m"]) s.task.line_end_m = ReadVec3(t, "line_end_m", "task.", origin);
-    s.task.R_WT_line = RotationFromRpy(ReadVec3(t, "tool_rpy_rad", "task.", origin));
-    s.task.pass_duration_s =
-        ReadDouble(t, "pass_duration_s", "task.", origin, s.task.pass_duration_s);
-    s.task.start_azimuth_rad =
-        ReadDouble(t, "start_azimuth_rad", "task.", origin, s.task.start_azimuth_rad);
-    s.task.end_azimuth_rad =
-        ReadDouble(t, "end_azimuth_rad", "task.", origin, s.task.end_azimuth_rad);
-  }
-  if (const YAML::Node h = root["haptic"]) {
-    CheckKeys(h, {"rate_hz", "max_force_N", "wall_stiffness_N_per_m"}, "haptic.", origin);
-    s.haptic.rate_hz = ReadDouble(h, "rate_hz", "haptic.", origin, s.haptic.rate_hz);
-    s.haptic.max_force_N = ReadDouble(h, "max_force_N", "haptic.", origin, s.haptic.max_force_N);
-    s.haptic.wall_stiffness_N_per_m =
-        ReadDouble(h, "wall_stiffness_N_per_m", "haptic.", origin, s.haptic.wall_stiffness_N_per_m);
-  }
-  if (const YAML::Node th = root["thread"]) {
-    if (!th.IsMap()) Fail(origin, "thread", "expected a map");
-    CheckKeys(th, {"params", "anchor_m", "slack_side", "floor_height_m", "max_strain"}, "thread.",
-              origin);
-    ThreadSceneDef d;
-    const std::string params = ReadString(th, "params", "thread.", origin, "");
-    if (params.empty()) Fail(origin, "thread.params", "expected a thread parameter file");
-    d.params_path = ResolveBeside(origin, params);
-    try {
-      d.def = thread::LoadThreadDef(d.params_path);
-    } catch (const std::exception& e) {
-      Fail(origin, "thread.params", e.what());
-    }
-    // The thread steps once per haptic tick.
-    d.def.time_step_s = 1.0 / s.haptic.rate_hz;
-    d.p_W_anchor = ReadVec3(th, "anchor_m", "thread.", origin);
-    if (th["slack_side"]) {
-      const Eigen::Vector3d side = ReadVec3(th, "slack_side", "thread.", origin);
-      d.slack_side_W = side.norm() > 0 ? Eigen::Vector3d(side.normalized()) : side;
-    }
-    d.floor_height_m = ReadDouble(th, "floor_height_m", "thread.", origin, d.floor_height_m);
-    d.max_strain = ReadDouble(th, "max_strain", "thread.", origin, d.max_strain);
-    s.thread = d;
-  }
-  if (const YAML::Node ti = root["tissue"]) {
-    if (!ti.IsMap()) Fail(origin, "tissue", "expected a map");
-    CheckKeys(ti,
-              {"params", "position_m", "rpy_rad", "tool", "contact_radius_m", "bar_length_m",
-               "display_level", "max_force_N", "level", "max_level", "solver", "grading",
-               "cg_relative_tolerance", "cg_max_iterations"},
-              "tissue.", origin);
-    TissueSceneDef d;
-    const std::string params = ReadString(ti, "params", "tissue.", origin, "");
-    if (params.empty()) Fail(origin, "tissue.params", "expected a tissue parameter file");
-    d.params_path = ResolveBeside(origin, params);
-    try {
-      d.def = fem::LoadTissueDef(d.params_path);
-    } catch (const std::exception& e) {
-      Fail(origin, "tissue.params", e.what());
-    }
-    // The scene's overrides of the parameter file (a station picks the level and solver that
-    // fit its haptic period).
-    d.def.level = ReadInt(ti, "level", "tissue.", origin, d.def.level);
-    d.def.max_level = ReadInt(ti, "max_level", "tissue.", origin, d.def.max_level);
-    d.def.grading = ReadDouble(ti, "grading", "tissue.", origin, d.def.grading);
-    d.def.cg_relative_tolerance =
-        ReadDouble(ti, "cg_relative_tolerance", "tissue.", origin, d.def.cg_relative_tolerance);
-    d.def.cg_max_iterations =
-        ReadInt(ti, "cg_max_iterations", "tissue.", origin, d.def.cg_max_iterations);
-    if (ti["solver"]) {
-      try {
-        d.def.solver = fem::ParseSolverKind(ReadString(ti, "solver", "tissue.", origin, ""));
-      } catch (const std::invalid_argument&) {
-        Fail(origin, "tissue.solver", "expected cg|pcg_jacobi|pcg_ic|cholmod");
-      }
-    }
-    const Eigen::Vector3d p = ReadVec3(ti, "position_m", "tissue.", origin);
-    d.X_WS = Eigen::Isometry3d::Identity();
-    d.X_WS.translate(p);
-    d.X_WS.rotate(RotationFromRpy(ReadVec3(ti, "rpy_rad", "tissue.", origin)));
-    const std::string tool = ReadString(ti, "tool", "tissue.", origin, "point");
-    if (tool == "point") {
-      d.tool = TissueToolKind::kPoint;
-    } else if (tool == "bar") {
-      d.tool = TissueToolKind::kBar;
-    } else {
-      Fail(origin, "tissue.tool", "expected point|bar");
-    }
-    d.contact_radius_m = ReadDouble(ti, "contact_radius_m", "tissue.", origin, d.contact_radius_m);
-    d.bar_length_m = ReadDouble(ti, "bar_length_m", "tissue.", origin, d.bar_length_m);
-    d.display_level = ReadInt(ti, "display_level", "tissue.", origin, d.display_level);
-    d.max_force_N = ReadDouble(ti, "max_force_N", "tissue.", origin, d.max_force_N);
-    s.tissue = d;
-  }
-  ValidateScene(s);
-  s.needle.X_WN = s.CalcIdealX_WT(s.task.start_azimuth_rad) * s.X_TN();
-  return s;
 }
 
 SceneModel LoadScene(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ParseScene(ss.str(), path);
+  try {
+    return ReadScene(YamlReader(path));
+  } catch (const InputError& e) {
+    throw SceneError(e);
+  }
 }
 
 }  // namespace microdex::scene

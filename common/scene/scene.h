@@ -18,16 +18,18 @@
 #include <string>
 #include <vector>
 
+#include "common/base/input_error.h"
 #include "common/fem/tissue_def.h"
 #include "common/geometry/arc_torus.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::scene {
 
-// Bad scene file: the message names the file, the field and what was expected.
-class SceneError : public std::runtime_error {
+// Bad scene file (or a parameter file it names): an InputError, "FILE:LINE: field: reason".
+class SceneError : public InputError {
  public:
-  using std::runtime_error::runtime_error;
+  using InputError::InputError;
+  explicit SceneError(const InputError& e) : InputError(e) {}
 };
 
 // Modules a scene may name; "thread" and "tissue" need their scene sections.
@@ -130,12 +132,16 @@ struct SceneModel {
   Eigen::Isometry3d X_TN() const;
 };
 
-// Throws SceneError naming the first bad field. Called by the loaders.
+// The scene's own checks (and those of its thread and tissue definitions), called by the
+// loaders. Throws std::invalid_argument for the first bad field, whose message starts with the
+// field name followed by ': ' (e.g. `vessel.tube_radius_m: expected 0 < tube radius < core
+// radius`); the loaders rethrow it as SceneError at that field's line.
 void ValidateScene(const SceneModel& scene);
 
-// Loads and validates a scene file. Throws SceneError.
+// Loads and validates a scene file. Throws SceneError "FILE:LINE: field: reason" (for an error
+// in a parameter file the scene names, FILE and LINE are the parameter file's).
 SceneModel LoadScene(const std::string& path);
-// The same from YAML text; origin names it in error messages.
+// The same from YAML text; origin stands for the file in error messages.
 SceneModel ParseScene(const std::string& yaml_text, const std::string& origin);
 
 }  // namespace microdex::scene

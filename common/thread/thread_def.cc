@@ -1,21 +1,16 @@
 #include "common/thread/thread_def.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <type_traits>
 
-#include "common/base/yaml_field.h"
+#include "common/base/yaml_reader.h"
 
 namespace microdex::thread {
 namespace {
 
 void Require(bool ok, const char* field, const std::string& expected) {
-  if (!ok) {
-    throw std::invalid_argument(std::string("ThreadDef.") + field + ": expected " + expected);
-  }
+  if (!ok) throw std::invalid_argument(std::string(field) + ": expected " + expected);
 }
 
 bool Finite(double value) { return std::isfinite(value); }
@@ -177,120 +172,78 @@ ThreadDef ThreadPreset(const std::string& name) {
 }
 
 ThreadDef LoadThreadDef(const std::string& path) {
-  YAML::Node file;
-  try {
-    file = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw std::runtime_error(path + ": cannot open thread parameter file");
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": malformed YAML: " + e.what());
-  }
-  const YAML::Node root = file["thread"];
-  if (!root || !root.IsMap()) {
-    throw std::runtime_error(path + ": field 'thread': expected a map of thread parameters");
-  }
-  static constexpr const char* kKnown[] = {"name",
-                                           "base",
-                                           "num_nodes",
-                                           "length_m",
-                                           "diameter_m",
-                                           "youngs_modulus_Pa",
-                                           "shear_modulus_Pa",
-                                           "density_kg_per_m3",
-                                           "stretch_stiffness_N_per_m",
-                                           "bend_stiffness_N_m",
-                                           "twist_stiffness_N_m",
-                                           "node_mass_kg",
-                                           "mass_scale",
-                                           "twist_coupling_N",
-                                           "drag_N_s_per_m2",
-                                           "twist_drag_N_m_s",
-                                           "contact_damping_N_s_per_m",
-                                           "contact_force_N",
-                                           "contact_decay_m",
-                                           "contact_cutoff_m",
-                                           "guard_fraction",
-                                           "strain_limit",
-                                           "gravity_m_per_s2",
-                                           "integrator",
-                                           "time_step_s",
-                                           "max_grasps",
-                                           "max_contacts",
-                                           "exact_contact_pairs",
-                                           "friction_coefficient",
-                                           "object_friction_coefficient",
-                                           "friction_contacts"};
-  for (const auto& entry : root) {
-    const std::string key = entry.first.as<std::string>();
-    bool known = false;
-    for (const char* name : kKnown) known = known || key == name;
-    if (!known)
-      throw std::runtime_error(
-          std::string(path).append(": field 'thread.").append(key).append("': unknown field"));
-  }
+  const YamlSection thread = YamlReader(path).Root().Map("thread");
+  thread.CheckNoUnknownKeys({"base",
+                             "name",
+                             "num_nodes",
+                             "length_m",
+                             "diameter_m",
+                             "youngs_modulus_Pa",
+                             "shear_modulus_Pa",
+                             "density_kg_per_m3",
+                             "stretch_stiffness_N_per_m",
+                             "bend_stiffness_N_m",
+                             "twist_stiffness_N_m",
+                             "node_mass_kg",
+                             "mass_scale",
+                             "twist_coupling_N",
+                             "drag_N_s_per_m2",
+                             "twist_drag_N_m_s",
+                             "contact_damping_N_s_per_m",
+                             "contact_force_N",
+                             "contact_decay_m",
+                             "contact_cutoff_m",
+                             "guard_fraction",
+                             "strain_limit",
+                             "gravity_m_per_s2",
+                             "integrator",
+                             "time_step_s",
+                             "max_grasps",
+                             "max_contacts",
+                             "exact_contact_pairs",
+                             "friction_coefficient",
+                             "object_friction_coefficient",
+                             "friction_contacts"});
   ThreadDef def;
-  std::string base;
-  ReadYamlField(root, path, "", "base", base);
-  if (!base.empty()) {
-    try {
-      def = ThreadPreset(base);
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(path + ": field 'thread.base': " + e.what());
-    }
-  }
-  ReadYamlField(root, path, "", "name", def.name);
-  ReadYamlField(root, path, "", "num_nodes", def.num_nodes);
-  ReadYamlField(root, path, "", "length_m", def.length_m);
-  ReadYamlField(root, path, "", "diameter_m", def.diameter_m);
-  ReadYamlField(root, path, "", "youngs_modulus_Pa", def.youngs_modulus_Pa);
-  ReadYamlField(root, path, "", "shear_modulus_Pa", def.shear_modulus_Pa);
-  ReadYamlField(root, path, "", "density_kg_per_m3", def.density_kg_per_m3);
-  ReadYamlField(root, path, "", "stretch_stiffness_N_per_m", def.stretch_stiffness_N_per_m);
-  ReadYamlField(root, path, "", "bend_stiffness_N_m", def.bend_stiffness_N_m);
-  ReadYamlField(root, path, "", "twist_stiffness_N_m", def.twist_stiffness_N_m);
-  ReadYamlField(root, path, "", "node_mass_kg", def.node_mass_kg);
-  ReadYamlField(root, path, "", "mass_scale", def.mass_scale);
-  ReadYamlField(root, path, "", "twist_coupling_N", def.twist_coupling_N);
-  ReadYamlField(root, path, "", "drag_N_s_per_m2", def.drag_N_s_per_m2);
-  ReadYamlField(root, path, "", "twist_drag_N_m_s", def.twist_drag_N_m_s);
-  ReadYamlField(root, path, "", "contact_damping_N_s_per_m", def.contact_damping_N_s_per_m);
-  ReadYamlField(root, path, "", "contact_force_N", def.contact_force_N);
-  ReadYamlField(root, path, "", "contact_decay_m", def.contact_decay_m);
-  ReadYamlField(root, path, "", "contact_cutoff_m", def.contact_cutoff_m);
-  ReadYamlField(root, path, "", "guard_fraction", def.guard_fraction);
-  ReadYamlField(root, path, "", "strain_limit", def.strain_limit);
-  ReadYamlField(root, path, "", "time_step_s", def.time_step_s);
-  ReadYamlField(root, path, "", "max_grasps", def.max_grasps);
-  ReadYamlField(root, path, "", "max_contacts", def.max_contacts);
-  ReadYamlField(root, path, "", "exact_contact_pairs", def.exact_contact_pairs);
-  ReadYamlField(root, path, "", "friction_coefficient", def.friction_coefficient);
-  ReadYamlField(root, path, "", "object_friction_coefficient", def.object_friction_coefficient);
-  ReadYamlField(root, path, "", "friction_contacts", def.friction_contacts);
-  if (const YAML::Node g = root["gravity_m_per_s2"]) {
-    if (!g.IsSequence() || g.size() != 3) {
-      throw std::runtime_error(path + ": field 'thread.gravity_m_per_s2' (line " +
-                               std::to_string(g.Mark().line + 1) +
-                               "): expected a list of 3 numbers in m/s^2");
-    }
-    for (int i = 0; i < 3; ++i) {
-      try {
-        def.gravity_m_per_s2[i] = g[i].as<double>();
-      } catch (const YAML::Exception&) {
-        throw std::runtime_error(path + ": field 'thread.gravity_m_per_s2': expected numbers");
-      }
-    }
-  }
-  if (const YAML::Node n = root["integrator"]) {
-    try {
-      def.integrator = ParseIntegrator(n.as<std::string>());
-    } catch (const std::exception& e) {
-      throw std::runtime_error(path + ": field 'thread.integrator': " + e.what());
-    }
-  }
+  // An empty base starts from the defaults.
+  if (!thread.String("base", "").empty()) def = thread.Enum("base", &ThreadPreset, def);
+  def.name = thread.String("name", def.name);
+  def.num_nodes = thread.Int("num_nodes", def.num_nodes);
+  def.length_m = thread.FiniteDouble("length_m", def.length_m);
+  def.diameter_m = thread.FiniteDouble("diameter_m", def.diameter_m);
+  def.youngs_modulus_Pa = thread.FiniteDouble("youngs_modulus_Pa", def.youngs_modulus_Pa);
+  def.shear_modulus_Pa = thread.FiniteDouble("shear_modulus_Pa", def.shear_modulus_Pa);
+  def.density_kg_per_m3 = thread.FiniteDouble("density_kg_per_m3", def.density_kg_per_m3);
+  def.stretch_stiffness_N_per_m =
+      thread.FiniteDouble("stretch_stiffness_N_per_m", def.stretch_stiffness_N_per_m);
+  def.bend_stiffness_N_m = thread.FiniteDouble("bend_stiffness_N_m", def.bend_stiffness_N_m);
+  def.twist_stiffness_N_m = thread.FiniteDouble("twist_stiffness_N_m", def.twist_stiffness_N_m);
+  def.node_mass_kg = thread.FiniteDouble("node_mass_kg", def.node_mass_kg);
+  def.mass_scale = thread.FiniteDouble("mass_scale", def.mass_scale);
+  def.twist_coupling_N = thread.FiniteDouble("twist_coupling_N", def.twist_coupling_N);
+  def.drag_N_s_per_m2 = thread.FiniteDouble("drag_N_s_per_m2", def.drag_N_s_per_m2);
+  def.twist_drag_N_m_s = thread.FiniteDouble("twist_drag_N_m_s", def.twist_drag_N_m_s);
+  def.contact_damping_N_s_per_m =
+      thread.FiniteDouble("contact_damping_N_s_per_m", def.contact_damping_N_s_per_m);
+  def.contact_force_N = thread.FiniteDouble("contact_force_N", def.contact_force_N);
+  def.contact_decay_m = thread.FiniteDouble("contact_decay_m", def.contact_decay_m);
+  def.contact_cutoff_m = thread.FiniteDouble("contact_cutoff_m", def.contact_cutoff_m);
+  def.guard_fraction = thread.FiniteDouble("guard_fraction", def.guard_fraction);
+  def.strain_limit = thread.FiniteDouble("strain_limit", def.strain_limit);
+  def.time_step_s = thread.FiniteDouble("time_step_s", def.time_step_s);
+  def.max_grasps = thread.Int("max_grasps", def.max_grasps);
+  def.max_contacts = thread.Int("max_contacts", def.max_contacts);
+  def.exact_contact_pairs = thread.Int("exact_contact_pairs", def.exact_contact_pairs);
+  def.friction_coefficient = thread.FiniteDouble("friction_coefficient", def.friction_coefficient);
+  def.object_friction_coefficient =
+      thread.FiniteDouble("object_friction_coefficient", def.object_friction_coefficient);
+  def.friction_contacts = thread.Int("friction_contacts", def.friction_contacts);
+  def.gravity_m_per_s2 = thread.Vec3("gravity_m_per_s2", def.gravity_m_per_s2);
+  def.integrator = thread.Enum("integrator", &ParseIntegrator, def.integrator);
   try {
     def.Validate();
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(path + ": " + e.what());
+    thread.FailInvalid(e);
   }
   return def;
 }

@@ -108,7 +108,8 @@ struct ThreadDef {
   // each adds two columns to the linearly implicit step's low-rank solve. 0: none.
   int friction_contacts = 64;
 
-  // Throws std::invalid_argument naming the bad field and what was expected.
+  // Throws std::invalid_argument for the first bad field, whose message starts with the field
+  // name followed by ': ' (e.g. `diameter_m: expected a positive diameter below 10 link lengths`).
   void Validate() const;
 };
 
@@ -121,8 +122,9 @@ ThreadDef Necklace();
 // By name: "stiff-nylon-10-0", "soft-silk", "necklace"; throws std::invalid_argument.
 ThreadDef ThreadPreset(const std::string& name);
 
-// Reads a thread parameter file (assets/scenes/thread_*.yaml). Throws std::runtime_error whose
-// message names the file and the field when the file is missing, malformed or invalid.
+// Reads a thread parameter file (assets/scenes/thread_*.yaml: a map `thread:`, optionally
+// starting from a preset `base`) and validates it. Throws microdex::InputError
+// "FILE:LINE: thread.FIELD: reason" (common/base/input_error.h).
 ThreadDef LoadThreadDef(const std::string& path);
 
 }  // namespace microdex::thread

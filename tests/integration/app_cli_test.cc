@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 #include "tests/integration/process.h"
 
@@ -39,7 +42,8 @@ void ExpectBadInput(const std::string& binary, const std::vector<std::string>& a
 const std::string kScene = testing::SourceDir() + "/assets/scenes/needle_tube.yaml";
 
 TEST(AppCli, StationRefusesBadInput) {
-  ExpectBadInput("microdex-station", {"--scene", "/nonexistent.yaml"}, "/nonexistent.yaml");
+  ExpectBadInput("microdex-station", {"--scene", "/nonexistent.yaml"},
+                 "microdex-station: /nonexistent.yaml: cannot open file\n");
   ExpectBadInput("microdex-station", {"--scene", kScene, "--skill", "1.5"}, "--skill");
   ExpectBadInput("microdex-station", {"--scene", kScene, "--device", "gui"}, "--device gui");
   ExpectBadInput("microdex-station", {"--scene", kScene, "--window"}, "--window");
@@ -50,6 +54,43 @@ TEST(AppCli, StationRefusesBadInput) {
   ExpectBadInput("microdex-station", {"--scene", kScene, "--station-id", "all"}, "--station-id");
   ExpectBadInput("microdex-station", {}, "--scene");
   ExpectBadInput("microdex-station", {"--scene", kScene, "--bogus"}, "--bogus");
+}
+
+std::string WriteScene(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+// Bad scene files: one line "FILE:LINE: field: reason".
+TEST(AppCli, StationNamesFileLineAndFieldOfABadScene) {
+  const std::string head = "name: t\nmodules: [needle]\n";
+  const std::string bad_value =
+      WriteScene("cli_bad_value.yaml", head +
+                                           "vessel:\n  core_radius_m: 5.0e-3\n"
+                                           "  tube_radius_m: 6.0e-3\n");
+  ExpectBadInput("microdex-station", {"--scene", bad_value},
+                 "microdex-station: " + bad_value +
+                     ":5: vessel.tube_radius_m: expected 0 < tube radius < core radius\n");
+  const std::string bad_type = WriteScene("cli_bad_type.yaml", head + "haptic: {rate_hz: fast}\n");
+  ExpectBadInput("microdex-station", {"--scene", bad_type},
+                 "microdex-station: " + bad_type + ":3: haptic.rate_hz: expected a number\n");
+  const std::string unknown = WriteScene("cli_unknown.yaml", head + "\ncolour: red\n");
+  ExpectBadInput("microdex-station", {"--scene", unknown},
+                 "microdex-station: " + unknown + ":4: colour: unknown key\n");
+  const std::string malformed = WriteScene("cli_malformed.yaml", "name: t\nmodules: [needle\n");
+  ExpectBadInput("microdex-station", {"--scene", malformed},
+                 "microdex-station: " + malformed + ":3: malformed YAML: ");
+  const std::string no_params = WriteScene("cli_no_params.yaml",
+                                           "name: t\nmodules: [tissue]\n"
+                                           "task: {path: line}\n"
+                                           "tissue:\n  params: cli_no_such_tissue.yaml\n");
+  ExpectBadInput("microdex-station", {"--scene", no_params},
+                 "microdex-station: " + no_params + ":5: tissue.params: cannot open file " +
+                     (std::filesystem::path(::testing::TempDir()) / "cli_no_such_tissue.yaml")
+                         .lexically_normal()
+                         .string() +
+                     "\n");
 }
 
 TEST(AppCli, InstructorRefusesBadInput) {

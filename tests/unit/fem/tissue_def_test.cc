@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/base/input_error.h"
 #include "common/fem/tissue_model.h"
 
 namespace microdex::fem {
@@ -65,34 +66,56 @@ TEST(TissueDefFile, AbsentKeysKeepDefaults) {
   EXPECT_DOUBLE_EQ(def.grading, TissueDef{}.grading);
 }
 
-TEST(TissueDefFile, BadFilesNameFileAndField) {
+TEST(TissueDefFile, BadFilesNameFileLineAndField) {
   const std::string missing = ::testing::TempDir() + "/no_such_tissue.yaml";
-  EXPECT_NE(ErrorOf(missing).find("no_such_tissue.yaml"), std::string::npos);
+  EXPECT_EQ(ErrorOf(missing), missing + ": cannot open file");
 
   struct Bad {
     const char* file;
     const char* text;
-    const char* field;
+    const char* error;  // after "PATH:"
   };
   const Bad cases[] = {
-      {"tissue_no_map.yaml", "tissue: 3\n", "'tissue'"},
-      {"tissue_bad_type.yaml", "tissue:\n  shear_modulus_Pa: soft\n", "tissue.shear_modulus_Pa"},
-      {"tissue_bad_int.yaml", "tissue:\n  level: 6.5\n", "tissue.level"},
-      {"tissue_unknown.yaml", "tissue:\n  youngs_modulus_Pa: 1e4\n", "tissue.youngs_modulus_Pa"},
-      {"tissue_bad_solver.yaml", "tissue:\n  solver: lu\n", "tissue.solver"},
-      {"tissue_bad_mesh.yaml", "tissue:\n  mesh: coarse\n", "tissue.mesh"},
-      {"tissue_bad_ordering.yaml", "tissue:\n  ordering: metis\n", "tissue.ordering"},
-      {"tissue_negative_g.yaml", "tissue:\n  shear_modulus_Pa: -1\n", "shear_modulus_Pa"},
-      {"tissue_level_high.yaml", "tissue:\n  max_level: 6\n  level: 7\n", "level"},
-      {"tissue_end_resolution.yaml", "tissue:\n  end_resolution: -64\n", "end_resolution"},
-      {"tissue_end_levels.yaml", "tissue:\n  end_levels: 9\n", "end_levels"},
-      {"tissue_malformed.yaml", "tissue: [1, 2\n", "malformed"},
+      {"tissue_no_map.yaml", "tissue: 3\n", "1: tissue: expected a map"},
+      {"tissue_no_section.yaml", "# tissue\nlevel: 3\n", "2: tissue: missing"},
+      {"tissue_bad_type.yaml", "tissue:\n  shear_modulus_Pa: soft\n",
+       "2: tissue.shear_modulus_Pa: expected a number"},
+      {"tissue_not_finite.yaml", "tissue:\n  level: 5\n  shear_modulus_Pa: .nan\n",
+       "3: tissue.shear_modulus_Pa: expected a finite number"},
+      {"tissue_bad_int.yaml", "tissue:\n  level: 6.5\n", "2: tissue.level: expected an integer"},
+      {"tissue_unknown.yaml", "tissue:\n  level: 5\n  youngs_modulus_Pa: 1e4\n",
+       "3: tissue.youngs_modulus_Pa: unknown key"},
+      {"tissue_bad_solver.yaml", "tissue:\n  solver: lu\n",
+       "2: tissue.solver: solver 'lu': expected cg, pcg_jacobi, pcg_ic or cholmod"},
+      {"tissue_bad_mesh.yaml", "tissue:\n  mesh: coarse\n",
+       "2: tissue.mesh: mesh kind 'coarse': expected fine or multiscale"},
+      {"tissue_bad_ordering.yaml", "tissue:\n  ordering: metis\n",
+       "2: tissue.ordering: ordering 'metis': expected nested_dissection or amd"},
+      // Values that parse but fail Validate(): the line of the field.
+      {"tissue_negative_g.yaml", "tissue:\n  level: 5\n\n  shear_modulus_Pa: -1\n",
+       "4: tissue.shear_modulus_Pa: expected a positive modulus in Pa"},
+      {"tissue_level_high.yaml", "tissue:\n  max_level: 6\n  level: 7\n",
+       "3: tissue.level: expected an integer in [1, max_level]"},
+      // ... and for a field left at its default, the line of its section.
+      {"tissue_default_level_high.yaml", "\ntissue:\n  max_level: 6\n",
+       "2: tissue.level: expected an integer in [1, max_level]"},
+      {"tissue_end_resolution.yaml", "tissue:\n  end_resolution: -64\n",
+       "2: tissue.end_resolution: expected 0 (off) or end-zone cells per tool length in (0, 1e4]"},
+      {"tissue_end_levels.yaml", "tissue:\n  end_levels: 9\n",
+       "2: tissue.end_levels: expected an integer in [0, 6]"},
   };
   for (const Bad& bad : cases) {
-    const std::string error = ErrorOf(Write(bad.file, bad.text));
-    EXPECT_NE(error.find(bad.file), std::string::npos) << bad.file << ": " << error;
-    EXPECT_NE(error.find(bad.field), std::string::npos) << bad.file << ": " << error;
+    const std::string path = Write(bad.file, bad.text);
+    EXPECT_EQ(ErrorOf(path), path + ":" + bad.error);
   }
+  const std::string malformed = Write("tissue_malformed.yaml", "tissue:\n  level: [1, 2\n");
+  const std::string error = ErrorOf(malformed);
+  EXPECT_EQ(error.rfind(malformed + ":3: malformed YAML: ", 0), 0u) << error;
+}
+
+TEST(TissueDefFile, ErrorsAreInputErrors) {
+  EXPECT_THROW(LoadTissueDef(Write("tissue_input_error.yaml", "tissue:\n  level: x\n")),
+               InputError);
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
+#include <string>
 
 #include "common/geometry/arc_torus_sampled.h"
 
@@ -42,36 +44,56 @@ TEST(Scene, ShippedSceneLoads) {
   EXPECT_EQ(m.modules, std::vector<std::string>{"needle"});
 }
 
-TEST(Scene, BadInputNamesFileAndField) {
-  EXPECT_NE(ErrorOf("name: [").find("test.yaml"), std::string::npos);
-  auto has = [](const std::string& err, const char* field) {
-    return err.find("test.yaml") != std::string::npos && err.find(field) != std::string::npos;
-  };
-  std::string y = kGood;
+TEST(Scene, BadInputNamesFileLineAndField) {
+  // kGood's lines: 2 name, 3 modules, 4 vessel, 5 needle, 6 task.
+  const std::string y = kGood;
   EXPECT_EQ(ErrorOf(y), "");
-  EXPECT_TRUE(has(ErrorOf(y + "colour: red\n"), "colour"));
-  std::string bad = y;
-  bad.replace(bad.find("tube_radius_m: 0.5e-3"), 21, "tube_radius_m: 6.0e-3");
-  EXPECT_TRUE(has(ErrorOf(bad), "vessel.tube_radius_m"));
-  bad = y;
-  bad.replace(bad.find("end_azimuth_rad: 3.3"), 20, "end_azimuth_rad: 4.0");
-  EXPECT_TRUE(has(ErrorOf(bad), "task.end_azimuth_rad"));
-  bad = y;
-  bad.replace(bad.find("[needle, tremor]"), 16, "[needle, vortex]");
-  EXPECT_TRUE(has(ErrorOf(bad), "vortex"));
-  bad = y;
-  bad.replace(bad.find("radius_m: 5.0e-3, sweep"), 16, "radius_m: abc");
-  EXPECT_TRUE(has(ErrorOf(bad), "needle.radius_m"));
-  bad = y;
-  bad.replace(bad.find("radius_m: 5.0e-3, sweep"), 16, "radius_m: 6.0e-3");
-  EXPECT_TRUE(has(ErrorOf(bad), "needle.radius_m"));
-  EXPECT_NE(ErrorOf("name: t\nmodules: []\n").find("modules"), std::string::npos);
+  auto with = [&](const char* from, const char* to) {
+    std::string bad = y;
+    bad.replace(bad.find(from), std::string(from).size(), to);
+    return ErrorOf(bad);
+  };
+  // Unknown keys.
+  EXPECT_EQ(ErrorOf(y + "colour: red\n"), "test.yaml:7: colour: unknown key");
+  EXPECT_EQ(with("sweep_rad", "sweep_deg"), "test.yaml:5: needle.sweep_deg: unknown key");
+  // Wrong types and non-finite numbers.
+  EXPECT_EQ(with("radius_m: 5.0e-3, sweep", "radius_m: abc, sweep"),
+            "test.yaml:5: needle.radius_m: expected a number");
+  EXPECT_EQ(ErrorOf(y + "haptic:\n  max_force_N: 2\n  rate_hz: .nan\n"),
+            "test.yaml:9: haptic.rate_hz: expected a finite number");
+  EXPECT_EQ(ErrorOf(y + "haptic: {rate_hz: [1000]}\n"),
+            "test.yaml:7: haptic.rate_hz: expected a number");
+  EXPECT_EQ(ErrorOf(y + "haptic: 3\n"), "test.yaml:7: haptic: expected a map");
+  // Values that parse but fail the scene's checks: the line of the field.
+  EXPECT_EQ(with("tube_radius_m: 0.5e-3", "tube_radius_m: 6.0e-3"),
+            "test.yaml:4: vessel.tube_radius_m: expected 0 < tube radius < core radius");
+  EXPECT_EQ(with("end_azimuth_rad: 3.3", "end_azimuth_rad: 4.0"),
+            "test.yaml:6: task.end_azimuth_rad: expected end + needle sweep <= vessel segment "
+            "angle");
+  EXPECT_EQ(with("[needle, tremor]", "[needle, vortex]"),
+            "test.yaml:3: modules: unknown module 'vortex' (known: needle, tremor, thread, "
+            "tissue)");
+  EXPECT_EQ(with("radius_m: 5.0e-3, sweep", "radius_m: 6.0e-3, sweep"),
+            "test.yaml:5: needle.radius_m: expected within the tube: |needle radius − core "
+            "radius| < tube radius");
+  EXPECT_EQ(ErrorOf("name: t\nmodules: []\n"),
+            "test.yaml:2: modules: expected at least one module");
+  // A field left at its default, or missing: the line of its map.
+  EXPECT_EQ(ErrorOf("# no name\nmodules: [needle]\n"),
+            "test.yaml:2: name: expected a non-empty name");
+  EXPECT_EQ(ErrorOf("name: t\n"), "test.yaml:1: modules: missing");
+  // Files that do not parse, or are not a map.
+  const std::string malformed = ErrorOf("name: t\nmodules: [needle\n");
+  EXPECT_EQ(malformed.rfind("test.yaml:3: malformed YAML: ", 0), 0u) << malformed;
+  EXPECT_EQ(ErrorOf("- needle\n"), "test.yaml:1: expected a map at the top");
   try {
     LoadScene("/nonexistent/scene.yaml");
     FAIL();
   } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.yaml"), std::string::npos);
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/scene.yaml: cannot open file");
   }
+  // SceneError is an InputError.
+  EXPECT_THROW(ParseScene("name: [", "test.yaml"), InputError);
 }
 
 TEST(Scene, IdealPathStaysOnTheCoreCircle) {
@@ -157,45 +179,54 @@ TEST(Scene, ThreadAndTissueSectionsAreChecked) {
   const std::string tissue = "tissue: {params: tissue_skin_patch.yaml, level: 6}\n";
   EXPECT_EQ(error_of("name: t\nmodules: [thread]\n" + thread + line), "");
   EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n" + tissue + line), "");
-  EXPECT_NE(error_of("name: t\nmodules: [thread]\n" + line).find("thread"), std::string::npos);
-  EXPECT_NE(error_of("name: t\nmodules: [tremor]\n" + thread + line).find("not in modules"),
-            std::string::npos);
-  const std::string missing =
-      error_of("name: t\nmodules: [thread]\nthread: {params: no_such.yaml}\n" + line);
-  EXPECT_NE(missing.find("thread.params"), std::string::npos) << missing;
-  EXPECT_NE(missing.find("no_such.yaml"), std::string::npos) << missing;
-  EXPECT_NE(error_of("name: t\nmodules: [tissue]\n"
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\n" + line),
+            origin + ":1: thread: section required by the 'thread' module");
+  EXPECT_EQ(error_of("name: t\nmodules: [tremor]\n" + thread + line),
+            origin + ":3: thread: section given but 'thread' is not in modules");
+  // A parameter file that cannot be opened: the scene's params line.
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\nthread: {params: no_such.yaml}\n" + line),
+            origin + ":3: thread.params: cannot open file " + SceneDir() + "/no_such.yaml");
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\nthread: {anchor_m: [-0.02, 0, 0]}\n" + line),
+            origin + ":3: thread.params: missing");
+  // Any other error in a parameter file names that file and its line.
+  const std::string bad_thread = ::testing::TempDir() + "/scene_bad_thread.yaml";
+  std::ofstream(bad_thread) << "thread:\n  base: stiff-nylon-10-0\n  num_nodes: 2\n";
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\nthread: {params: " + bad_thread +
+                     ", anchor_m: [-0.02, 0, 0]}\n" + line),
+            bad_thread + ":3: thread.num_nodes: expected an integer in [3, 100000]");
+  EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n"
                      "tissue: {params: tissue_skin_patch.yaml, display_level: 7}\n" +
-                     line)
-                .find("tissue.display_level"),
-            std::string::npos);
-  EXPECT_NE(error_of("name: t\nmodules: [tissue]\n"
-                     "tissue: {params: tissue_skin_patch.yaml, solver: magic}\n" +
-                     line)
-                .find("tissue.solver"),
-            std::string::npos);
-  EXPECT_NE(error_of("name: t\nmodules: [tissue]\n"
-                     "tissue: {params: tissue_skin_patch.yaml, level: 0}\n" +
-                     line)
-                .find("tissue"),
-            std::string::npos);
-  EXPECT_NE(error_of("name: t\nmodules: [needle]\n" + line).find("task.path"), std::string::npos);
-  EXPECT_NE(error_of("name: t\nmodules: [tremor]\n"
+                     line),
+            origin + ":3: tissue.display_level: expected 1..6 ((2^l + 1)^2 <= 16384 values)");
+  EXPECT_EQ(
+      error_of("name: t\nmodules: [tissue]\n"
+               "tissue: {params: tissue_skin_patch.yaml, solver: magic}\n" +
+               line),
+      origin + ":3: tissue.solver: solver 'magic': expected cg, pcg_jacobi, pcg_ic or cholmod");
+  // The scene's overrides are checked with the parameter file's other values.
+  EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n"
+                     "tissue:\n  params: tissue_skin_patch.yaml\n  level: 0\n" +
+                     line),
+            origin + ":5: tissue.level: expected an integer in [1, max_level] (" + SceneDir() +
+                "/tissue_skin_patch.yaml with the scene's overrides)");
+  EXPECT_EQ(error_of("name: t\nmodules: [needle]\n" + line),
+            origin + ":3: task.path: the needle module needs path: arc");
+  EXPECT_EQ(error_of("name: t\nmodules: [tremor]\n"
                      "task: {path: line, line_start_m: [0, 0, 0], line_end_m: [0, 0, 0]}\n")
-                .find("task.line_end_m"),
-            std::string::npos);
-  EXPECT_NE(error_of("name: t\nmodules: [thread]\n"
+                .rfind(origin + ":3: task.line_end_m: ", 0),
+            0u);
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\n"
                      "thread: {params: thread_stiff_nylon_10_0.yaml, anchor_m: [-0.02, 0, 0], "
                      "slack_side: [0, 0, 0]}\n" +
                      line)
-                .find("thread.slack_side"),
-            std::string::npos);
+                .rfind(origin + ":3: thread.slack_side: ", 0),
+            0u);
   // The thread must reach the tool's start point without stretching.
-  EXPECT_NE(error_of("name: t\nmodules: [thread]\n"
+  EXPECT_EQ(error_of("name: t\nmodules: [thread]\n"
                      "thread: {params: thread_stiff_nylon_10_0.yaml, anchor_m: [-0.05, 0, 0]}\n" +
                      line)
-                .find("thread.anchor_m"),
-            std::string::npos);
+                .rfind(origin + ":3: thread.anchor_m: ", 0),
+            0u);
 }
 
 }  // namespace

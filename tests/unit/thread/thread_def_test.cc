@@ -53,20 +53,65 @@ TEST(ThreadDef, ValidateNamesTheBadField) {
   }
 }
 
-TEST(ThreadDef, BadFilesNameFileAndField) {
-  const std::string dir = ::testing::TempDir();
-  const std::string missing = dir + "/no_such_thread.yaml";
-  EXPECT_NE(ErrorOf(missing).find("no_such_thread.yaml"), std::string::npos);
-  const std::string bad_type = dir + "/bad_type.yaml";
-  std::ofstream(bad_type) << "thread:\n  diameter_m: thick\n";
-  EXPECT_NE(ErrorOf(bad_type).find("diameter_m"), std::string::npos);
-  EXPECT_NE(ErrorOf(bad_type).find("bad_type.yaml"), std::string::npos);
-  const std::string unknown = dir + "/unknown.yaml";
-  std::ofstream(unknown) << "thread:\n  stifness: 3\n";
-  EXPECT_NE(ErrorOf(unknown).find("stifness"), std::string::npos);
-  const std::string invalid = dir + "/invalid.yaml";
-  std::ofstream(invalid) << "thread:\n  base: necklace\n  num_nodes: 1\n";
-  EXPECT_NE(ErrorOf(invalid).find("num_nodes"), std::string::npos);
+std::string Write(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(ThreadDef, ValidateMessageStartsWithTheField) {
+  ThreadDef def = StiffNylon10_0();
+  def.num_nodes = 1;
+  try {
+    def.Validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "num_nodes: expected an integer in [3, 100000]");
+  }
+}
+
+TEST(ThreadDef, BadFilesNameFileLineAndField) {
+  const std::string missing = ::testing::TempDir() + "/no_such_thread.yaml";
+  EXPECT_EQ(ErrorOf(missing), missing + ": cannot open file");
+
+  struct Bad {
+    const char* file;
+    const char* text;
+    const char* error;  // after "PATH:"
+  };
+  const Bad cases[] = {
+      {"thread_no_map.yaml", "thread: [1]\n", "1: thread: expected a map"},
+      // Type errors name the field with its section.
+      {"thread_bad_type.yaml", "thread:\n  base: necklace\n  diameter_m: thick\n",
+       "3: thread.diameter_m: expected a number"},
+      {"thread_not_finite.yaml", "thread:\n  length_m: .inf\n",
+       "2: thread.length_m: expected a finite number"},
+      {"thread_bad_int.yaml", "thread:\n  num_nodes: many\n",
+       "2: thread.num_nodes: expected an integer"},
+      {"thread_unknown.yaml", "thread:\n  name: x\n  stifness: 3\n",
+       "3: thread.stifness: unknown key"},
+      {"thread_bad_base.yaml", "thread:\n  base: hemp\n",
+       "2: thread.base: thread preset: expected stiff-nylon-10-0, soft-silk or necklace, got "
+       "'hemp'"},
+      {"thread_bad_gravity.yaml", "thread:\n\n  gravity_m_per_s2: [0, 0]\n",
+       "3: thread.gravity_m_per_s2: expected [x, y, z]"},
+      {"thread_bad_integrator.yaml", "thread:\n  integrator: rk4\n",
+       "2: thread.integrator: integrator: expected semi-implicit-euler or "
+       "linearly-implicit-euler, got 'rk4'"},
+      // Values that parse but fail Validate(): the line of the field.
+      {"thread_invalid.yaml", "thread:\n  base: necklace\n  num_nodes: 1\n",
+       "3: thread.num_nodes: expected an integer in [3, 100000]"},
+      // ... and for a field left at its default, the line of its section.
+      {"thread_invalid_default.yaml", "# short\nthread:\n  length_m: 0.0005\n",
+       "2: thread.contact_cutoff_m: expected a positive length below the link length"},
+  };
+  for (const Bad& bad : cases) {
+    const std::string path = Write(bad.file, bad.text);
+    EXPECT_EQ(ErrorOf(path), path + ":" + bad.error);
+  }
+  const std::string malformed = Write("thread_malformed.yaml", "thread: {name: x\n");
+  const std::string error = ErrorOf(malformed);
+  EXPECT_EQ(error.rfind(malformed + ":2: malformed YAML: ", 0), 0u) << error;
 }
 
 }  // namespace
