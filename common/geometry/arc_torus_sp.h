@@ -18,6 +18,7 @@
 // Hot path: no allocation, no virtual call, no exception. Invalid input returns kInvalidInput.
 
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "common/geometry/arc_torus.h"
 
@@ -54,8 +55,25 @@ struct SpOptions {
   bool quick_certificate = true;
 };
 
-// What the SP path did for one query (tests, benchmark, telemetry). Optional output.
+// The stage that settled a query (SpDiagnostics::decision; README_sp.md, "Stages").
+enum class SpDecision : std::uint8_t {
+  kInvalidInput,       // rejected before any stage
+  kEmptyRange,         // clip: no needle point inside the segment
+  kThesisPass,         // no certificate (max_certify_rounds = 0 or polish_max_iters = 0): the
+                       // wall pass's minima and the piece ends, ascended if polish is on
+  kQuickCertificate,   // certify: the quick test on the level torus proved no farther point
+  kLiftedCertificate,  // certify: a full SP pass (lift + quartic) against the level torus
+  kAlongNeedle,        // certify, beyond the horn torus: the extrema along the needle
+  kRoundsExhausted,    // certify: max_certify_rounds used up while still finding farther points
+  kExact,              // fall back: the exact method answered (deep contact)
+};
+const char* ToString(SpDecision decision);
+
+// What the SP path did for one query (tests, benchmark, telemetry). Optional output. Asking
+// for it does not change the path, except that the thesis's wall pass is also run, for the
+// sign-change report alone, where the path does not run it.
 struct SpDiagnostics {
+  SpDecision decision = SpDecision::kInvalidInput;
   bool fallback = false;          // the lifted circle was too ill-conditioned: robust path used
   bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
@@ -65,6 +83,7 @@ struct SpDiagnostics {
                                   // then a lifted pass (deep: extrema along the needle)
   int certify_improvements = 0;   // of which found a farther point than the ascent had
   int certify_quick = 0;          // of which settled by the quick test (no quartic)
+  int certify_lifted = 0;         // of which ran a full lifted SP pass (lift + quartic)
   int num_extrema = 0;            // critical points of φ found on the whole lifted circle
   int num_intervals = 0;          // pieces of the arc inside the segment's azimuth range
   int num_sign_changes = 0;       // sign changes of φ along the clipped arc (§4.2.4)

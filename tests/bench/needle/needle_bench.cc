@@ -2,6 +2,7 @@
 // (thesis Fig. 4.6), and the --cases validation tool (README.md "Needle cases CSV").
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -379,7 +380,7 @@ void WritePlot(const std::vector<MethodResult>& all, const std::string& png,
                const std::string& family) {
   const std::string data = png + ".dat";
   std::ofstream d(data);
-  const char* names[] = {"sp", "exact", "sampling", "mesh", "sampling_clipped"};
+  const char* names[] = {"sp", "exact", "sampling", "mesh", "sampling_clipped", "sp_thesis"};
   for (const char* name : names) {
     d << "# " << name << "\n";
     for (const MethodResult& m : all) {
@@ -399,11 +400,12 @@ void WritePlot(const std::vector<MethodResult>& all, const std::string& png,
     << "set xlabel 'time per query (ns)'\nset ylabel 'max |clearance error| (m)'\n"
     << "set title 'needle-vessel clearance: error against run time (" << family << ")'\n"
     << "set key top right\n"
-    << "plot '" << data << "' index 0 with linespoints title 'SP (quartic tol / polish)', \\\n"
+    << "plot '" << data << "' index 0 with points pt 9 ps 2 title 'SP staged (default)', \\\n"
     << "  '' index 1 with points pt 7 ps 2 title 'exact (reference, error 0)', \\\n"
     << "  '' index 2 with linespoints title 'sampling N=10..10^4', \\\n"
     << "  '' index 3 with linespoints title 'mesh (FCL OBBRSS)', \\\n"
-    << "  '' index 4 with linespoints title 'sampling over the clipped pieces'\n";
+    << "  '' index 4 with linespoints title 'sampling over the clipped pieces', \\\n"
+    << "  '' index 5 with linespoints title 'SP thesis pass (quartic tol)'\n";
   g.close();
   const std::string cmd = "gnuplot '" + script + "'";
   if (std::system(cmd.c_str()) != 0) {
@@ -437,7 +439,18 @@ struct FamilyResult {
   std::vector<MethodResult> all;  // every method and setting
   const MethodResult* sp = nullptr;
   Ratios ratios;
+  // Which stage settled each query of the SP default (SpDiagnostics::decision), and how many
+  // queries started the ascent from uniform points (the lifted circle unusable).
+  std::array<int, 8> decisions{};
+  int uniform_starts = 0;
+  int lifted_passes = 0;  // queries that ran at least one lifted certificate pass
 };
+
+constexpr geometry::SpDecision kDecisions[] = {
+    geometry::SpDecision::kInvalidInput,      geometry::SpDecision::kEmptyRange,
+    geometry::SpDecision::kThesisPass,        geometry::SpDecision::kQuickCertificate,
+    geometry::SpDecision::kLiftedCertificate, geometry::SpDecision::kAlongNeedle,
+    geometry::SpDecision::kRoundsExhausted,   geometry::SpDecision::kExact};
 
 FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps, double budget_s) {
   FamilyResult fr;
@@ -474,23 +487,28 @@ FamilyResult RunFamily(const Family& family, const ReportOptions& opt, int reps,
     std::fprintf(stderr, "  %-9s %-30s %12.1f ns  max err %.3g m  point %.3g m\n", name.c_str(),
                  setting.c_str(), m.ns_per_query, m.max_abs_error, m.max_point_error);
   };
-  struct SpSetting {
-    const char* label;
-    double quartic_tol;
-    int polish;
-  };
-  const SpSetting sp_settings[] = {{"tol=1e-3,polish=0", 1e-3, 0},
-                                   {"tol=1e-6,polish=0", 1e-6, 0},
-                                   {"tol=1e-10,polish=0", 1e-10, 0},
-                                   {"tol=1e-15,polish=0", 1e-15, 0},
-                                   {"tol=1e-15,polish=12 (default)", 1e-15, 12}};
-  for (const SpSetting& s : sp_settings) {
+  // The thesis's SP pass alone (§4.2–4.3): lift, quartic (4.26) to the given tolerance, the
+  // clearance at the extrema of G (no ascent, no certificate).
+  for (const double tol : {1e-3, 1e-6, 1e-10, 1e-15}) {
     geometry::SpOptions options;
-    options.quartic_tol = s.quartic_tol;
-    options.polish_max_iters = s.polish;
-    run_analytic("sp", s.label, [&](const Query& q) {
+    options.quartic_tol = tol;
+    options.polish_max_iters = 0;
+    char label[32];
+    std::snprintf(label, sizeof label, "tol=%g", tol);
+    run_analytic("sp_thesis", label, [&](const Query& q) {
       return geometry::CalcArcTorusClearanceSP(q.arc, q.torus, options);
     });
+  }
+  // The default path: clip, distance ascent, level-torus certificate (quick test; lifted SP
+  // pass where it cannot prove), exact method for the deep contacts it cannot certify.
+  run_analytic("sp", "clip+ascent+certificate (default)",
+               [&](const Query& q) { return geometry::CalcArcTorusClearanceSP(q.arc, q.torus); });
+  for (const Query& q : family.queries) {
+    geometry::SpDiagnostics d;
+    geometry::CalcArcTorusClearanceSP(q.arc, q.torus, {}, &d);
+    ++fr.decisions[static_cast<int>(d.decision)];
+    fr.uniform_starts += d.fallback;
+    fr.lifted_passes += d.certify_lifted > 0;
   }
   run_analytic("exact", "closed form", [&](const Query& q) {
     return geometry::CalcArcTorusClearanceExact(q.arc, q.torus);
@@ -651,7 +669,13 @@ int RunReport(const ReportOptions& opt) {
         << JsonNumber(fr.ratios.sampling_clipped_over_sp_point)
         << "}, \"cheapest_sampling_point\": \"" << fr.ratios.sampling_point_setting
         << "\", \"sp_queries_per_second\": " << JsonNumber(1e9 / fr.sp->ns_per_query)
-        << ",\n     \"goals\": [";
+        << ",\n     \"sp_decisions\": {";
+      for (size_t k = 0; k < std::size(kDecisions); ++k) {
+        j << (k > 0 ? ", " : "") << "\"" << geometry::ToString(kDecisions[k])
+          << "\": " << fr.decisions[static_cast<int>(kDecisions[k])];
+      }
+      j << "}, \"sp_uniform_starts\": " << fr.uniform_starts
+        << ", \"sp_lifted_passes\": " << fr.lifted_passes << ",\n     \"goals\": [";
       const std::vector<Goal> goals = CheckGoals(fr);
       for (size_t g = 0; g < goals.size(); ++g) {
         j << (g > 0 ? ", " : "") << "{\"goal\": \"" << goals[g].what
@@ -695,6 +719,14 @@ int RunReport(const ReportOptions& opt) {
         fr.ratios.sampling_over_sp_point, setting(fr.ratios.sampling_point_setting),
         fr.ratios.sampling_clipped_over_sp_point,
         setting(fr.ratios.sampling_clipped_point_setting));
+    std::printf("  SP default settled by:");
+    const double n = static_cast<double>(fr.family->queries.size());
+    for (const geometry::SpDecision d : kDecisions) {
+      const int count = fr.decisions[static_cast<int>(d)];
+      if (count > 0) std::printf(" %s %.1f %%", geometry::ToString(d), 100 * count / n);
+    }
+    std::printf("; with a lifted pass %.1f %%, uniform starts %.1f %%\n",
+                100 * fr.lifted_passes / n, 100 * fr.uniform_starts / n);
     for (const Goal& g : CheckGoals(fr)) {
       std::printf("  goal %-40s %10.4g  %s\n", g.what.c_str(), g.value, g.met ? "met" : "NOT met");
     }

@@ -140,14 +140,15 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
   const std::string text = all_text.substr(0, families_at);
   const std::string families = all_text.substr(families_at);
   const std::regex method(
-      R"re(\{"name": "(sp|exact|sampling|mesh)", "setting": "[^"]*", "ns_per_query": [0-9.e+-]+, "max_abs_error": [0-9.e+-]+, "rms_error": [0-9.e+-]+, "agreement": [0-9.e+-]+)re");
-  int count[4] = {0, 0, 0, 0};
-  const char* names[4] = {"sp", "exact", "sampling", "mesh"};
+      R"re(\{"name": "(sp|exact|sampling|mesh|sp_thesis)", "setting": "[^"]*", "ns_per_query": [0-9.e+-]+, "max_abs_error": [0-9.e+-]+, "rms_error": [0-9.e+-]+, "agreement": [0-9.e+-]+)re");
+  int count[5] = {0, 0, 0, 0, 0};
+  const char* names[5] = {"sp", "exact", "sampling", "mesh", "sp_thesis"};
   for (auto it = std::sregex_iterator(text.begin(), text.end(), method);
        it != std::sregex_iterator(); ++it) {
-    for (int k = 0; k < 4; ++k) count[k] += (*it)[1] == names[k];
+    for (int k = 0; k < 5; ++k) count[k] += (*it)[1] == names[k];
   }
-  EXPECT_GE(count[0], 2) << text;
+  EXPECT_EQ(count[0], 1) << text;  // the default path
+  EXPECT_GE(count[4], 2) << text;  // the thesis's pass at several quartic tolerances
   EXPECT_EQ(count[1], 1) << text;
   EXPECT_GE(count[2], 5) << text;
   EXPECT_GE(count[3], 2) << text;
@@ -179,6 +180,20 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
   EXPECT_EQ(count_matches(std::regex(R"re("point_ratios": \{"mesh_over_sp": )re")), 4) << families;
   EXPECT_EQ(count_matches(std::regex(R"re("lower_bounds": \[("[a-z_ ()]+"(, )?)*\])re")), 4)
       << families;
+  // Which stage settled each default query: the counts of every family add up to its queries.
+  const std::regex decisions(
+      R"re("queries": ([0-9]+), "contacts"(?:[^\n]*\n){3} *"sp_decisions": \{"invalid_input": ([0-9]+), "empty_range": ([0-9]+), "thesis_pass": ([0-9]+), "quick_certificate": ([0-9]+), "lifted_certificate": ([0-9]+), "along_needle": ([0-9]+), "rounds_exhausted": ([0-9]+), "exact": ([0-9]+)\})re");
+  int families_with_decisions = 0;
+  for (auto it = std::sregex_iterator(families.begin(), families.end(), decisions);
+       it != std::sregex_iterator(); ++it) {
+    int sum = 0;
+    for (int k = 2; k <= 9; ++k) sum += std::stoi((*it)[k]);
+    EXPECT_EQ(sum, std::stoi((*it)[1])) << it->str();
+    EXPECT_EQ(std::stoi((*it)[4]), 0) << "the default path has the certificate: " << it->str();
+    EXPECT_GT(std::stoi((*it)[5]), 0) << "the quick test settles most queries: " << it->str();
+    ++families_with_decisions;
+  }
+  EXPECT_EQ(families_with_decisions, 4) << families;
   EXPECT_EQ(count_matches(std::regex(R"re("met": (true|false))re")),
             4 + 3 * 3)  // the mesh goal only where the mesh answers
       << families;
