@@ -23,8 +23,8 @@ YAML::Node KeyNode(const YAML::Node& map, std::string_view key) {
 
 }  // namespace
 
-YamlSection::YamlSection(std::string file, YAML::Node node, std::string prefix, int line)
-    : file_(std::move(file)), node_(std::move(node)), prefix_(std::move(prefix)), line_(line) {}
+YamlSection::YamlSection(std::string file, const YAML::Node& node, std::string prefix, int line)
+    : file_(std::move(file)), node_(node), prefix_(std::move(prefix)), line_(line) {}
 
 std::string YamlSection::Field(std::string_view key) const { return prefix_ + std::string(key); }
 

@@ -37,7 +37,7 @@ namespace microdex {
 // is absent and throw InputError when it is present with the wrong type.
 class YamlSection {
  public:
-  YamlSection(std::string file, YAML::Node node, std::string prefix, int line);
+  YamlSection(std::string file, const YAML::Node& node, std::string prefix, int line);
 
   const std::string& file() const { return file_; }
   // The fully qualified name of a field of this section: prefix + key.
@@ -109,7 +109,7 @@ class YamlReader {
   YamlSection Root() const;
 
  private:
-  YamlReader(std::string file, YAML::Node root) : file_(std::move(file)), root_(std::move(root)) {}
+  YamlReader(std::string file, const YAML::Node& root) : file_(std::move(file)), root_(root) {}
   static YAML::Node Parse(const std::string& text, const std::string& origin);
 
   std::string file_;

@@ -373,25 +373,15 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
                                             model.def.ordering == Ordering::kNestedDissection);
 }
 
-void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
-                TissueState& state) {
-  const TissueDef& def = model.def;
-  const Clock::time_point t_begin = Clock::now();
-  TissueStepStats stats;
-  if (!ToolIsFinite(tool)) {
-    stats.total_us = Microseconds(t_begin, Clock::now());
-    ws.stats = stats;
-    Fail(state, TissueStatus::kBadInput);
-    return;
-  }
+namespace {
 
-  // Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
-  SelectMesh(model, def.level, def.mesh, tool, ws.mesh);
+// Select, after the mesh and the contacts: numbers the free nodes (boundary nodes fixed,
+// contact nodes tagged by the finder) and returns their count; *key identifies the system's
+// sparsity (mesh signature, contact count and nodes).
+int NumberFreeNodes(const TissueModel& model, TissueWorkspace& ws, std::uint64_t* key) {
   const MeshSelection& mesh = ws.mesh;
-  ContactFinder finder(model, tool, ws);
-  const bool contacts_fit = finder.Run();
   int n = 0;
-  std::uint64_t key = MixKey(mesh.signature, static_cast<std::uint64_t>(ws.num_contacts));
+  *key = MixKey(mesh.signature, static_cast<std::uint64_t>(ws.num_contacts));
   for (int k = 0; k < mesh.num_active_nodes; ++k) {
     const int node = mesh.active_nodes[k];
     if (ws.contact_stamp[node] == mesh.mark) continue;  // contact, tagged by the finder
@@ -401,27 +391,21 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
       ws.dof_node[n++] = node;
     }
   }
-  for (int c = 0; c < ws.num_contacts; ++c) key = MixKey(key, ws.contact_nodes[c]);
-  stats.unknowns = n;
-  stats.contact_nodes = ws.num_contacts;
-  stats.active_nodes = mesh.num_active_nodes;
-  stats.triangles = mesh.num_triangles;
-  stats.leaves = mesh.num_leaves;
-  if (!contacts_fit) {
-    stats.select_us = stats.total_us = Microseconds(t_begin, Clock::now());
-    ws.stats = stats;
-    Fail(state, TissueStatus::kTooManyContacts);
-    return;
-  }
+  for (int c = 0; c < ws.num_contacts; ++c) *key = MixKey(*key, ws.contact_nodes[c]);
+  return n;
+}
 
-  // The cached pattern of this selection, or a slot for a new one (least recently used). A
-  // cached pattern keeps the numbering of the unknowns it was built with.
+// The cached pattern of this selection, or a slot for a new one (least recently used), and
+// the numbering of the unknowns: a cached pattern keeps the numbering it was built with.
+int TakePatternSlot(const TissueModel& model, TissueWorkspace& ws, std::uint64_t key, int n,
+                    bool* new_pattern) {
+  const TissueDef& def = model.def;
   int slot = -1;
   for (int e = 0; e < static_cast<int>(ws.patterns.size()); ++e) {
     if (ws.patterns[e].valid && ws.patterns[e].key == key && ws.patterns[e].num_dofs == n) slot = e;
   }
-  const bool new_pattern = slot < 0;
-  if (new_pattern) {
+  *new_pattern = slot < 0;
+  if (*new_pattern) {
     slot = 0;
     for (int e = 1; e < static_cast<int>(ws.patterns.size()); ++e) {
       if (!ws.patterns[e].valid ||
@@ -441,97 +425,108 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   for (int i = 0; i < n; ++i) ws.node_dof[ws.dof_node[i]] = i;
   // The dof codes of every triangle's vertices, read once here (node_dof is a grid-sized
   // array: scattered reads) for the pattern, the right-hand side and the reactions.
+  const MeshSelection& mesh = ws.mesh;
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const Triangle& t = mesh.triangles[e];
     for (int k = 0; k < 3; ++k) ws.tri_dof[3 * static_cast<size_t>(e) + k] = ws.node_dof[t.node[k]];
   }
-  const Clock::time_point t_selected = Clock::now();
-  stats.select_us = Microseconds(t_begin, t_selected);
-  if (new_pattern) BuildPattern(ws, ws.patterns[slot], n);
-  PatternEntry& entry = ws.patterns[slot];
-  entry.last_used = ++ws.use_clock;
-  stats.pattern_reused = !new_pattern;
-  if (!entry.values_valid || !ws.reuse_values) {
-    AssembleValues(model, mesh, entry);
-    if (ws.ic_key == key) ws.ic_valid = false;
-  }
-  AssembleRhs(model, ws, n);
-  const CsrView a{n, entry.row_ptr.data(), entry.cols.data(), entry.vals.data(), entry.diag.data()};
-  const Clock::time_point t_assembled = Clock::now();
-  stats.assemble_us = Microseconds(t_selected, t_assembled);
+  return slot;
+}
 
-  // Solve the reduced system for the free nodes.
+// Solve with CHOLMOD: analysis per pattern, numeric factorisation per value change.
+TissueStatus SolveCholmod(TissueWorkspace& ws, const CsrView& a, int slot, bool new_pattern,
+                          PatternEntry& entry, TissueStepStats& stats) {
+  stats.factor_reused = entry.factor_valid;
+  if (!entry.factor_valid) {
+    if (new_pattern || !ws.cholmod->HasAnalysis(slot)) ws.cholmod->Analyze(slot, a);
+    entry.factor_valid = ws.cholmod->Factorize(slot, a);
+  }
+  if (!entry.factor_valid || !ws.cholmod->Solve(slot, ws.rhs.data(), ws.x.data(), a.n))
+    return TissueStatus::kFactorisationFailed;
+  return TissueStatus::kOk;
+}
+
+// The starting point of (P)CG: the last good field where the new mesh has the same nodes
+// (warm start, for the preconditioned solvers), else 0.
+void StartFromLastField(const TissueModel& model, const TissueState& state, TissueWorkspace& ws,
+                        int n) {
+  const bool warm = model.def.solver != SolverKind::kCg && state.step > 0;
+  if (warm) {
+    ++ws.field_stamp;
+    for (int k = 0; k < state.num_field_nodes; ++k) {
+      const int node = state.field_nodes[k];
+      ws.grid_w_m[node] = state.field_w_m[k];
+      ws.grid_stamp[node] = ws.field_stamp;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const int node = ws.dof_node[i];
+    ws.x[i] = warm && ws.grid_stamp[node] == ws.field_stamp ? ws.grid_w_m[node] : 0.0;
+  }
+}
+
+// Solve with CG, Jacobi-PCG or IC(0)-PCG; the preconditioner is factored once per key.
+TissueStatus SolveIterative(const TissueModel& model, const TissueState& state, TissueWorkspace& ws,
+                            const CsrView& a, std::uint64_t key, TissueStepStats& stats) {
+  const TissueDef& def = model.def;
+  StartFromLastField(model, state, ws, a.n);
+  Preconditioner preconditioner = Preconditioner::kNone;
+  if (def.solver != SolverKind::kCg) {
+    preconditioner =
+        def.solver == SolverKind::kPcgIc ? Preconditioner::kIc0 : Preconditioner::kJacobi;
+    stats.factor_reused = ws.ic_valid && ws.ic_key == key;
+    if (!stats.factor_reused) {
+      const bool factored =
+          preconditioner == Preconditioner::kIc0 ? FactorIc0(a, ws.cg) : FactorJacobi(a, ws.cg);
+      ws.ic_valid = factored;
+      ws.ic_key = key;
+      if (!factored) return TissueStatus::kFactorisationFailed;
+    }
+  }
+  const CgResult cg = SolveCg(a, ws.rhs.data(), ws.x.data(), preconditioner,
+                              def.cg_relative_tolerance, def.cg_max_iterations, ws.cg);
+  stats.iterations = cg.iterations;
+  return cg.converged ? TissueStatus::kOk : TissueStatus::kNotConverged;
+}
+
+// ‖b − K u‖ / ‖b‖, recomputed after the solve.
+double RelativeResidual(const CsrView& a, TissueWorkspace& ws, double b_norm2) {
+  Multiply(a, ws.x.data(), ws.residual.data());
+  double r2 = 0;
+  for (int i = 0; i < a.n; ++i) {
+    const double r = ws.rhs[i] - ws.residual[i];
+    r2 += r * r;
+  }
+  return std::sqrt(r2 / b_norm2);
+}
+
+// Solve the reduced system (3.9)–(3.11) for the free nodes.
+TissueStatus SolveReduced(const TissueModel& model, const TissueState& state, TissueWorkspace& ws,
+                          const CsrView& a, std::uint64_t key, int slot, bool new_pattern,
+                          PatternEntry& entry, TissueStepStats& stats) {
+  const int n = a.n;
   TissueStatus status = ws.num_contacts == 0 ? TissueStatus::kNoContact : TissueStatus::kOk;
   double b_norm2 = 0;
   for (int i = 0; i < n; ++i) b_norm2 += ws.rhs[i] * ws.rhs[i];
-  if (n > 0 && b_norm2 == 0) {
+  if (n == 0) return status;
+  if (b_norm2 == 0) {
     std::fill_n(ws.x.begin(), n, 0.0);
-  } else if (n > 0) {
-    if (def.solver == SolverKind::kCholmod) {
-      stats.factor_reused = entry.factor_valid;
-      if (!entry.factor_valid) {
-        if (new_pattern || !ws.cholmod->HasAnalysis(slot)) ws.cholmod->Analyze(slot, a);
-        entry.factor_valid = ws.cholmod->Factorize(slot, a);
-      }
-      if (!entry.factor_valid || !ws.cholmod->Solve(slot, ws.rhs.data(), ws.x.data(), n))
-        status = TissueStatus::kFactorisationFailed;
-    } else {
-      const bool warm = def.solver != SolverKind::kCg && state.step > 0;
-      if (warm) {
-        ++ws.field_stamp;
-        for (int k = 0; k < state.num_field_nodes; ++k) {
-          const int node = state.field_nodes[k];
-          ws.grid_w_m[node] = state.field_w_m[k];
-          ws.grid_stamp[node] = ws.field_stamp;
-        }
-      }
-      for (int i = 0; i < n; ++i) {
-        const int node = ws.dof_node[i];
-        ws.x[i] = warm && ws.grid_stamp[node] == ws.field_stamp ? ws.grid_w_m[node] : 0.0;
-      }
-      Preconditioner preconditioner = Preconditioner::kNone;
-      bool factored = true;
-      if (def.solver != SolverKind::kCg) {
-        preconditioner =
-            def.solver == SolverKind::kPcgIc ? Preconditioner::kIc0 : Preconditioner::kJacobi;
-        stats.factor_reused = ws.ic_valid && ws.ic_key == key;
-        if (!stats.factor_reused) {
-          factored =
-              preconditioner == Preconditioner::kIc0 ? FactorIc0(a, ws.cg) : FactorJacobi(a, ws.cg);
-          ws.ic_valid = factored;
-          ws.ic_key = key;
-        }
-      }
-      if (!factored) {
-        status = TissueStatus::kFactorisationFailed;
-      } else {
-        const CgResult cg = SolveCg(a, ws.rhs.data(), ws.x.data(), preconditioner,
-                                    def.cg_relative_tolerance, def.cg_max_iterations, ws.cg);
-        stats.iterations = cg.iterations;
-        if (!cg.converged) status = TissueStatus::kNotConverged;
-      }
-    }
-    if (IsGood(status)) {
-      Multiply(a, ws.x.data(), ws.residual.data());
-      double r2 = 0;
-      for (int i = 0; i < n; ++i) {
-        const double r = ws.rhs[i] - ws.residual[i];
-        r2 += r * r;
-      }
-      stats.relative_residual = std::sqrt(r2 / b_norm2);
-      if (!std::isfinite(stats.relative_residual)) status = TissueStatus::kNonFinite;
-    }
+    return status;
   }
-  const Clock::time_point t_solved = Clock::now();
-  stats.solve_us = Microseconds(t_assembled, t_solved);
-  if (!IsGood(status)) {
-    stats.total_us = Microseconds(t_begin, t_solved);
-    ws.stats = stats;
-    Fail(state, status);
-    return;
-  }
+  const TissueStatus solved = model.def.solver == SolverKind::kCholmod
+                                  ? SolveCholmod(ws, a, slot, new_pattern, entry, stats)
+                                  : SolveIterative(model, state, ws, a, key, stats);
+  if (!IsGood(solved)) return solved;
+  stats.relative_residual = RelativeResidual(a, ws, b_norm2);
+  if (!std::isfinite(stats.relative_residual)) return TissueStatus::kNonFinite;
+  return status;
+}
 
-  // Reactions at the contact nodes (3.12): f_c = Σ_e K_e w over the elements around c.
+// Reactions at the contact nodes (3.12): f_c = Σ_e K_e w over the elements around c; their
+// resultant on the tool and its torque about tool.p_ST.
+void CalcReactions(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
+                   Eigen::Vector3d* f_T_S, Eigen::Vector3d* tau_T_S) {
+  const MeshSelection& mesh = ws.mesh;
   std::fill_n(ws.contact_f_N.begin(), ws.num_contacts, 0.0);
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const Triangle& t = mesh.triangles[e];
@@ -545,25 +540,23 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
       ws.contact_f_N[-2 - d[a_local]] += f;
     }
   }
-  Eigen::Vector3d f_T_S = Eigen::Vector3d::Zero();
-  Eigen::Vector3d tau_T_S = Eigen::Vector3d::Zero();
+  *f_T_S = Eigen::Vector3d::Zero();
+  *tau_T_S = Eigen::Vector3d::Zero();
   for (int c = 0; c < ws.num_contacts; ++c) {
     const int node = ws.contact_nodes[c];
     const double fz_on_tool_N = -ws.contact_f_N[c];  // the tissue pushes back on the tool
     const double rx = model.NodeX_m(node) - tool.p_ST.x();
     const double ry = model.NodeY_m(node) - tool.p_ST.y();
-    f_T_S.z() += fz_on_tool_N;
-    tau_T_S.x() += ry * fz_on_tool_N;  // r × (0, 0, f)
-    tau_T_S.y() -= rx * fz_on_tool_N;
+    f_T_S->z() += fz_on_tool_N;
+    tau_T_S->x() += ry * fz_on_tool_N;  // r × (0, 0, f)
+    tau_T_S->y() -= rx * fz_on_tool_N;
   }
-  if (!f_T_S.allFinite() || !tau_T_S.allFinite()) {
-    stats.total_us = Microseconds(t_begin, Clock::now());
-    ws.stats = stats;
-    Fail(state, TissueStatus::kNonFinite);
-    return;
-  }
+}
 
-  // Commit: this is now the last good state.
+// This step is now the last good state.
+void Commit(const TissueWorkspace& ws, const Eigen::Vector3d& f_T_S, const Eigen::Vector3d& tau_T_S,
+            TissueStatus status, TissueState& state) {
+  const MeshSelection& mesh = ws.mesh;
   ++state.step;
   for (int k = 0; k < mesh.num_active_nodes; ++k) {
     const int node = mesh.active_nodes[k];
@@ -579,6 +572,69 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   state.f_T_S = f_T_S;
   state.tau_T_S = tau_T_S;
   state.status = status;
+}
+
+}  // namespace
+
+void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
+                TissueState& state) {
+  const Clock::time_point t_begin = Clock::now();
+  TissueStepStats stats;
+  // On failure: the stage times so far, the last good state kept, the status recorded.
+  const auto fail = [&](TissueStatus status) {
+    stats.total_us = Microseconds(t_begin, Clock::now());
+    ws.stats = stats;
+    Fail(state, status);
+  };
+  if (!ToolIsFinite(tool)) return fail(TissueStatus::kBadInput);
+
+  // 1. Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
+  SelectMesh(model, model.def.level, model.def.mesh, tool, ws.mesh);
+  const MeshSelection& mesh = ws.mesh;
+  ContactFinder finder(model, tool, ws);
+  const bool contacts_fit = finder.Run();
+  std::uint64_t key = 0;
+  const int n = NumberFreeNodes(model, ws, &key);
+  stats.unknowns = n;
+  stats.contact_nodes = ws.num_contacts;
+  stats.active_nodes = mesh.num_active_nodes;
+  stats.triangles = mesh.num_triangles;
+  stats.leaves = mesh.num_leaves;
+  if (!contacts_fit) {
+    stats.select_us = Microseconds(t_begin, Clock::now());
+    return fail(TissueStatus::kTooManyContacts);
+  }
+  bool new_pattern = false;
+  const int slot = TakePatternSlot(model, ws, key, n, &new_pattern);
+  const Clock::time_point t_selected = Clock::now();
+  stats.select_us = Microseconds(t_begin, t_selected);
+
+  // 2. Assemble: the pattern (new key only), K_ff's values (unless cached), b_f.
+  if (new_pattern) BuildPattern(ws, ws.patterns[slot], n);
+  PatternEntry& entry = ws.patterns[slot];
+  entry.last_used = ++ws.use_clock;
+  stats.pattern_reused = !new_pattern;
+  if (!entry.values_valid || !ws.reuse_values) {
+    AssembleValues(model, mesh, entry);
+    if (ws.ic_key == key) ws.ic_valid = false;
+  }
+  AssembleRhs(model, ws, n);
+  const CsrView a{n, entry.row_ptr.data(), entry.cols.data(), entry.vals.data(), entry.diag.data()};
+  const Clock::time_point t_assembled = Clock::now();
+  stats.assemble_us = Microseconds(t_selected, t_assembled);
+
+  // 3. Solve.
+  const TissueStatus status =
+      SolveReduced(model, state, ws, a, key, slot, new_pattern, entry, stats);
+  const Clock::time_point t_solved = Clock::now();
+  stats.solve_us = Microseconds(t_assembled, t_solved);
+  if (!IsGood(status)) return fail(status);
+
+  // 4. Forces, 5. commit.
+  Eigen::Vector3d f_T_S, tau_T_S;
+  CalcReactions(model, tool, ws, &f_T_S, &tau_T_S);
+  if (!f_T_S.allFinite() || !tau_T_S.allFinite()) return fail(TissueStatus::kNonFinite);
+  Commit(ws, f_T_S, tau_T_S, status, state);
   const Clock::time_point t_end = Clock::now();
   stats.forces_us = Microseconds(t_solved, t_end);
   stats.total_us = Microseconds(t_begin, t_end);

@@ -11,9 +11,6 @@
 namespace microdex::geometry {
 namespace {
 
-using sp::kPi;
-using sp::kTwoPi;
-
 // φ_t below −this·|φ|'s size marks a farther point (the lifted certificate pass).
 constexpr double kCertifyPhiRel = 1e-12;
 // The quick test proves G̃_t ≥ −this·(the size of G̃_t's terms): a fiftieth of the full pass's

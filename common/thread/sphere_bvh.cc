@@ -350,6 +350,35 @@ int RefitSphereBvh(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, doub
   return static_cast<int>(t.nodes.size());
 }
 
+int RefitSphereBvhScalar(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
+                         SphereBvhSpheres& s) {
+  const int n = t.num_leaves;
+  MICRODEX_CHECK(x_W.cols() == n + 1);
+  s.nodes_W = x_W.transpose().cast<float>();
+  const float* px = s.nodes_W.col(0).data();
+  const float* py = s.nodes_W.col(1).data();
+  const float* pz = s.nodes_W.col(2).data();
+  float* out = s.xyzr.data();
+  const float inflate = static_cast<float>(inflate_m);
+  for (int l = 0; l < n; ++l) {
+    float* c = out + 4 * l;
+    FitLeaf(px[l], py[l], pz[l], px[l + 1], py[l + 1], pz[l + 1], inflate, c[0], c[1], c[2], c[3]);
+  }
+  for (const SphereBvhLevel& lv : t.levels) {
+    for (int k = 0; k < lv.count; ++k) {
+      const int i = lv.begin + k;
+      const float* a = out + 4 * t.nodes[i].left;
+      const float* b = out + 4 * t.nodes[i].right;
+      float* c = out + 4 * i;
+      FitParent(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0], c[1], c[2], c[3]);
+    }
+  }
+  return static_cast<int>(t.nodes.size());
+}
+
+bool SphereBvhSpheresOverlap(const float* a, const float* b) { return Overlap(a, b); }
+bool SphereBvhSpheresOverlapScalar(const float* a, const float* b) { return OverlapScalar(a, b); }
+
 namespace {
 
 // FindCollision(start) depth first on the fixed stack, for a pair the queue has no room for.

@@ -104,6 +104,16 @@ int RefitSphereBvh(const SphereBvhTopology& topology, const Eigen::Matrix3Xd& x_
 int RefitSphereBvhLeaves(const SphereBvhTopology& topology, const Eigen::Matrix3Xd& x_W,
                          double inflate_m, SphereBvhSpheres& spheres);
 
+// The SIMD paths' scalar twins (tests hold them bit for bit equal; the traversal and the refit
+// use the four-lane forms where the processor has them). RefitSphereBvhScalar: RefitSphereBvh
+// one sphere at a time. SphereBvhSpheresOverlap: the overlap test of two (x, y, z, r) spheres
+// as the traversal runs it (SSE2 where available); SphereBvhSpheresOverlapScalar: the same
+// operations one lane at a time.
+int RefitSphereBvhScalar(const SphereBvhTopology& topology, const Eigen::Matrix3Xd& x_W,
+                         double inflate_m, SphereBvhSpheres& spheres);
+bool SphereBvhSpheresOverlap(const float* a, const float* b);
+bool SphereBvhSpheresOverlapScalar(const float* a, const float* b);
+
 // Self-collision pairs by the FindCollision traversal: FindCollision(T, T) is split as
 // Self(T) = Self(left) + Self(right) + FindCollision(left, right), so every pair is found
 // once. The pairs are tested breadth first from a queue (the tests are independent, so they

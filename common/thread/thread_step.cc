@@ -239,14 +239,15 @@ void IntegrateSemiImplicit(const ThreadModel& model, double h, ThreadWorkspace& 
 //   (M + h C + h^2 K) dv = h (F - C v) - h^2 K v,   v += dv,   x += h v,
 // K the clipped stretch Hessian, the small-angle bending stiffness and the contact bounds.
 // Grasped nodes are eliminated (their dv is prescribed); the tool force is their row's residual.
-bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspace& w,
-                               ThreadState& state) {
+// Its steps, in order, are the functions below.
+
+// A (holding h^2 K of stretch and bend) += the contact bounds + M + h C; b = h (F - C v) - h^2 K v.
+void AssembleImplicitSystem(const ThreadModel& model, double h, ThreadWorkspace& w,
+                            const ThreadState& state) {
   const int n = model.num_nodes;
-  const int p = model.half_bandwidth;
   BandedSpd& A = w.system;
   Eigen::VectorXd& b = w.rhs;
   const Eigen::Map<const Eigen::VectorXd> v(state.v_W.data(), 3 * n);
-  // A currently holds h^2 K (stretch, bend); add the contact bounds.
   for (int i = 0; i < n; ++i) {
     if (w.c_contact_N_s_per_m[i] == 0.0 && w.k_contact.col(i).isZero()) continue;
     A.AddBlock(i, i, (h * h) * Eigen::Map<const Eigen::Matrix3d>(w.k_contact.col(i).data()));
@@ -260,9 +261,15 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
       b[k] = h * (w.f_W(r, i) - c * v[k]) - b[k];
     }
   }
-  // Exactly coupled self contacts: A += d u u^T, b -= d (u^T v) u with u = g (x) n and
-  // d = h c + h^2 k (contact damping and stiffness of the pair, relative motion only). Columns
-  // of grasped nodes hold a prescribed dv: their part moves to the free rows' right-hand side.
+}
+
+// Exactly coupled self contacts: A += d u u^T, b -= d (u^T v) u with u = g (x) n and
+// d = h c + h^2 k (contact damping and stiffness of the pair, relative motion only). Columns
+// of grasped nodes hold a prescribed dv: their part moves to the free rows' right-hand side.
+// The d u u^T terms are not added to the banded A: they enter as low-rank terms at the solve.
+// Returns the number of exactly coupled pairs.
+int CoupleExactPairs(const ThreadModel& model, double h, ThreadWorkspace& w, ThreadState& state) {
+  Eigen::VectorXd& b = w.rhs;
   const int m = ExactPairCount(model, w);
   state.status.num_exact_pairs = m;
   state.status.num_bound_pairs = w.num_self_contacts - m;
@@ -287,8 +294,17 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
       b.segment<3>(3 * t.node[k]) -= (d * (uv + (grasped ? 0.0 : ug)) * t.g[k]) * t.n;
     }
   }
-  // Prescribed dv of grasped nodes; keep their unmodified rows for the reaction.
-  Eigen::VectorXd& dv = b;  // solved in place
+  return m;
+}
+
+// Grasped nodes: keep their unmodified rows for the reaction, move their prescribed dv's
+// columns to the right-hand side, then decouple their rows (dv = the prescribed value).
+void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& w,
+                           const ThreadState& state) {
+  const int n = model.num_nodes;
+  const int p = model.half_bandwidth;
+  BandedSpd& A = w.system;
+  Eigen::VectorXd& b = w.rhs;
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     const Grasp& g = state.grasps[slot];
     if (g.node < 0) continue;
@@ -326,9 +342,15 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
       b[k] = dvg[r];
     }
   }
+}
+
+// Factorises the banded system and solves it in place (w.rhs becomes dv), then adds the
+// exactly coupled pairs and the friction as low-rank terms on top of the banded factor.
+bool SolveImplicitSystem(int m, ThreadWorkspace& w, ThreadState& state) {
+  BandedSpd& A = w.system;
+  Eigen::VectorXd& dv = w.rhs;
   if (!A.Factorize()) return false;
   A.Solve(dv);
-  // Exactly coupled pairs and friction: low-rank terms on top of the banded factor.
   const int nf = state.status.num_friction_contacts;
   if (m + nf > 0) {
     for (int q = 0; q < m; ++q) {
@@ -346,6 +368,18 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
     w.low_rank.CorrectSolution(dv);
     if (nf > 0) SolveFriction(w, state, dv);
   }
+  return true;
+}
+
+// The force of each grasp on the thread, negated: what the tool feels. The grasped rows'
+// residual (A dv - b) / h, the exactly coupled pairs' share on grasped nodes, and the friction
+// impulses on grasped nodes.
+void CalcGraspReactions(const ThreadModel& model, double h, int m, ThreadWorkspace& w,
+                        ThreadState& state) {
+  const int n = model.num_nodes;
+  const int p = model.half_bandwidth;
+  const Eigen::VectorXd& dv = w.rhs;
+  const int nf = state.status.num_friction_contacts;
   // Reaction: r = (A dv - b)_g / h is what the tool pushes with; the thread pushes back.
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     Grasp& g = state.grasps[slot];
@@ -382,11 +416,12 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
       if (slot >= 0) state.grasps[slot].f_T_W += (c.weight[k] * w.friction_p[j] / h) * c.dir;
     }
   }
-  for (int i = 0; i < n; ++i) {
-    state.v_W.col(i) += dv.segment<3>(3 * i);
-    state.x_W.col(i) += h * state.v_W.col(i);
-  }
-  // Torsion (5.6), implicitly: (I + h c + h^2 Kq) dqdot = h (tau - c qdot) - h^2 Kq qdot.
+}
+
+// Torsion (5.6), implicitly: (I + h c + h^2 Kq) dqdot = h (tau - c qdot) - h^2 Kq qdot, the
+// grasped nodes' roll prescribed.
+bool IntegrateTwist(const ThreadModel& model, double h, ThreadWorkspace& w, ThreadState& state) {
+  const int n = model.num_nodes;
   BandedSpd& T = w.twist_system;
   Eigen::VectorXd& tb = w.twist_rhs;
   T.SetZero();
@@ -425,6 +460,21 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
   state.qdot_rad_per_s += tb;
   state.q_rad += h * state.qdot_rad_per_s;
   return true;
+}
+
+bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspace& w,
+                               ThreadState& state) {
+  AssembleImplicitSystem(model, h, w, state);
+  const int m = CoupleExactPairs(model, h, w, state);
+  EliminateGraspedNodes(model, h, w, state);
+  if (!SolveImplicitSystem(m, w, state)) return false;
+  CalcGraspReactions(model, h, m, w, state);
+  const Eigen::VectorXd& dv = w.rhs;
+  for (int i = 0; i < model.num_nodes; ++i) {
+    state.v_W.col(i) += dv.segment<3>(3 * i);
+    state.x_W.col(i) += h * state.v_W.col(i);
+  }
+  return IntegrateTwist(model, h, w, state);
 }
 
 // Strain limiting (see ThreadDef::strain_limit): alternating Gauss-Seidel sweeps over the

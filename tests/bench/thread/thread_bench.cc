@@ -512,8 +512,16 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj,
     if (t > 0) throws[t].hold_tension_N = HoldTensionAfterThrow(throws[t - 1], throws[t]);
     KnotThrowScript script(model, state, hands, throws[t]);
     KnotThrowScript::Phase last = script.phase();
-    std::vector<double> f_standing, f_driver;
+    std::vector<double> f_standing, f_driver, step_us;
     int max_contacts = 0;
+    // The rate of each phase, the first steps' beside the tight pull's.
+    const auto rate = [&] { return step_us.empty() ? 0.0 : 1e6 / Median(step_us); };
+    const auto p99 = [&] {
+      std::vector<double> v = step_us;
+      if (v.empty()) return 0.0;
+      std::sort(v.begin(), v.end());
+      return v[std::min(v.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(v.size())))];
+    };
     if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr) {
       for (const Collider& c : script.colliders()) {
         const Eigen::Vector3d m = 0.5 * (c.a_W + c.b_W) * 1e3;
@@ -521,7 +529,12 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj,
                     c.radius_m * 1e3);
       }
     }
-    while (script.Step(model, state)) {
+    while (true) {
+      const Clock::time_point step_start = Clock::now();
+      const bool more = script.Step(model, state);
+      step_us.push_back(
+          std::chrono::duration<double, std::micro>(Clock::now() - step_start).count());
+      if (!more) break;
       const double d_now = CalcMinNonAdjacentDistance(model, state.x_W);
       if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr && d_now < 0.5 * model.def.diameter_m &&
           min_d >= 0.5 * model.def.diameter_m) {
@@ -558,10 +571,12 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj,
         const double dr_max = *std::max_element(f_driver.begin(), f_driver.end());
         std::printf(
             "  %s: f_standing median %.3g max %.3g N, f_driver median %.3g max %.3g N, "
-            "self contacts max %d\n",
-            PhaseName(last), Median(f_standing), sd_max, Median(f_driver), dr_max, max_contacts);
+            "self contacts max %d, %.0f steps/s (median), step p99 %.0f us\n",
+            PhaseName(last), Median(f_standing), sd_max, Median(f_driver), dr_max, max_contacts,
+            rate(), p99());
         f_standing.clear();
         f_driver.clear();
+        step_us.clear();
         max_contacts = 0;
         int crossings = 0;
         const std::string knot = KnotOf(model, state, &crossings);
@@ -601,10 +616,10 @@ int RunTie(const std::string& spec, int nodes, const std::string& obj,
     if (!f_standing.empty()) {
       std::printf(
           "  %s: f_standing median %.3g max %.3g N, f_driver median %.3g max %.3g N, "
-          "self contacts max %d\n",
+          "self contacts max %d, %.0f steps/s (median), step p99 %.0f us\n",
           PhaseName(last), Median(f_standing),
           *std::max_element(f_standing.begin(), f_standing.end()), Median(f_driver),
-          *std::max_element(f_driver.begin(), f_driver.end()), max_contacts);
+          *std::max_element(f_driver.begin(), f_driver.end()), max_contacts, rate(), p99());
     }
     int crossings = 0;
     const std::string knot = KnotOf(model, state, &crossings);

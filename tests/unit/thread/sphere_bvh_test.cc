@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -197,6 +198,56 @@ TEST(SphereBvh, RefitEnclosesLinksAndChildren) {
       }
     }
   }
+}
+
+// The four-lane refit and its scalar twin: the same IEEE operations in the same order, so the
+// same bits, for every tree shape (sizes around multiples of four, odd nodes carried up) and
+// for coordinates far from the origin and very small.
+TEST(SphereBvh, SimdRefitEqualsItsScalarTwin) {
+  int compared = 0;
+  for (int nodes = 2; nodes <= 70; ++nodes) {
+    for (const double offset_m : {0.0, 3.0, -1e3}) {
+      for (const double step_m : {50e-6, 1e-9}) {
+        Eigen::Matrix3Xd x = RandomWalk(nodes, step_m, 7 * nodes + 1);
+        x.colwise() += Eigen::Vector3d(offset_m, -0.5 * offset_m, 0.25 * offset_m);
+        const SphereBvhTopology t = BuildSphereBvhTopology(nodes - 1);
+        SphereBvhSpheres simd = MakeSphereBvhSpheres(t), scalar = MakeSphereBvhSpheres(t);
+        RefitSphereBvh(t, x, 37.5e-6, simd);
+        RefitSphereBvhScalar(t, x, 37.5e-6, scalar);
+        ASSERT_EQ(simd.xyzr.size(), scalar.xyzr.size());
+        ASSERT_EQ(std::memcmp(simd.xyzr.data(), scalar.xyzr.data(),
+                              sizeof(float) * static_cast<size_t>(simd.xyzr.size())),
+                  0)
+            << nodes << " nodes, offset " << offset_m << ", step " << step_m;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 69 * 6);
+}
+
+TEST(SphereBvh, SimdOverlapEqualsItsScalarTwin) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  alignas(16) float a[4], b[4];
+  int overlaps = 0, tangent = 0;
+  for (int k = 0; k < 200000; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      a[i] = u(rng);
+      b[i] = u(rng);
+    }
+    a[3] = 0.5f * std::abs(u(rng));
+    const float d = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                              (a[2] - b[2]) * (a[2] - b[2]));
+    // A third of the pairs just touching (within rounding), where the two could disagree.
+    b[3] = k % 3 == 0 ? d - a[3] : 0.5f * std::abs(u(rng));
+    tangent += k % 3 == 0;
+    const bool simd = SphereBvhSpheresOverlap(a, b);
+    ASSERT_EQ(simd, SphereBvhSpheresOverlapScalar(a, b)) << "pair " << k;
+    overlaps += simd;
+  }
+  EXPECT_GT(overlaps, 50000);
+  EXPECT_GT(tangent, 60000);
 }
 
 TEST(SphereBvh, FindCollisionEqualsAllPairsOnRandomWalks) {
