@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "common/net/dds_cli.h"
 #include "instructor/cue_spec.h"
 #include "instructor/instructor.h"
 
@@ -41,18 +42,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                  "convergent, divergent, tremor; STATION may be 'all'");
   app.add_option("--table-period", table_period_s, "seconds between tables (0: only at the end)");
   app.add_option("--issuer", o.issuer, "name of this console in the cues it sends");
-  app.add_option("--dds-profile", o.dds.profile_file, "DDS XML profiles")->capture_default_str();
-  app.add_option("--domain", o.dds.domain_id, "DDS domain id");
-  app.add_option("--partition", o.dds.partition, "DDS partition (the course)");
+  microdex::net::AddDdsOptions(app, o.dds);
   app.add_option("--record", record, "(not available in this build)");
   app.add_option("--security", security, "(not available in this build)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "microdex-instructor: %s\n", e.what());
-    return 2;
+  if (const std::optional<int> status =
+          microdex::net::ParseCommandLine(app, argc, argv, "microdex-instructor")) {
+    return *status;
   }
   if (!record.empty() || !security.empty()) {
     std::fprintf(stderr, "microdex-instructor: %s: not available in this build yet\n",

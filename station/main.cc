@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "common/net/dds_cli.h"
 #include "station/station_app.h"
 
 namespace {
@@ -45,20 +46,14 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--trainee", o.trainee, "trainee name shown to the instructor");
   app.add_option("--score-out", o.score_out, "write the final score as JSON to FILE");
   app.add_option("--mirror-rate", o.mirror_rate_hz, "rate of the mirrored state topics, Hz");
-  app.add_option("--dds-profile", o.dds.profile_file, "DDS XML profiles")->capture_default_str();
-  app.add_option("--domain", o.dds.domain_id, "DDS domain id");
-  app.add_option("--partition", o.dds.partition, "DDS partition (the course)");
+  microdex::net::AddDdsOptions(app, o.dds);
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--window", window, "open a view window (not available in this build)");
   app.add_option("--screenshot", screenshot_unused, "(not available in this build)");
   app.add_option("--security", security_unused, "(not available in this build)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "microdex-station: %s\n", e.what());
-    return 2;
+  if (const std::optional<int> status =
+          microdex::net::ParseCommandLine(app, argc, argv, "microdex-station")) {
+    return *status;
   }
   if (window || !screenshot_unused.empty() || !security_unused.empty()) {
     std::fprintf(

@@ -283,16 +283,36 @@ SphereBvhSpheres MakeSphereBvhSpheres(const SphereBvhTopology& topology) {
   return s;
 }
 
+namespace {
+
+// The nodes in single precision, one array per coordinate, for the leaf fits.
+struct LeafInputs {
+  const float *px, *py, *pz;
+  float* out;
+  float inflate;
+};
+LeafInputs PrepareLeaves(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
+                         SphereBvhSpheres& s) {
+  MICRODEX_CHECK(x_W.cols() == t.num_leaves + 1);
+  s.nodes_W = x_W.transpose().cast<float>();
+  return {s.nodes_W.col(0).data(), s.nodes_W.col(1).data(), s.nodes_W.col(2).data(), s.xyzr.data(),
+          static_cast<float>(inflate_m)};
+}
+
+// The sphere of inner node i from its children's, one sphere at a time.
+void FitParentScalar(const SphereBvhTopology& t, int i, float* out) {
+  const float* a = out + 4 * t.nodes[i].left;
+  const float* b = out + 4 * t.nodes[i].right;
+  float* c = out + 4 * i;
+  FitParent(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0], c[1], c[2], c[3]);
+}
+
+}  // namespace
+
 int RefitSphereBvhLeaves(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
                          SphereBvhSpheres& s) {
   const int n = t.num_leaves;
-  MICRODEX_CHECK(x_W.cols() == n + 1);
-  s.nodes_W = x_W.transpose().cast<float>();
-  const float* px = s.nodes_W.col(0).data();
-  const float* py = s.nodes_W.col(1).data();
-  const float* pz = s.nodes_W.col(2).data();
-  float* out = s.xyzr.data();
-  const float inflate = static_cast<float>(inflate_m);
+  const auto [px, py, pz, out, inflate] = PrepareLeaves(t, x_W, inflate_m, s);
   int l = 0;
   for (; l + 4 <= n; l += 4) {  // four links at a time, then one sphere per column
     F4 x, y, z, r;
@@ -339,13 +359,7 @@ int RefitSphereBvh(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, doub
       Store(p + 8, z);
       Store(p + 12, r);
     }
-    for (; k < lv.count; ++k) {
-      const int i = lv.begin + k;
-      const float* a = out + 4 * t.nodes[i].left;
-      const float* b = out + 4 * t.nodes[i].right;
-      float* c = out + 4 * i;
-      FitParent(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0], c[1], c[2], c[3]);
-    }
+    for (; k < lv.count; ++k) FitParentScalar(t, lv.begin + k, out);
   }
   return static_cast<int>(t.nodes.size());
 }
@@ -353,25 +367,13 @@ int RefitSphereBvh(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, doub
 int RefitSphereBvhScalar(const SphereBvhTopology& t, const Eigen::Matrix3Xd& x_W, double inflate_m,
                          SphereBvhSpheres& s) {
   const int n = t.num_leaves;
-  MICRODEX_CHECK(x_W.cols() == n + 1);
-  s.nodes_W = x_W.transpose().cast<float>();
-  const float* px = s.nodes_W.col(0).data();
-  const float* py = s.nodes_W.col(1).data();
-  const float* pz = s.nodes_W.col(2).data();
-  float* out = s.xyzr.data();
-  const float inflate = static_cast<float>(inflate_m);
+  const auto [px, py, pz, out, inflate] = PrepareLeaves(t, x_W, inflate_m, s);
   for (int l = 0; l < n; ++l) {
     float* c = out + 4 * l;
     FitLeaf(px[l], py[l], pz[l], px[l + 1], py[l + 1], pz[l + 1], inflate, c[0], c[1], c[2], c[3]);
   }
   for (const SphereBvhLevel& lv : t.levels) {
-    for (int k = 0; k < lv.count; ++k) {
-      const int i = lv.begin + k;
-      const float* a = out + 4 * t.nodes[i].left;
-      const float* b = out + 4 * t.nodes[i].right;
-      float* c = out + 4 * i;
-      FitParent(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0], c[1], c[2], c[3]);
-    }
+    for (int k = 0; k < lv.count; ++k) FitParentScalar(t, lv.begin + k, out);
   }
   return static_cast<int>(t.nodes.size());
 }

@@ -241,6 +241,11 @@ void IntegrateSemiImplicit(const ThreadModel& model, double h, ThreadWorkspace& 
 // Grasped nodes are eliminated (their dv is prescribed); the tool force is their row's residual.
 // Its steps, in order, are the functions below.
 
+// The velocity change that takes a grasped node to its tool point in one step.
+Eigen::Vector3d PrescribedDv(const Grasp& g, const ThreadState& state, double h) {
+  return (g.p_WT - state.x_W.col(g.node)) / h - state.v_W.col(g.node);
+}
+
 // A (holding h^2 K of stretch and bend) += the contact bounds + M + h C; b = h (F - C v) - h^2 K v.
 void AssembleImplicitSystem(const ThreadModel& model, double h, ThreadWorkspace& w,
                             const ThreadState& state) {
@@ -283,10 +288,7 @@ int CoupleExactPairs(const ThreadModel& model, double h, ThreadWorkspace& w, Thr
       uv += t.g[k] * t.n.dot(state.v_W.col(t.node[k]));
       const int slot = w.grasp_slot[t.node[k]];
       if (slot >= 0) {
-        const Grasp& gr = state.grasps[slot];
-        const Eigen::Vector3d dvg =
-            (gr.p_WT - state.x_W.col(t.node[k])) / h - state.v_W.col(t.node[k]);
-        ug += t.g[k] * t.n.dot(dvg);
+        ug += t.g[k] * t.n.dot(PrescribedDv(state.grasps[slot], state, h));
       }
     }
     for (int k = 0; k < 4; ++k) {
@@ -305,24 +307,16 @@ void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& 
   const int p = model.half_bandwidth;
   BandedSpd& A = w.system;
   Eigen::VectorXd& b = w.rhs;
+  // Keep each grasped row unmodified (for the reaction) and move the grasped columns to the
+  // right-hand side; only then decouple the rows (the columns are read from the whole A).
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     const Grasp& g = state.grasps[slot];
     if (g.node < 0) continue;
+    const Eigen::Vector3d dvg = PrescribedDv(g, state, h);
     for (int r = 0; r < 3; ++r) {
       const int k = 3 * g.node + r;
       for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
         w.grasp_rows(3 * slot + r, j - k + p) = A.At(k, j);
-      }
-    }
-  }
-  // Eliminate: move prescribed columns to the right-hand side, then decouple the rows.
-  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
-    const Grasp& g = state.grasps[slot];
-    if (g.node < 0) continue;
-    const Eigen::Vector3d dvg = (g.p_WT - state.x_W.col(g.node)) / h - state.v_W.col(g.node);
-    for (int r = 0; r < 3; ++r) {
-      const int k = 3 * g.node + r;
-      for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
         if (j == k || w.grasp_slot[j / 3] >= 0) continue;
         b[j] -= A.At(j, k) * dvg[r];
       }
@@ -331,7 +325,7 @@ void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& 
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     const Grasp& g = state.grasps[slot];
     if (g.node < 0) continue;
-    const Eigen::Vector3d dvg = (g.p_WT - state.x_W.col(g.node)) / h - state.v_W.col(g.node);
+    const Eigen::Vector3d dvg = PrescribedDv(g, state, h);
     for (int r = 0; r < 3; ++r) {
       const int k = 3 * g.node + r;
       w.grasp_rows(3 * slot + r, 2 * p + 1) = b[k];

@@ -466,12 +466,11 @@ int RunFem(int argc, char** argv) {
       const double over_cholmod = chol ? m->step_us / chol->step_us : kNaN;
       std::fprintf(stderr,
                    "  %-10s L%d  error %.3g  %7.1f us | same level fine %8.1f us (x%.1f) | "
-                   "fine level %s with error %.3g: %s us (x%s) | / cholmod %.2f\n",
+                   "fine level %s with error %.3g: %.1f us (x%.1f) | / cholmod %.2f\n",
                    ToString(s), level, m->force_error, m->step_us, f_same ? f_same->step_us : kNaN,
                    level_gain, f_equal ? std::to_string(f_equal->level).c_str() : "none",
-                   f_equal ? f_equal->force_error : kNaN,
-                   f_equal ? Num(f_equal->step_us).c_str() : "-", Num(equal_gain).c_str(),
-                   over_cholmod);
+                   f_equal ? f_equal->force_error : kNaN, f_equal ? f_equal->step_us : kNaN,
+                   equal_gain, over_cholmod);
       if (fair.size() > 1) fair += ", ";
       fair += "{\"solver\": \"" + std::string(ToString(s)) +
               "\", \"level\": " + std::to_string(level) +
