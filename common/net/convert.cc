@@ -245,6 +245,32 @@ bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
   return c.ok();
 }
 
+namespace {
+
+// The active-cue mask: bit k of the message is the IDL's CueKind value k, bit k of the plain
+// type cues::CueKind k; each set bit is converted by the kind's name, so neither side depends
+// on the other's numbering. Returns false for a message bit that names no kind.
+std::uint32_t ActiveCuesToMsg(std::uint32_t plain) {
+  std::uint32_t out = 0;
+  for (std::uint32_t k = 0; k < cues::kCueKindCount; ++k) {
+    if ((plain >> k) & 1u) out |= 1u << static_cast<std::uint32_t>(CueKindToMsg(cues::CueKind(k)));
+  }
+  return out;
+}
+
+bool ActiveCuesFromMsg(std::uint32_t bits, std::uint32_t* plain) {
+  *plain = 0;
+  for (std::uint32_t k = 0; k < 32; ++k) {
+    if (!((bits >> k) & 1u)) continue;
+    cues::CueKind kind;
+    if (!CueKindFromMsg(static_cast<msg::CueKind>(k), &kind)) return false;
+    *plain |= 1u << static_cast<std::uint32_t>(kind);
+  }
+  return true;
+}
+
+}  // namespace
+
 // ---- ToolState ----
 void ToMsg(const ToolState& in, msg::ToolState& out) {
   HeaderToMsg(in.header, out);
@@ -252,7 +278,7 @@ void ToMsg(const ToolState& in, msg::ToolState& out) {
   out.q_WT(Q(in.q_WT));
   out.f_T_W(V(in.f_T_W));
   out.tremor_rms_m(in.tremor_rms_m);
-  out.active_cues(in.active_cues);
+  out.active_cues(ActiveCuesToMsg(in.active_cues));
 }
 
 bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
@@ -266,7 +292,9 @@ bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
   out.q_WT = Q(in.q_WT());
   out.f_T_W = V(in.f_T_W());
   out.tremor_rms_m = in.tremor_rms_m();
-  out.active_cues = in.active_cues();
+  if (!ActiveCuesFromMsg(in.active_cues(), &out.active_cues)) {
+    c.Fail("active_cues: a bit that names no cue kind");
+  }
   return c.ok();
 }
 

@@ -54,7 +54,8 @@ struct ToolState {
   Eigen::Quaterniond q_WT = Eigen::Quaterniond::Identity();
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // N
   double tremor_rms_m = 0;
-  std::uint32_t active_cues = 0;  // bit (1 << CueKind)
+  std::uint32_t active_cues =
+      0;  // bit (1 << cues::CueKind); on the wire, bit (1 << msg::CueKind) of the same name
 };
 
 enum class ClearanceStatus : std::uint8_t { kOk = 0, kEmptyRange = 1, kInvalidInput = 2 };

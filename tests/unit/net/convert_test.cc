@@ -205,6 +205,39 @@ TEST(NetConvert, CueCommandKindsAndRejection) {
   EXPECT_FALSE(cues::ParseCueKind("vortex", &parsed));
 }
 
+TEST(NetConvert, ActiveCuesCrossByKindName) {
+  for (std::uint32_t mask = 0; mask < (1u << cues::kCueKindCount); ++mask) {
+    ToolState in;
+    in.header = MakeHeader();
+    in.q_WT = Eigen::Quaterniond::Identity();
+    in.active_cues = mask;
+    msg::ToolState m;
+    ToMsg(in, m);
+    // Each set bit is the IDL's value of the kind of the same name.
+    for (std::uint32_t k = 0; k < cues::kCueKindCount; ++k) {
+      const auto kind = static_cast<cues::CueKind>(k);
+      CueCommand c;
+      c.header = MakeHeader();
+      c.kind = kind;
+      msg::CueCommand cm;
+      ToMsg(c, cm);
+      EXPECT_EQ((m.active_cues() >> static_cast<std::uint32_t>(cm.kind())) & 1u, (mask >> k) & 1u)
+          << cues::CueKindName(kind);
+    }
+    ToolState out;
+    ASSERT_TRUE(FromMsg(m, out));
+    EXPECT_EQ(out.active_cues, mask);
+  }
+  msg::ToolState m;
+  m.station_id("station-1");
+  m.q_WT({1, 0, 0, 0});
+  m.active_cues(1u << 20);  // no kind has that value
+  ToolState out;
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("active_cues"), std::string::npos) << why;
+}
+
 TEST(NetConvert, EmptyStationIdIsRejectedOverlongIsCut) {
   msg::Score m;
   Score out;
