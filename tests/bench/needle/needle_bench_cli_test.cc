@@ -180,6 +180,17 @@ TEST(NeedleBenchCli, QuickJsonReportHasTheDocumentedShape) {
   EXPECT_EQ(count_matches(std::regex(R"re("point_ratios": \{"mesh_over_sp": )re")), 4) << families;
   EXPECT_EQ(count_matches(std::regex(R"re("lower_bounds": \[("[a-z_ ()]+"(, )?)*\])re")), 4)
       << families;
+  // The default path's error against the exact method in every family: README.md states
+  // ≤ 8.4e-17 m on the full run (R = 5 mm), held here as ≤ 1e-16 m.
+  const std::regex default_error(
+      R"re("name": "sp", "setting": "clip\+ascent\+certificate \(default\)", "ns_per_query": [0-9.e+-]+, "max_abs_error": ([0-9.e+-]+))re");
+  int default_rows = 0;
+  for (auto it = std::sregex_iterator(families.begin(), families.end(), default_error);
+       it != std::sregex_iterator(); ++it) {
+    EXPECT_LE(std::stod((*it)[1]), 1e-16) << it->str();
+    ++default_rows;
+  }
+  EXPECT_EQ(default_rows, 4) << families;
   // Which stage settled each default query: the counts of every family add up to its queries.
   const std::regex decisions(
       R"re("queries": ([0-9]+), "contacts"(?:[^\n]*\n){3} *"sp_decisions": \{"invalid_input": ([0-9]+), "empty_range": ([0-9]+), "thesis_pass": ([0-9]+), "quick_certificate": ([0-9]+), "lifted_certificate": ([0-9]+), "along_needle": ([0-9]+), "rounds_exhausted": ([0-9]+), "exact": ([0-9]+)\})re");

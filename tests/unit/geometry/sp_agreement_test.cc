@@ -194,6 +194,10 @@ TEST(SpAgreementTest, MillionRandomConfigurations) {
   near_core.Print("near core (shared generator)");
   wide.Print("wide (shared generator)");
   EXPECT_EQ(near_ideal.cases + crossing.cases + near_core.cases + wide.cases, kRandomCases);
+  // The figures README.md states (its "needle–vessel clearance" row), as bounds.
+  EXPECT_LE(std::max({near_ideal.max_error_rel, crossing.max_error_rel, near_core.max_error_rel}),
+            3e-14);
+  EXPECT_LE(wide.max_error_rel, 3e-13);
 }
 
 // Degenerate families, each exactly and under perturbations from 1e-15 to 1e-3 (relative).
@@ -277,6 +281,8 @@ TEST(SpAgreementTest, AdversarialSet) {
     }
   }
   stats.Print("adversarial");
+  EXPECT_EQ(stats.cases, 5760);
+  EXPECT_LE(stats.max_error_rel, 1e-10);  // README.md: 6.0e-11 R (ρ = 1e3 R needles)
 }
 
 // Touch / no-touch is exact for every setting, including the thesis's single pass (no
