@@ -58,7 +58,7 @@ struct TissueFrame {
   std::uint32_t mesh_revision = 0;
   std::uint32_t unknowns = 0;
   double max_displacement_m = 0;
-  std::uint8_t status = 0;
+  fem::TissueStatus status = fem::TissueStatus::kNoContact;
   std::array<float, kMaxFrameTissueNodes> w_m{};  // x fastest
 };
 

@@ -83,6 +83,27 @@ net::ClearanceStatus ToNet(geometry::ClearanceStatus status) {
   return net::ClearanceStatus::kInvalidInput;
 }
 
+// The tissue step's status as the message's, enumerator by enumerator.
+net::TissueStepStatus ToNet(fem::TissueStatus status) {
+  switch (status) {
+    case fem::TissueStatus::kOk:
+      return net::TissueStepStatus::kOk;
+    case fem::TissueStatus::kNoContact:
+      return net::TissueStepStatus::kNoContact;
+    case fem::TissueStatus::kBadInput:
+      return net::TissueStepStatus::kBadInput;
+    case fem::TissueStatus::kTooManyContacts:
+      return net::TissueStepStatus::kTooManyContacts;
+    case fem::TissueStatus::kNotConverged:
+      return net::TissueStepStatus::kNotConverged;
+    case fem::TissueStatus::kFactorisationFailed:
+      return net::TissueStepStatus::kFactorisationFailed;
+    case fem::TissueStatus::kNonFinite:
+      return net::TissueStepStatus::kNonFinite;
+  }
+  return net::TissueStepStatus::kNonFinite;
+}
+
 }  // namespace
 
 StationPublisher::StationPublisher(const PublisherConfig& config, const net::DdsOptions& dds,
@@ -312,7 +333,7 @@ void StationPublisher::PublishFrames() {
     t.mesh_revision = f.mesh_revision;
     t.unknowns = f.unknowns;
     t.max_displacement_m = f.max_displacement_m;
-    t.status = f.status;
+    t.status = ToNet(f.status);
     t.displacement_m.assign(f.w_m.begin(), f.w_m.begin() + std::size_t{f.nodes_x} * f.nodes_y);
     net::ToMsg(t, w_->tissue_msg);
     w_->tissue->write(&w_->tissue_msg);

@@ -67,7 +67,7 @@ void TissueModule::WriteFrame(const state::StationState& s, std::uint64_t step,
   f.nodes_y = side;
   f.mesh_revision = mesh_revision_;
   f.unknowns = static_cast<std::uint32_t>(ws_.stats.unknowns);
-  f.status = static_cast<std::uint8_t>(state.status);
+  f.status = state.status;
   for (std::size_t i = 0; i < grid_m_.size(); ++i) f.w_m[i] = static_cast<float>(grid_m_[i]);
   // The field is harmonic off the contact nodes and zero on the edges, so its largest
   // magnitude is at a contact node (maximum principle).

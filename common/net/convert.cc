@@ -271,6 +271,87 @@ bool ActiveCuesFromMsg(std::uint32_t bits, std::uint32_t* plain) {
 
 }  // namespace
 
+namespace {
+
+// Needle clearance and tissue step statuses cross by name.
+msg::NeedleClearanceStatus ClearanceStatusToMsg(ClearanceStatus s) {
+  switch (s) {
+    case ClearanceStatus::kOk:
+      return msg::CLEARANCE_OK;
+    case ClearanceStatus::kEmptyRange:
+      return msg::CLEARANCE_EMPTY_RANGE;
+    case ClearanceStatus::kInvalidInput:
+      return msg::CLEARANCE_INVALID_INPUT;
+  }
+  MICRODEX_CHECK(false);
+  return msg::CLEARANCE_INVALID_INPUT;
+}
+
+bool ClearanceStatusFromMsg(msg::NeedleClearanceStatus in, ClearanceStatus* out) {
+  switch (in) {
+    case msg::CLEARANCE_OK:
+      *out = ClearanceStatus::kOk;
+      return true;
+    case msg::CLEARANCE_EMPTY_RANGE:
+      *out = ClearanceStatus::kEmptyRange;
+      return true;
+    case msg::CLEARANCE_INVALID_INPUT:
+      *out = ClearanceStatus::kInvalidInput;
+      return true;
+  }
+  return false;
+}
+
+msg::TissueStepStatus TissueStatusToMsg(TissueStepStatus s) {
+  switch (s) {
+    case TissueStepStatus::kOk:
+      return msg::TISSUE_OK;
+    case TissueStepStatus::kNoContact:
+      return msg::TISSUE_NO_CONTACT;
+    case TissueStepStatus::kBadInput:
+      return msg::TISSUE_BAD_INPUT;
+    case TissueStepStatus::kTooManyContacts:
+      return msg::TISSUE_TOO_MANY_CONTACTS;
+    case TissueStepStatus::kNotConverged:
+      return msg::TISSUE_NOT_CONVERGED;
+    case TissueStepStatus::kFactorisationFailed:
+      return msg::TISSUE_FACTORISATION_FAILED;
+    case TissueStepStatus::kNonFinite:
+      return msg::TISSUE_NON_FINITE;
+  }
+  MICRODEX_CHECK(false);
+  return msg::TISSUE_NON_FINITE;
+}
+
+bool TissueStatusFromMsg(msg::TissueStepStatus in, TissueStepStatus* out) {
+  switch (in) {
+    case msg::TISSUE_OK:
+      *out = TissueStepStatus::kOk;
+      return true;
+    case msg::TISSUE_NO_CONTACT:
+      *out = TissueStepStatus::kNoContact;
+      return true;
+    case msg::TISSUE_BAD_INPUT:
+      *out = TissueStepStatus::kBadInput;
+      return true;
+    case msg::TISSUE_TOO_MANY_CONTACTS:
+      *out = TissueStepStatus::kTooManyContacts;
+      return true;
+    case msg::TISSUE_NOT_CONVERGED:
+      *out = TissueStepStatus::kNotConverged;
+      return true;
+    case msg::TISSUE_FACTORISATION_FAILED:
+      *out = TissueStepStatus::kFactorisationFailed;
+      return true;
+    case msg::TISSUE_NON_FINITE:
+      *out = TissueStepStatus::kNonFinite;
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 // ---- ToolState ----
 void ToMsg(const ToolState& in, msg::ToolState& out) {
   HeaderToMsg(in.header, out);
@@ -308,7 +389,7 @@ void ToMsg(const NeedleState& in, msg::NeedleState& out) {
   out.s_rad(in.s_rad);
   out.p_WD(V(in.p_WD));
   out.p_WB(V(in.p_WB));
-  out.status(static_cast<std::uint8_t>(in.status));
+  out.status(ClearanceStatusToMsg(in.status));
 }
 
 bool FromMsg(const msg::NeedleState& in, NeedleState& out, std::string* why) {
@@ -317,9 +398,10 @@ bool FromMsg(const msg::NeedleState& in, NeedleState& out, std::string* why) {
   c.Finite(in.p_WN(), "p_WN");
   c.Unit(in.q_WN(), "q_WN");
   c.Flag(in.contact(), "contact");
-  if (in.status() > 2) c.Fail("status: not 0, 1 or 2");
+  ClearanceStatus status = ClearanceStatus::kInvalidInput;
+  if (!ClearanceStatusFromMsg(in.status(), &status)) c.Fail("status: not a clearance status");
   // Clearance and the closest points are NaN when the status says there is none.
-  if (in.status() == 0) {
+  if (status == ClearanceStatus::kOk) {
     c.Finite(in.clearance_m(), "clearance_m");
     c.Finite(in.s_rad(), "s_rad");
     c.Finite(in.p_WD(), "p_WD");
@@ -332,7 +414,7 @@ bool FromMsg(const msg::NeedleState& in, NeedleState& out, std::string* why) {
   out.s_rad = in.s_rad();
   out.p_WD = V(in.p_WD());
   out.p_WB = V(in.p_WB());
-  out.status = static_cast<ClearanceStatus>(in.status());
+  out.status = status;
   return c.ok();
 }
 
@@ -393,7 +475,7 @@ void ToMsg(const TissueState& in, msg::TissueState& out) {
   out.mesh_revision(in.mesh_revision);
   out.unknowns(in.unknowns);
   out.max_displacement_m(in.max_displacement_m);
-  out.status(in.status);
+  out.status(TissueStatusToMsg(in.status));
   out.displacement_m(in.displacement_m);
 }
 
@@ -409,7 +491,8 @@ bool FromMsg(const msg::TissueState& in, TissueState& out, std::string* why) {
   if (!(in.length_x_m() > 0 && std::isfinite(in.length_x_m()))) c.Fail("length_x_m: expected > 0");
   if (!(in.length_y_m() > 0 && std::isfinite(in.length_y_m()))) c.Fail("length_y_m: expected > 0");
   c.Finite(in.max_displacement_m(), "max_displacement_m");
-  if (in.status() > kMaxTissueStatus) c.Fail("status: out of range");
+  TissueStepStatus status = TissueStepStatus::kNonFinite;
+  if (!TissueStatusFromMsg(in.status(), &status)) c.Fail("status: not a tissue step status");
   if (!c.ok()) return false;
   for (float w : in.displacement_m()) c.Finite(w, "displacement_m[]");
   out.p_WS = V(in.p_WS());
@@ -421,7 +504,7 @@ bool FromMsg(const msg::TissueState& in, TissueState& out, std::string* why) {
   out.mesh_revision = in.mesh_revision();
   out.unknowns = in.unknowns();
   out.max_displacement_m = in.max_displacement_m();
-  out.status = in.status();
+  out.status = status;
   out.displacement_m = in.displacement_m();
   return c.ok();
 }

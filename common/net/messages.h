@@ -81,7 +81,16 @@ struct ThreadState {
   Eigen::Vector3d f_grasp_W = Eigen::Vector3d::Zero();  // thread on the tool, N
 };
 
-inline constexpr std::uint8_t kMaxTissueStatus = 6;  // fem::TissueStatus::kNonFinite
+// The tissue step's status (fem::TissueStatus, enumerator for enumerator).
+enum class TissueStepStatus : std::uint8_t {
+  kOk,
+  kNoContact,
+  kBadInput,
+  kTooManyContacts,
+  kNotConverged,
+  kFactorisationFailed,
+  kNonFinite,
+};
 
 struct TissueState {
   Header header;
@@ -94,7 +103,7 @@ struct TissueState {
   std::uint32_t mesh_revision = 0;
   std::uint32_t unknowns = 0;
   double max_displacement_m = 0;
-  std::uint8_t status = 0;            // fem::TissueStatus, <= kMaxTissueStatus
+  TissueStepStatus status = TissueStepStatus::kOk;
   std::vector<float> displacement_m;  // x fastest; at most kMaxTissueNodes
 };
 

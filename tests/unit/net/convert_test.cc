@@ -71,10 +71,44 @@ TEST(NetConvert, NeedleStateWithoutClearanceMayCarryNan) {
   NeedleState out;
   EXPECT_TRUE(FromMsg(m, out));
   EXPECT_EQ(out.status, ClearanceStatus::kEmptyRange);
-  m.status(0);  // the same NaN claimed valid
+  m.status(msg::CLEARANCE_OK);  // the same NaN claimed valid
   std::string why;
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("clearance_m"), std::string::npos) << why;
+  m.status(static_cast<msg::NeedleClearanceStatus>(3));  // no such status
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("status"), std::string::npos) << why;
+}
+
+// Statuses cross by name: every plain enumerator arrives as itself.
+TEST(NetConvert, StatusesCrossByName) {
+  for (const ClearanceStatus s :
+       {ClearanceStatus::kOk, ClearanceStatus::kEmptyRange, ClearanceStatus::kInvalidInput}) {
+    NeedleState in;
+    in.header = MakeHeader();
+    in.status = s;
+    in.clearance_m = s == ClearanceStatus::kOk ? 1e-4 : kNan;
+    msg::NeedleState m;
+    ToMsg(in, m);
+    NeedleState out;
+    ASSERT_TRUE(FromMsg(m, out));
+    EXPECT_EQ(out.status, s);
+  }
+  EXPECT_EQ(static_cast<int>(msg::CLEARANCE_EMPTY_RANGE), 1);
+  int tissue_statuses = 0;
+  for (int k = 0; k <= static_cast<int>(TissueStepStatus::kNonFinite); ++k) {
+    TissueState in;
+    in.header = MakeHeader();
+    in.length_x_m = in.length_y_m = 0.02;
+    in.status = static_cast<TissueStepStatus>(k);
+    msg::TissueState m;
+    ToMsg(in, m);
+    TissueState out;
+    ASSERT_TRUE(FromMsg(m, out));
+    EXPECT_EQ(out.status, in.status);
+    ++tissue_statuses;
+  }
+  EXPECT_EQ(tissue_statuses, 7);
 }
 
 TEST(NetConvert, DeviceInputRejectsNonFiniteAndNonUnit) {
@@ -140,7 +174,7 @@ TEST(NetConvert, TissueStateRoundTripAndBound) {
   in.mesh_revision = 3;
   in.unknowns = 900;
   in.max_displacement_m = 2e-6;
-  in.status = 0;
+  in.status = TissueStepStatus::kOk;
   in.displacement_m = {1e-6f, -2e-6f, 0.0f, 0.5e-6f, 0.0f, 0.0f};
   msg::TissueState m;
   ToMsg(in, m);
@@ -159,10 +193,10 @@ TEST(NetConvert, TissueStateRoundTripAndBound) {
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("nodes_x"), std::string::npos) << why;
   m.nodes_x(3);
-  m.status(kMaxTissueStatus + 1);
+  m.status(static_cast<msg::TissueStepStatus>(7));  // no such status
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("status"), std::string::npos) << why;
-  m.status(0);
+  m.status(msg::TISSUE_OK);
   m.length_x_m(0);
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("length_x_m"), std::string::npos) << why;

@@ -90,7 +90,7 @@ NeedleState MakeNeedleState() {
   m.s_rad(0.7);
   m.p_WD({4e-3, 1e-3, 0});
   m.p_WB({4.1e-3, 1e-3, 0});
-  m.status(0);
+  m.status(microdex::msg::CLEARANCE_OK);
   return m;
 }
 
@@ -123,7 +123,7 @@ TissueState MakeTissueState() {
   m.mesh_revision(7);
   m.unknowns(829);
   m.max_displacement_m(1e-3);
-  m.status(0);
+  m.status(microdex::msg::TISSUE_OK);
   for (int i = 0; i < 3000; ++i) m.displacement_m().push_back(static_cast<float>(i) * 1e-7f);
   return m;
 }
