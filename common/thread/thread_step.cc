@@ -307,8 +307,18 @@ void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& 
   const int p = model.half_bandwidth;
   BandedSpd& A = w.system;
   Eigen::VectorXd& b = w.rhs;
-  // Keep each grasped row unmodified (for the reaction) and move the grasped columns to the
+  // Keep each grasped row unmodified (for the reaction); move the grasped columns to the
   // right-hand side; only then decouple the rows (the columns are read from the whole A).
+  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
+    const Grasp& g = state.grasps[slot];
+    if (g.node < 0) continue;
+    for (int r = 0; r < 3; ++r) {
+      const int k = 3 * g.node + r;
+      for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
+        w.grasp_rows(3 * slot + r, j - k + p) = A.At(k, j);
+      }
+    }
+  }
   for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
     const Grasp& g = state.grasps[slot];
     if (g.node < 0) continue;
@@ -316,7 +326,6 @@ void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& 
     for (int r = 0; r < 3; ++r) {
       const int k = 3 * g.node + r;
       for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
-        w.grasp_rows(3 * slot + r, j - k + p) = A.At(k, j);
         if (j == k || w.grasp_slot[j / 3] >= 0) continue;
         b[j] -= A.At(j, k) * dvg[r];
       }
