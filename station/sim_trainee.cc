@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace microdex::station {
 namespace {
@@ -11,16 +12,19 @@ double Lerp(double novice, double expert, double skill) {
 }
 }  // namespace
 
-std::string SimTraineeDef::Validate() const {
-  if (!(skill >= 0 && skill <= 1)) return "skill: expected 0..1";
-  if (!(tremor_rms_novice_m >= 0 && tremor_rms_expert_m >= 0)) return "tremor_rms: expected >= 0";
-  if (!(drift_std_novice_m >= 0 && drift_std_expert_m >= 0)) return "drift_std: expected >= 0";
+void SimTraineeDef::Validate() const {
+  if (!(skill >= 0 && skill <= 1)) throw std::invalid_argument("skill: expected 0..1");
+  if (!(tremor_rms_novice_m >= 0 && tremor_rms_expert_m >= 0))
+    throw std::invalid_argument("tremor_rms: expected >= 0");
+  if (!(drift_std_novice_m >= 0 && drift_std_expert_m >= 0))
+    throw std::invalid_argument("drift_std: expected >= 0");
   if (!(drift_min_hz > 0 && drift_min_hz < drift_max_hz)) {
-    return "drift_min_hz: expected 0 < drift_min_hz < drift_max_hz";
+    throw std::invalid_argument("drift_min_hz: expected 0 < drift_min_hz < drift_max_hz");
   }
-  if (!(hand_stiffness_N_per_m > 0)) return "hand_stiffness_N_per_m: expected > 0";
-  if (!(hand_time_constant_s > 0)) return "hand_time_constant_s: expected > 0";
-  return {};
+  if (!(hand_stiffness_N_per_m > 0))
+    throw std::invalid_argument("hand_stiffness_N_per_m: expected > 0");
+  if (!(hand_time_constant_s > 0))
+    throw std::invalid_argument("hand_time_constant_s: expected > 0");
 }
 
 SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)

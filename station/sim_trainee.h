@@ -37,8 +37,8 @@ struct SimTraineeDef {
   double drift_max_hz = 0.5;
   double hand_stiffness_N_per_m = 400;
   double hand_time_constant_s = 0.05;
-  // Empty when valid, else a one-line reason naming the field.
-  std::string Validate() const;
+  // Throws std::invalid_argument("field: reason") (the contract of every Def's Validate()).
+  void Validate() const;
 };
 
 class SimTrainee final : public Device {

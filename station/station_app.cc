@@ -136,7 +136,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   SimTraineeDef trainee_def;
   trainee_def.skill = o.skill;
   trainee_def.seed = o.seed;
-  if (std::string why = trainee_def.Validate(); !why.empty()) throw std::runtime_error(why);
+  trainee_def.Validate();
   SimTrainee device(scene, trainee_def);
 
   bool realtime = false;

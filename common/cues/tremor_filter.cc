@@ -1,6 +1,7 @@
 #include "common/cues/tremor_filter.h"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace microdex::cues {
 namespace {
@@ -34,16 +35,18 @@ Biquad MakeButterworthHighPass(double f0_hz, double fs_hz) {
   return {(1 + c) / 2 / a0, -(1 + c) / a0, (1 + c) / 2 / a0, -2 * c / a0, (1 - alpha) / a0};
 }
 
-const char* TremorFilterDef::Validate() const {
-  if (!(sample_rate_hz > 0)) return "sample_rate_hz: expected > 0";
+void TremorFilterDef::Validate() const {
+  if (!(sample_rate_hz > 0)) throw std::invalid_argument("sample_rate_hz: expected > 0");
   if (!(high_pass_hz > 0 && high_pass_hz < low_pass_hz)) {
-    return "high_pass_hz: expected 0 < high_pass_hz < low_pass_hz";
+    throw std::invalid_argument("high_pass_hz: expected 0 < high_pass_hz < low_pass_hz");
   }
-  if (!(low_pass_hz < sample_rate_hz / 2)) return "low_pass_hz: expected below Nyquist";
-  return nullptr;
+  if (!(low_pass_hz < sample_rate_hz / 2)) {
+    throw std::invalid_argument("low_pass_hz: expected below Nyquist");
+  }
 }
 
 TremorFilterModel MakeTremorFilter(const TremorFilterDef& def) {
+  def.Validate();
   return {MakeButterworthHighPass(def.high_pass_hz, def.sample_rate_hz),
           MakeButterworthLowPass(def.low_pass_hz, def.sample_rate_hz)};
 }

@@ -24,8 +24,8 @@ struct TremorFilterDef {
   double high_pass_hz = 6.0;
   double low_pass_hz = 16.0;
   double sample_rate_hz = 1000.0;
-  // Empty when valid, else a one-line reason naming the field.
-  const char* Validate() const;
+  // Throws std::invalid_argument("field: reason") (the contract of every Def's Validate()).
+  void Validate() const;
 };
 
 struct TremorFilterModel {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "common/cues/path_force_field.h"
 #include "common/cues/tremor_filter.h"
@@ -48,9 +50,15 @@ TEST(TremorFilter, RampAndConstantLeaveNoOffset) {
     y = StepTremorFilter(m, Eigen::Vector3d(1e-3 + 5e-3 * k / 1000.0, 2e-3, 3e-3), s);
   }
   EXPECT_LT(y.norm(), 1e-9) << "a 5 mm/s ramp left an offset";
-  EXPECT_EQ(def.Validate(), nullptr);
+  EXPECT_NO_THROW(def.Validate());
   def.low_pass_hz = 600;
-  EXPECT_NE(def.Validate(), nullptr);
+  try {
+    def.Validate();
+    ADD_FAILURE() << "a low-pass above Nyquist was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("low_pass_hz: ", 0), 0u) << e.what();
+  }
+  EXPECT_THROW(MakeTremorFilter(def), std::invalid_argument);
 }
 
 TEST(PathField, SpringTowardsOrAwayFromTheCircle) {

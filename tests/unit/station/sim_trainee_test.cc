@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <complex>
+#include <stdexcept>
 #include <vector>
 
 namespace microdex::station {
@@ -128,9 +129,14 @@ TEST(SimTrainee, HandYieldsToForceWithItsStiffness) {
     d = pushed.Read(k).X_WT.translation() - free_hand.Read(k).X_WT.translation();
   }
   EXPECT_LT((d - f / def.hand_stiffness_N_per_m).norm(), 1e-9);
-  EXPECT_EQ(def.Validate(), "");
+  EXPECT_NO_THROW(def.Validate());
   def.skill = 2;
-  EXPECT_NE(def.Validate().find("skill"), std::string::npos);
+  try {
+    def.Validate();
+    ADD_FAILURE() << "skill 2 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("skill: ", 0), 0u) << e.what();
+  }
 }
 
 }  // namespace
