@@ -89,7 +89,8 @@ TEST(TissueModule, PressedPointMatchesTheDiskCapacity) {
     EXPECT_LT(m.status().error_estimate, 1e-6) << "relative residual of the solve";
     // The discrete disk (grid nodes within a) and the P1 field near it set the error: of order
     // (h / a) / ln(R / a), a few per cent at cells of 0.31 and 0.16 mm.
-    EXPECT_LT(error, 0.05) << "level " << level;
+    // station/README.md states 3.2 % at level 6 and 2.3 % at level 7.
+    EXPECT_LT(error, level == 6 ? 0.033 : 0.024) << "level " << level;
     EXPECT_LT(error, previous_error) << "the error must fall as the mesh is refined";
     previous_error = error;
   }
