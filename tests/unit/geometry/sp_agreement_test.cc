@@ -352,6 +352,7 @@ TEST(SpAgreementTest, QuickCertificateAgreesWithTheFullPass) {
       "point in %ld, quick test settled %ld of %ld near-core\n",
       ok, max_diff_rel, farther_found, settled_quick, near_core);
   EXPECT_GT(settled_quick, near_core / 2);
+  EXPECT_LE(max_diff_rel, 1e-14);  // README_sp.md: 7.7e-15 R
 }
 
 // Deep contacts (the deepest point R or more from the core circle): the level sets there are
@@ -388,6 +389,7 @@ TEST(SpAgreementTest, DeepContactsAreCertifiedBySp) {
       by_exact, deep.ok, by_exact_within_10r, within_10r);
   EXPECT_GT(within_10r, kSmallSetCases / 4);
   EXPECT_LT(by_exact_within_10r, within_10r / 50);
+  EXPECT_LE(deep.max_error_rel, 1e-13);  // README_sp.md: 8.5e-14 R
 }
 
 TEST(SpAgreementTest, InvariantUnderRigidMotionAndUniformScaling) {
