@@ -1,6 +1,7 @@
 #include "station/haptic_loop.h"
 
 #include <cmath>
+#include <thread>
 
 #include "common/base/check.h"
 #include "common/state/state_hash.h"
@@ -50,7 +51,13 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
   s.has_state_hash = config_.hash_period_steps > 0 &&
                      step % static_cast<std::uint64_t>(config_.hash_period_steps) == 0;
   s.state_hash = s.has_state_hash ? state::CalcStateHash(state_) : 0;
-  if (!rings_.snapshots.TryPush(s)) ring_dropped_.fetch_add(1, std::memory_order_relaxed);
+  while (!rings_.snapshots.TryPush(s)) {
+    if (!config_.wait_for_ring) {
+      ring_dropped_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    }
+    std::this_thread::yield();  // unpaced only: the publisher drains the ring
+  }
 }
 
 void HapticLoop::Run(const std::atomic<bool>& stop, std::uint64_t max_steps) {

@@ -39,6 +39,10 @@ struct HapticLoopConfig {
   // The state hash is taken after every step whose index is a multiple of this (1000: once
   // a second at 1 kHz, the telemetry's hash); 0: never.
   int hash_period_steps = 1000;
+  // Unpaced runs only (--unpaced, not real time): when the snapshot ring is full the haptic
+  // thread yields until the publisher has drained it, so that no snapshot is lost and the final
+  // score is the last step's. Paced runs drop and count (ring_dropped) instead of waiting.
+  bool wait_for_ring = false;
 };
 
 class HapticLoop {

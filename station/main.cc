@@ -48,6 +48,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--mirror-rate", o.mirror_rate_hz, "rate of the mirrored state topics, Hz");
   microdex::net::AddDdsOptions(app, o.dds);
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
+  app.add_flag("--unpaced", o.unpaced,
+               "step as fast as possible in simulated time (same results as paced)");
   app.add_flag("--window", window, "open a view window (not available in this build)");
   app.add_option("--screenshot", screenshot_unused, "(not available in this build)");
   app.add_option("--security", security_unused, "(not available in this build)");

@@ -123,6 +123,7 @@ std::string StationOptions::Validate() const {
   }
   if (!(skill >= 0 && skill <= 1)) return "--skill: expected 0..1";
   if (!(duration_s >= 0) || !std::isfinite(duration_s)) return "--duration: expected >= 0 s";
+  if (unpaced && !(duration_s > 0)) return "--unpaced: needs --duration S (simulated seconds)";
   if (station_id.empty() || station_id.size() > 64) return "--station-id: expected 1..64 chars";
   if (station_id == "all") return "--station-id: 'all' is reserved for cues to every station";
   if (trainee.size() > 128) return "--trainee: longer than 128 characters";
@@ -149,18 +150,23 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   }
 
   StationRings rings;
-  rt::MonotonicClock clock;
+  // Paced: absolute 1 kHz deadlines on the monotonic clock. Unpaced: a clock that jumps to each
+  // deadline, so the loop runs as fast as it can in simulated time.
+  rt::MonotonicClock wall_clock;
+  rt::ManualClock unpaced_clock(wall_clock.NowNs());
+  rt::Clock& clock = o.unpaced ? static_cast<rt::Clock&>(unpaced_clock) : wall_clock;
   // The modules write their large frames once per mirror period.
   const int frame_period_steps =
       static_cast<int>(std::max(1L, std::lround(scene.haptic.rate_hz / o.mirror_rate_hz)));
   HapticLoopConfig lc;
   lc.seed = o.seed;
   lc.frame_period_steps = frame_period_steps;
+  lc.wait_for_ring = o.unpaced;
   HapticLoop loop(scene, device, rings, clock, lc);
 
   PublisherConfig pc;
   pc.station_id = o.station_id;
-  pc.session_id = o.station_id + "-" + std::to_string(clock.RealtimeNs() / 1'000'000) + "-" +
+  pc.session_id = o.station_id + "-" + std::to_string(wall_clock.RealtimeNs() / 1'000'000) + "-" +
                   std::to_string(getpid());
   pc.session_id = pc.session_id.substr(0, 64);
   pc.trainee = o.trainee;
@@ -178,7 +184,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   std::atomic<bool> fifo{false};
   std::string fifo_why;
   std::thread haptic([&] {
-    if (o.realtime) fifo = rt::MakeThisThreadFifo(kHapticPriority, &fifo_why);
+    if (o.realtime && !o.unpaced) fifo = rt::MakeThisThreadFifo(kHapticPriority, &fifo_why);
     loop.Run(haptic_stop, max_steps);
     haptic_done = true;
   });
@@ -186,7 +192,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   // on its WaitSet almost always, and waking promptly after each tick keeps the age of the
   // published state small on a loaded machine.
   std::thread pub_thread([&] {
-    if (o.realtime) {
+    if (o.realtime && !o.unpaced) {
       std::string why;
       if (!rt::MakeThisThreadFifo(kPublisherPriority, &why)) {
         spdlog::warn("publisher thread not SCHED_FIFO: {}", why);
@@ -202,7 +208,9 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   haptic.join();
   publisher.RequestStop();
   pub_thread.join();
-  if (o.realtime && !fifo) spdlog::warn("haptic thread not SCHED_FIFO: {}", fifo_why);
+  if (o.realtime && !o.unpaced && !fifo) {
+    spdlog::warn("haptic thread not SCHED_FIFO: {}", fifo_why);
+  }
   const bool rt_ok = realtime && fifo;
   spdlog::info("station {}: {} steps, score {:.1f}, period p99 {:.3f} ms, overruns {}, dropped {}",
                o.station_id, loop.step(), publisher.final_score().score,

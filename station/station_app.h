@@ -21,6 +21,10 @@ struct StationOptions {
   std::string score_out;  // JSON file written at the end ("" none)
   double mirror_rate_hz = 60;
   bool realtime = true;  // try SCHED_FIFO + mlockall
+  // Step as fast as the machine allows, without the 1 kHz pacing (reports, tests): the same
+  // scene, skill, seed and duration (in simulated seconds) give the same steps, score and state
+  // hash as a paced run. Not real time: the haptic thread may wait for the publisher.
+  bool unpaced = false;
   net::DdsOptions dds;
   // Empty when valid; otherwise a one-line reason naming the option.
   std::string Validate() const;

@@ -93,6 +93,46 @@ TEST(AppCli, StationNamesFileLineAndFieldOfABadScene) {
                      "\n");
 }
 
+// The same scene, skill, seed and simulated duration give the same steps, score and state hash
+// whether the station is paced at 1 kHz or runs unpaced as fast as it can.
+TEST(AppCli, UnpacedRunEqualsPacedRun) {
+  const std::string dir = ::testing::TempDir();
+  const auto run = [&](bool unpaced, const std::string& out) {
+    std::vector<std::string> args = {"--scene",
+                                     kScene,
+                                     "--skill",
+                                     "0.3",
+                                     "--seed",
+                                     "7",
+                                     "--duration",
+                                     "2",
+                                     "--score-out",
+                                     out,
+                                     "--no-realtime",
+                                     "--station-id",
+                                     unpaced ? "unpaced" : "paced"};
+    if (unpaced) args.push_back("--unpaced");
+    const Outcome o = RunApp("microdex-station", args);
+    EXPECT_EQ(o.status, 0) << o.output;
+    return testing::ReadFile(out);
+  };
+  const std::string paced = run(false, dir + "/paced.json");
+  const std::string unpaced = run(true, dir + "/unpaced.json");
+  const auto field = [](const std::string& json, const std::string& key) {
+    const size_t at = json.find("\"" + key + "\": ");
+    if (at == std::string::npos) return std::string("(missing)");
+    const size_t from = at + key.size() + 4;
+    return json.substr(from, json.find_first_of(",\n", from) - from);
+  };
+  for (const char* key : {"steps", "score", "contacts", "time_in_contact_s", "mean_clearance_m",
+                          "tremor_rms_m", "state_hash"}) {
+    EXPECT_NE(field(paced, key), "(missing)") << key;
+    EXPECT_EQ(field(paced, key), field(unpaced, key)) << key;
+  }
+  EXPECT_EQ(field(paced, "steps"), "2000");
+  ExpectBadInput("microdex-station", {"--scene", kScene, "--unpaced"}, "--unpaced");
+}
+
 TEST(AppCli, InstructorRefusesBadInput) {
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:vortex:3"}, "vortex");
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:tremor"}, "STATION:KIND");
