@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 namespace microdex::geometry {
 namespace {
@@ -59,9 +60,8 @@ const char* FindArcTorusInputError(const ArcDef& arc, const TorusSegmentDef& tor
   return nullptr;
 }
 
-std::string ValidateArcTorus(const ArcDef& arc, const TorusSegmentDef& torus) {
-  const char* error = FindArcTorusInputError(arc, torus);
-  return error == nullptr ? std::string() : std::string(error);
+void ValidateArcTorus(const ArcDef& arc, const TorusSegmentDef& torus) {
+  if (const char* error = FindArcTorusInputError(arc, torus)) throw std::invalid_argument(error);
 }
 
 ArcInTorusFrame CalcArcInTorusFrame(const ArcDef& arc, const TorusSegmentDef& torus) {

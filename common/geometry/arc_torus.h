@@ -43,8 +43,10 @@ struct ArcTorusClearance {
   Eigen::Vector3d p_WB = Eigen::Vector3d::Zero();  // B: the tube-wall point nearest to D, in world
 };
 
-// Empty when (arc, torus) is a valid query; otherwise a one-line reason naming the field.
-std::string ValidateArcTorus(const ArcDef& arc, const TorusSegmentDef& torus);
+// The Defs' contract (README "Errors"): throws std::invalid_argument whose message starts with
+// the field ("ArcDef.radius_m: expected ..."); the pair is validated together because some
+// limits relate the two (the needle's scale and distance against the vessel's).
+void ValidateArcTorus(const ArcDef& arc, const TorusSegmentDef& torus);
 
 // The same check without allocation, for the per-query hot path: nullptr when valid,
 // otherwise a static one-line reason naming the field.

@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 
 #include "tests/unit/geometry/brute_force_clearance.h"
 #include "tests/unit/geometry/random_arc_torus.h"
@@ -435,9 +436,9 @@ TEST(ArcTorusExact, InvalidInputIsReported) {
     EXPECT_EQ(out.status, ClearanceStatus::kInvalidInput) << what;
     EXPECT_TRUE(std::isnan(out.clearance_m)) << what;
     EXPECT_FALSE(out.contact) << what;
-    EXPECT_FALSE(ValidateArcTorus(c.arc, c.torus).empty()) << what;
+    EXPECT_THROW(ValidateArcTorus(c.arc, c.torus), std::invalid_argument) << what;
   };
-  EXPECT_TRUE(ValidateArcTorus(good.arc, good.torus).empty());
+  EXPECT_NO_THROW(ValidateArcTorus(good.arc, good.torus));
   RandomArcTorus c = good;
   c.arc.radius_m = nan;
   expect_invalid(c, "nan needle radius");
