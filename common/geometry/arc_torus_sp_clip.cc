@@ -1,6 +1,5 @@
 #include "common/geometry/arc_torus_sp_clip.h"
 
-#include <algorithm>
 #include <cmath>
 
 namespace microdex::geometry::sp {
