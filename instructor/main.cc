@@ -1,14 +1,12 @@
 // microdex-instructor: the instructor console, headless text view (README.md
 // "Command-line contracts").
-#include <pthread.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <thread>
 
-#include "common/net/dds_cli.h"
+#include "common/net/app_cli.h"
 #include "instructor/cue_spec.h"
 #include "instructor/instructor.h"
 
@@ -19,11 +17,7 @@ std::atomic<bool> g_stop{false};
 // Errors are caught around parsing and the run; what could escape is an allocation failure
 // while setting up, which ends the process as it should.
 int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  const microdex::net::StopSignals stop_signals;
 
   using namespace microdex;
   instructor::InstructorOptions o;
@@ -74,11 +68,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 2;
   }
 
-  std::thread([&] {
-    int sig = 0;
-    sigwait(&signals, &sig);
-    g_stop = true;
-  }).detach();
+  stop_signals.Watch(g_stop);
 
   try {
     instructor::Instructor console(o);

@@ -1,14 +1,12 @@
 // microdex-station: one trainee station (README.md "Command-line contracts").
-#include <pthread.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <csignal>
+#include <atomic>
 #include <cstdio>
-#include <thread>
 
-#include "common/net/dds_cli.h"
+#include "common/net/app_cli.h"
 #include "station/station_app.h"
 
 namespace {
@@ -20,13 +18,7 @@ std::atomic<bool> g_stop{false};
 // Errors are caught around parsing and the run; what could escape is an allocation failure
 // while setting up, which ends the process as it should.
 int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
-  // SIGINT/SIGTERM are blocked in every thread (the DDS threads inherit the mask) and taken
-  // by one watcher thread that only sets the stop flag.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  const microdex::net::StopSignals stop_signals;
 
   microdex::station::StationOptions o;
   o.station_id = "station-" + std::to_string(getpid());
@@ -70,12 +62,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   }
   spdlog::set_pattern("[%H:%M:%S.%e] [station] [%l] %v");
 
-  std::thread watcher([&] {
-    int sig = 0;
-    sigwait(&signals, &sig);
-    g_stop = true;
-  });
-  watcher.detach();  // it ends with the process; it only ever sets the flag
+  stop_signals.Watch(g_stop);
   try {
     return microdex::station::RunStation(o, g_stop);
   } catch (const std::exception& e) {

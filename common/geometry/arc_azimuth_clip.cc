@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 
@@ -131,6 +132,22 @@ AzimuthIntervals CalcAzimuthIntervals(const ArcInTorusFrame& arc, double segment
     out.end[i] = pieces[i].hi;
   }
   return out;
+}
+
+bool StartClippedQuery(const ArcDef& arc, const TorusSegmentDef& torus, ArcInTorusFrame& frame,
+                       AzimuthIntervals& intervals, ArcTorusClearance& out) {
+  out.clearance_m = std::numeric_limits<double>::quiet_NaN();
+  if (FindArcTorusInputError(arc, torus) != nullptr) {
+    out.status = ClearanceStatus::kInvalidInput;
+    return false;
+  }
+  frame = CalcArcInTorusFrame(arc, torus);
+  intervals = CalcAzimuthIntervals(frame, torus.segment_angle_rad);
+  if (intervals.count == 0) {
+    out.status = ClearanceStatus::kEmptyRange;
+    return false;
+  }
+  return true;
 }
 
 }  // namespace microdex::geometry

@@ -46,4 +46,11 @@ struct AzimuthIntervals {
 // Isolated points (the arc grazing a bounding plane from outside) are dropped.
 AzimuthIntervals CalcAzimuthIntervals(const ArcInTorusFrame& arc, double segment_angle_rad);
 
+// The start of every query restricted to the azimuth range (the exact method and the clipped
+// sampler): checks the input, puts the arc in the torus frame and clips it. Returns false when
+// there is nothing to solve, with out.status kInvalidInput or kEmptyRange; out.clearance_m is
+// NaN either way.
+bool StartClippedQuery(const ArcDef& arc, const TorusSegmentDef& torus, ArcInTorusFrame& frame,
+                       AzimuthIntervals& intervals, ArcTorusClearance& out);
+
 }  // namespace microdex::geometry

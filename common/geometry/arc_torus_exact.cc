@@ -702,16 +702,10 @@ ArcTorusClearance MakeArcTorusClearance(const TorusSegmentDef& torus, const ArcI
 ArcTorusClearance CalcArcTorusClearanceExact(const ArcDef& arc, const TorusSegmentDef& torus,
                                              ExactDiagnostics* diagnostics) {
   ArcTorusClearance out;
-  out.clearance_m = kNaN;
-  if (FindArcTorusInputError(arc, torus) != nullptr) {
-    out.status = ClearanceStatus::kInvalidInput;
-    return out;
-  }
-  const ArcInTorusFrame frame = CalcArcInTorusFrame(arc, torus);
-  const AzimuthIntervals intervals = CalcAzimuthIntervals(frame, torus.segment_angle_rad);
-  if (intervals.count == 0) {
-    out.status = ClearanceStatus::kEmptyRange;
-    if (diagnostics != nullptr) *diagnostics = {};
+  ArcInTorusFrame frame;
+  AzimuthIntervals intervals;
+  if (!StartClippedQuery(arc, torus, frame, intervals, out)) {
+    if (out.status == ClearanceStatus::kEmptyRange && diagnostics != nullptr) *diagnostics = {};
     return out;
   }
   const Curve curve = MakeCurve(frame);

