@@ -392,7 +392,7 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
     }
     if (v.thread.latest) {
       std::snprintf(part, sizeof part, "%sstr %.1f%% %.2fN", state.empty() ? "" : " ",
-                    v.thread.latest->max_strain * 1e2, v.thread.latest->f_grasp_W.norm());
+                    v.thread.latest->max_strain * 1e2, v.thread.latest->f_T_W.norm());
       state += part;
     }
     if (v.tissue.latest) {

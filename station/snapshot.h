@@ -46,7 +46,7 @@ struct ThreadFrame {
   std::array<Vec3, kMaxFrameThreadNodes> p_W{};  // node positions, world, m
   double max_strain = 0;
   int grasped_node = -1;
-  Vec3 f_grasp_W{};  // thread on the tool, N
+  Vec3 f_T_W{};  // thread on the tool, N
 };
 
 // The tissue module's mirrored state: the displacement field on the display grid.

@@ -319,7 +319,7 @@ void StationPublisher::PublishFrames() {
     for (int i = 0; i < f.num_nodes; ++i) t.nodes[i] = E(f.p_W[i]);
     t.max_strain = f.max_strain;
     t.grasped_node = f.grasped_node;
-    t.f_grasp_W = E(f.f_grasp_W);
+    t.f_T_W = E(f.f_T_W);
     t.knot = knot_;
     net::ToMsg(t, w_->thread_msg);
     w_->thread->write(&w_->thread_msg);

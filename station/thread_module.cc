@@ -91,8 +91,8 @@ void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
   thread::SetGraspTarget(t.thread, tool_slot_, in.X_WT.translation(), roll_rad);
   thread::StepThread(model_, std::span<const thread::Collider>(colliders_.data(), num_colliders_),
                      ws_, t.thread);
-  t.f_tool_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
-  f_T_W += t.f_tool_W;
+  t.f_T_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
+  f_T_W += t.f_T_W;
 }
 
 ModuleStatus ThreadModule::Status(const state::StationState& s) const {
@@ -118,7 +118,7 @@ void ThreadModule::WriteFrame(const state::StationState& s, std::uint64_t step,
   }
   f.max_strain = t.thread.status.max_strain;
   f.grasped_node = tool_node_;
-  f.f_grasp_W = {t.f_tool_W.x(), t.f_tool_W.y(), t.f_tool_W.z()};
+  f.f_T_W = {t.f_T_W.x(), t.f_T_W.y(), t.f_T_W.z()};
   frames.thread.Publish();
 }
 

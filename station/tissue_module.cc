@@ -39,16 +39,16 @@ void TissueModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
   if (!ws_.stats.pattern_reused) ++mesh_revision_;
   // A failed step keeps the last good field and force (StepTissue), so the force stays
   // continuous; the failure is counted in the state's num_failed_steps.
-  t.f_tool_W = R_WS_ * t.tissue.f_T_S;
-  if (!t.f_tool_W.allFinite()) t.f_tool_W.setZero();
-  f_T_W += t.f_tool_W;
+  t.f_T_W = R_WS_ * t.tissue.f_T_S;
+  if (!t.f_T_W.allFinite()) t.f_T_W.setZero();
+  f_T_W += t.f_T_W;
 }
 
 ModuleStatus TissueModule::Status(const state::StationState& s) const {
   const state::TissueModuleState& t = *s.tissue;
   ModuleStatus out;
-  out.fault = t.f_tool_W.norm() > max_force_N_;
-  out.fault_value = t.f_tool_W.norm();
+  out.fault = t.f_T_W.norm() > max_force_N_;
+  out.fault_value = t.f_T_W.norm();
   out.error_estimate = ws_.stats.relative_residual;
   out.warnings = t.tissue.num_failed_steps;
   return out;

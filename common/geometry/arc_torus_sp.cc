@@ -39,16 +39,16 @@ ArcTorusClearance MakeResult(const NeedleInV& nv, const TorusSegmentDef& torus, 
   out.clearance_m = clearance;
   out.contact = clearance <= 0;
   out.s_rad = best.s;
-  const Eigen::Vector3d p_VN = nv.o + nv.rho * (best.cos_s * nv.e1 + best.sin_s * nv.e2);
-  out.p_WD = torus.X_WV * p_VN;
+  const Eigen::Vector3d p_VD = nv.o + nv.rho * (best.cos_s * nv.e1 + best.sin_s * nv.e2);
+  out.p_WD = torus.X_WV * p_VD;
   // Nearest wall point: along the ray from the nearest core point through the needle point,
   // whose distance from it is dist (f was evaluated at this very point).
-  const double w = std::sqrt(p_VN.x() * p_VN.x() + p_VN.y() * p_VN.y());
+  const double w = std::sqrt(p_VD.x() * p_VD.x() + p_VD.y() * p_VD.y());
   const double inv_w = 1 / w, inv_dist = 1 / dist;
   const Eigen::Vector3d radial =
-      w > 0 ? Eigen::Vector3d(p_VN.x() * inv_w, p_VN.y() * inv_w, 0) : Eigen::Vector3d::UnitX();
+      w > 0 ? Eigen::Vector3d(p_VD.x() * inv_w, p_VD.y() * inv_w, 0) : Eigen::Vector3d::UnitX();
   const Eigen::Vector3d core_pt = core_r * radial;
-  const Eigen::Vector3d dir = dist > 0 ? Eigen::Vector3d((p_VN - core_pt) * inv_dist) : radial;
+  const Eigen::Vector3d dir = dist > 0 ? Eigen::Vector3d((p_VD - core_pt) * inv_dist) : radial;
   out.p_WB = torus.X_WV * Eigen::Vector3d(core_pt + tube_r * dir);
   return out;
 }

@@ -431,7 +431,7 @@ void ToMsg(const ThreadState& in, msg::ThreadState& out) {
   out.knot(in.knot);
   out.max_strain(in.max_strain);
   out.grasped_node(in.grasped_node);
-  out.f_grasp_W(V(in.f_grasp_W));
+  out.f_T_W(V(in.f_T_W));
 }
 
 bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
@@ -440,7 +440,7 @@ bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
   if (in.nodes().size() > kMaxThreadNodes) c.Fail("nodes: more than kMaxThreadNodes");
   c.String(S(in.knot()), kMaxModuleNameLength, "knot");
   c.Finite(in.max_strain(), "max_strain");
-  c.Finite(in.f_grasp_W(), "f_grasp_W");
+  c.Finite(in.f_T_W(), "f_T_W");
   if (in.grasped_node() < -1 || in.grasped_node() >= static_cast<std::int32_t>(in.nodes().size())) {
     c.Fail("grasped_node: expected -1 or a node index");
   }
@@ -456,7 +456,7 @@ bool FromMsg(const msg::ThreadState& in, ThreadState& out, std::string* why) {
   out.knot = S(in.knot());
   out.max_strain = in.max_strain();
   out.grasped_node = in.grasped_node();
-  out.f_grasp_W = V(in.f_grasp_W());
+  out.f_T_W = V(in.f_T_W());
   return c.ok();
 }
 

@@ -74,11 +74,11 @@ struct NeedleState {
 
 struct ThreadState {
   Header header;
-  std::vector<Eigen::Vector3d> nodes;                   // world, m; at most kMaxThreadNodes
-  std::string knot;                                     // "" while not recognised yet
-  double max_strain = 0;                                // max |l − r| / r over the links
-  std::int32_t grasped_node = -1;                       // -1: none
-  Eigen::Vector3d f_grasp_W = Eigen::Vector3d::Zero();  // thread on the tool, N
+  std::vector<Eigen::Vector3d> nodes;               // world, m; at most kMaxThreadNodes
+  std::string knot;                                 // "" while not recognised yet
+  double max_strain = 0;                            // max |l − r| / r over the links
+  std::int32_t grasped_node = -1;                   // -1: none
+  Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // thread on the tool, N
 };
 
 // The tissue step's status (fem::TissueStatus, enumerator for enumerator).

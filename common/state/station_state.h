@@ -111,13 +111,13 @@ struct TremorState {
 // The suture-thread module.
 struct ThreadModuleState {
   thread::ThreadState thread;
-  Eigen::Vector3d f_tool_W = Eigen::Vector3d::Zero();  // thread on the tool, saturated, N
+  Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // thread on the tool, saturated, N
 };
 
 // The tissue module.
 struct TissueModuleState {
   fem::TissueState tissue;
-  Eigen::Vector3d f_tool_W = Eigen::Vector3d::Zero();  // tissue on the tool, N (unsaturated)
+  Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // tissue on the tool, N (unsaturated)
 };
 
 struct StationState {

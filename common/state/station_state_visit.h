@@ -154,7 +154,7 @@ void Thread(S& m, V& v) {
   v("thread.status.num_friction_contacts", &s.num_friction_contacts, 1);
   v("thread.status.num_sliding_contacts", &s.num_sliding_contacts, 1);
   v("thread.status.max_strain", &s.max_strain, 1);
-  Matrix("thread.f_tool_W", m.f_tool_W, v);
+  Matrix("thread.f_T_W", m.f_T_W, v);
 }
 
 template <typename S, typename V>
@@ -183,7 +183,7 @@ void Tissue(S& m, V& v) {
   Matrix("tissue.tau_T_S", t.tau_T_S, v);
   Enum("tissue.status", t.status, v);
   v("tissue.num_failed_steps", &t.num_failed_steps, 1);
-  Matrix("tissue.f_tool_W", m.f_tool_W, v);
+  Matrix("tissue.f_T_W", m.f_T_W, v);
 }
 
 // An optional section: its presence flag, then its fields when present.

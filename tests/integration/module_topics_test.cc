@@ -174,7 +174,7 @@ TEST(ModuleTopics, StationsPublishOnlyTheirModulesTopics) {
       max_strain = std::max(max_strain, std::abs(l - rest_m) / rest_m);
     }
     EXPECT_NEAR(t.max_strain(), max_strain, 1e-9);
-    const double f = std::hypot(t.f_grasp_W()[0], t.f_grasp_W()[1], t.f_grasp_W()[2]);
+    const double f = std::hypot(t.f_T_W()[0], t.f_T_W()[1], t.f_T_W()[2]);
     EXPECT_LE(f, 2.0);
   }
   EXPECT_EQ(std::string(threads["mt-thread"].back().knot().c_str()), "none");

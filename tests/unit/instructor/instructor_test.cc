@@ -72,7 +72,7 @@ TEST(Instructor, PresenceMirrorsDepartureAndLivelinessLoss) {
   thread.knot = "none";
   thread.max_strain = 0.012;
   thread.grasped_node = 1;
-  thread.f_grasp_W = {-0.03, 0, 0};
+  thread.f_T_W = {-0.03, 0, 0};
   net::TissueState tissue;
   tissue.header = {"st-a", "st-a-session", 16, 2};
   tissue.length_x_m = tissue.length_y_m = 0.02;

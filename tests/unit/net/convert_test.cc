@@ -138,7 +138,7 @@ TEST(NetConvert, ThreadStateBoundIsEnforcedOnReceipt) {
   in.knot = "square";
   in.max_strain = 0.012;
   in.grasped_node = static_cast<std::int32_t>(kMaxThreadNodes) - 1;
-  in.f_grasp_W = Eigen::Vector3d(0.1, -0.2, 0.3);
+  in.f_T_W = Eigen::Vector3d(0.1, -0.2, 0.3);
   msg::ThreadState m;
   ToMsg(in, m);
   ThreadState out;
@@ -147,16 +147,16 @@ TEST(NetConvert, ThreadStateBoundIsEnforcedOnReceipt) {
   EXPECT_EQ(out.knot, "square");
   EXPECT_EQ(out.max_strain, in.max_strain);
   EXPECT_EQ(out.grasped_node, in.grasped_node);
-  EXPECT_EQ(out.f_grasp_W, in.f_grasp_W);
+  EXPECT_EQ(out.f_T_W, in.f_T_W);
   std::string why;
   m.grasped_node(static_cast<std::int32_t>(kMaxThreadNodes));  // not a node
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("grasped_node"), std::string::npos) << why;
   m.grasped_node(-1);
-  m.f_grasp_W({0, std::nan(""), 0});
+  m.f_T_W({0, std::nan(""), 0});
   EXPECT_FALSE(FromMsg(m, out, &why));
-  EXPECT_NE(why.find("f_grasp_W"), std::string::npos) << why;
-  m.f_grasp_W({0, 0, 0});
+  EXPECT_NE(why.find("f_T_W"), std::string::npos) << why;
+  m.f_T_W({0, 0, 0});
   m.nodes().push_back(m.nodes().back());  // one over the bound
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("nodes"), std::string::npos) << why;

@@ -107,7 +107,7 @@ ThreadState MakeThreadState() {
   m.knot("square");
   m.max_strain(0.01);
   m.grasped_node(99);
-  m.f_grasp_W({0.1, 0.2, -0.3});
+  m.f_T_W({0.1, 0.2, -0.3});
   return m;
 }
 

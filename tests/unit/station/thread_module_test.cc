@@ -130,7 +130,7 @@ TEST(ThreadModule, FrameCarriesTheNodes) {
   }
   EXPECT_EQ(f.grasped_node, f.num_nodes - 1);
   EXPECT_EQ(f.max_strain, m.Status(s).error_estimate);
-  EXPECT_EQ(f.f_grasp_W[0], s.thread->f_tool_W.x());
+  EXPECT_EQ(f.f_T_W[0], s.thread->f_T_W.x());
 }
 
 TEST(ThreadModule, SlackThreadStartsAsAnArcOfRestLengthLinks) {
