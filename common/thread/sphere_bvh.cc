@@ -413,42 +413,122 @@ int FindCollisionOnStack(const SphereBvhTopology& t, const float* s, SphereBvhNo
   return count;
 }
 
-}  // namespace
+// FindSelfCollisions' traversal: its rings, its output and the stages that fill them.
+class SelfCollisionTraversal {
+ public:
+  SelfCollisionTraversal(const SphereBvhTopology& t, SphereBvhSpheres& spheres, LinkPair* pairs,
+                         int capacity)
+      : t_(t),
+        sphere_(spheres.xyzr.data()),
+        sphere_bytes_(reinterpret_cast<const char*>(sphere_)),
+        node_bytes_(reinterpret_cast<const char*>(t.traversal.data())),
+        ring_(spheres.queue.data()),
+        small_ring_(spheres.small_queue.data()),
+        ring_size_(static_cast<unsigned>(spheres.queue.size())),
+        small_size_(static_cast<unsigned>(spheres.small_queue.size())),
+        pairs_(pairs),
+        capacity_(capacity) {}
 
-int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, LinkPair* pairs,
-                       int capacity) {
-  const float* sphere = spheres.xyzr.data();
-  const char* sphere_bytes = reinterpret_cast<const char*>(sphere);
-  const char* node_bytes = reinterpret_cast<const char*>(t.traversal.data());
-  auto record = [&](std::uint32_t offset) -> const SphereBvhTraversalNode& {
-    return *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes + offset);
-  };
-  SphereBvhNodePair* ring = spheres.queue.data();
-  SphereBvhNodePair* small_ring = spheres.small_queue.data();
-  const unsigned ring_size = static_cast<unsigned>(spheres.queue.size());
-  const unsigned small_size = static_cast<unsigned>(spheres.small_queue.size());
-  unsigned head = 0, tail = 0, small_head = 0, small_tail = 0;
-  int count = 0;
+  int count() const { return count_; }
 
-  auto overlap = [&](SphereBvhNodePair pq) -> unsigned {
+  // The starting leaf pairs (neighbours of neighbours along the chain): test and write.
+  void TestStartLeafPairs() {
+    const SphereBvhNodePair* leaf_pairs = t_.self_leaf_pairs.data();
+    const unsigned num_leaf_pairs = static_cast<unsigned>(t_.self_leaf_pairs.size());
+    for (unsigned k = 0; k < num_leaf_pairs;) {
+      const unsigned run = std::min(num_leaf_pairs - k, FreePairs());
+      for (const unsigned end = k + run; k < end; ++k) {
+        const std::uint32_t p = static_cast<std::uint32_t>(leaf_pairs[k]);
+        const std::uint32_t q = static_cast<std::uint32_t>(leaf_pairs[k] >> 32);
+        pairs_[count_] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
+        count_ += Overlap(reinterpret_cast<const float*>(sphere_bytes_ + p),
+                          reinterpret_cast<const float*>(sphere_bytes_ + q))
+                      ? 1
+                      : 0;
+      }
+      if (run == 0) {  // `pairs` is full: count only
+        count_ +=
+            Overlap(sphere_, NodePairFirst(leaf_pairs[k]), NodePairSecond(leaf_pairs[k])) ? 1 : 0;
+        ++k;
+      }
+    }
+  }
+
+  // The starting node pairs into the ring, those that overlap; with the ring full, a pair is
+  // finished depth first on the stack.
+  void QueueStartPairs() {
+    const SphereBvhNodePair* start = t_.self_pairs.data();
+    const unsigned num_start = static_cast<unsigned>(t_.self_pairs.size());
+    for (unsigned k = 0; k < num_start;) {
+      const unsigned run = std::min(num_start - k, ring_size_ - (tail_ - head_));
+      if (run == 0) {
+        count_ = FindCollisionOnStack(t_, sphere_, start[k++], pairs_, capacity_, count_);
+        continue;
+      }
+      for (const unsigned end = k + run; k < end; ++k) {
+        ring_[tail_ & (ring_size_ - 1)] = start[k];
+        tail_ += Overlaps(start[k]);
+      }
+    }
+  }
+
+  // Breadth first, in runs that cannot overflow either ring. A full small ring is drained;
+  // with the main ring full, one pair is finished depth first on the stack.
+  void DrainRing() {
+    while (head_ != tail_) {
+      const unsigned run = RunLength(tail_ - head_);
+      if (run == 0) {  // the pair overlaps: the stack's first test repeats that
+        count_ = FindCollisionOnStack(t_, sphere_, ring_[head_++ & (ring_size_ - 1)], pairs_,
+                                      capacity_, count_);
+        continue;
+      }
+      for (const unsigned end = head_ + run; head_ != end; ++head_) {
+        Split(ring_[head_ & (ring_size_ - 1)]);
+      }
+    }
+  }
+
+  // The small pairs pushed: their leaf pairs tested four at a time.
+  void DrainSmall() {
+    while (small_head_ != small_tail_) {
+      const unsigned run = std::min(small_tail_ - small_head_, FreePairs() / 4);
+      if (run == 0) {
+        TestSmallPair(small_ring_[small_head_++ & (small_size_ - 1)], true);
+        continue;
+      }
+      for (const unsigned end = small_head_ + run; small_head_ != end; ++small_head_) {
+        TestSmallPair(small_ring_[small_head_ & (small_size_ - 1)], false);
+      }
+    }
+  }
+
+ private:
+  unsigned FreePairs() const { return static_cast<unsigned>(std::max(capacity_ - count_, 0)); }
+
+  const SphereBvhTraversalNode& Record(std::uint32_t offset) const {
+    return *reinterpret_cast<const SphereBvhTraversalNode*>(node_bytes_ + offset);
+  }
+
+  unsigned Overlaps(SphereBvhNodePair pq) const {
     return Overlap(
-               reinterpret_cast<const float*>(sphere_bytes + static_cast<std::uint32_t>(pq)),
-               reinterpret_cast<const float*>(sphere_bytes + static_cast<std::uint32_t>(pq >> 32)))
+               reinterpret_cast<const float*>(sphere_bytes_ + static_cast<std::uint32_t>(pq)),
+               reinterpret_cast<const float*>(sphere_bytes_ + static_cast<std::uint32_t>(pq >> 32)))
                ? 1u
                : 0u;
-  };
+  }
+
   // One FindCollision step on a pair already found to overlap, with a node of more than two
   // links: split it and test its two children, keeping those that overlap; children with both
   // nodes small go to the small ring untested (their leaf pairs are tested there). A miss costs
   // one test and nothing else, as the pairs are tested where they are made. No branch depends
   // on a test, so successive tests overlap in the processor. Needs two free slots in each ring.
-  auto step = [&](SphereBvhNodePair pq) {
+  void Split(SphereBvhNodePair pq) {
     const std::uint32_t p = static_cast<std::uint32_t>(pq);
     const std::uint32_t q = static_cast<std::uint32_t>(pq >> 32);
     // Split p (first) or q; the other keeps its half of the packed pair. Arithmetic, not a
     // branch: which one is split follows no pattern the processor could predict.
-    const SphereBvhTraversalNode& np = record(p);
-    const SphereBvhTraversalNode& nq = record(q);
+    const SphereBvhTraversalNode& np = Record(p);
+    const SphereBvhTraversalNode& nq = Record(q);
     const unsigned first = DescendFirst(np.size, nq.size) ? 1u : 0u;
     const unsigned child_shift = 32 * (first ^ 1u);
     const std::uint64_t keep = pq & (std::uint64_t{0xffffffffu} << (32 * first));
@@ -456,28 +536,29 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
         static_cast<unsigned>(np.size) ^
         ((static_cast<unsigned>(np.size) ^ static_cast<unsigned>(nq.size)) & (0u - first));
     const unsigned keep_small = keep_size <= kSmall ? 1u : 0u;
-    const SphereBvhTraversalNode& split = record(static_cast<std::uint32_t>(pq >> child_shift));
+    const SphereBvhTraversalNode& split = Record(static_cast<std::uint32_t>(pq >> child_shift));
     const std::uint64_t left = keep | static_cast<std::uint64_t>(split.left_offset & ~15u)
                                           << child_shift;
     const std::uint64_t right = keep | static_cast<std::uint64_t>(split.right_offset & ~15u)
                                            << child_shift;
     const unsigned left_small = keep_small & split.left_offset;
     const unsigned right_small = keep_small & split.right_offset;
-    ring[tail & (ring_size - 1)] = left;
-    tail += (left_small ^ 1u) & overlap(left);
-    ring[tail & (ring_size - 1)] = right;
-    tail += (right_small ^ 1u) & overlap(right);
-    small_ring[small_tail & (small_size - 1)] = left;
-    small_tail += left_small;
-    small_ring[small_tail & (small_size - 1)] = right;
-    small_tail += right_small;
-  };
+    ring_[tail_ & (ring_size_ - 1)] = left;
+    tail_ += (left_small ^ 1u) & Overlaps(left);
+    ring_[tail_ & (ring_size_ - 1)] = right;
+    tail_ += (right_small ^ 1u) & Overlaps(right);
+    small_ring_[small_tail_ & (small_size_ - 1)] = left;
+    small_tail_ += left_small;
+    small_ring_[small_tail_ & (small_size_ - 1)] = right;
+    small_tail_ += right_small;
+  }
+
   // The up to four leaf pairs (a, b), (a, b + 1), (a + 1, b), (a + 1, b + 1): those of `lanes`
   // that overlap are written (the tests are the single-pair test, without branches). Needs four
   // free slots in `pairs` unless `checked`.
-  auto test_leaves = [&](int a, int b, unsigned lanes, bool checked) {
-    const float* sa = sphere + 4 * a;
-    const float* sb = sphere + 4 * b;
+  void TestLeaves(int a, int b, unsigned lanes, bool checked) {
+    const float* sa = sphere_ + 4 * a;
+    const float* sb = sphere_ + 4 * b;
     const unsigned hits = ((Overlap(sa, sb) ? 1u : 0u) | (Overlap(sa, sb + 4) ? 2u : 0u) |
                            (Overlap(sa + 4, sb) ? 4u : 0u) | (Overlap(sa + 4, sb + 4) ? 8u : 0u)) &
                           lanes;
@@ -488,86 +569,49 @@ int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, Li
     for (int lane = 0; lane < 4; ++lane) {
       const std::uint64_t value =
           base + std::bit_cast<std::uint64_t>(LinkPair{lane >> 1, lane & 1});
-      if (!checked || count < capacity) pairs[count] = std::bit_cast<LinkPair>(value);
-      count += static_cast<int>(hits >> lane) & 1;
+      if (!checked || count_ < capacity_) pairs_[count_] = std::bit_cast<LinkPair>(value);
+      count_ += static_cast<int>(hits >> lane) & 1;
     }
-  };
+  }
+
   // A pushed small pair of nodes (at most two links each, not neighbours).
-  auto small_step = [&](SphereBvhNodePair pq, bool checked) {
-    const SphereBvhTraversalNode& np = record(static_cast<std::uint32_t>(pq));
-    const SphereBvhTraversalNode& nq = record(static_cast<std::uint32_t>(pq >> 32));
-    test_leaves(np.lo, nq.lo, (np.size == 2 ? 15u : 3u) & (nq.size == 2 ? 15u : 5u), checked);
-  };
-  auto drain_small = [&]() {
-    while (small_head != small_tail) {
-      const unsigned run = std::min(small_tail - small_head,
-                                    static_cast<unsigned>(std::max(capacity - count, 0)) / 4);
-      if (run == 0) {
-        small_step(small_ring[small_head++ & (small_size - 1)], true);
-        continue;
-      }
-      for (const unsigned end = small_head + run; small_head != end; ++small_head) {
-        small_step(small_ring[small_head & (small_size - 1)], false);
-      }
-    }
-  };
-  // The starting leaf pairs: test and write.
-  const SphereBvhNodePair* leaf_pairs = t.self_leaf_pairs.data();
-  const unsigned num_leaf_pairs = static_cast<unsigned>(t.self_leaf_pairs.size());
-  for (unsigned k = 0; k < num_leaf_pairs;) {
-    const unsigned run =
-        std::min(num_leaf_pairs - k, static_cast<unsigned>(std::max(capacity - count, 0)));
-    for (const unsigned end = k + run; k < end; ++k) {
-      const std::uint32_t p = static_cast<std::uint32_t>(leaf_pairs[k]);
-      const std::uint32_t q = static_cast<std::uint32_t>(leaf_pairs[k] >> 32);
-      pairs[count] = {static_cast<int>(p >> 4), static_cast<int>(q >> 4)};
-      count += Overlap(reinterpret_cast<const float*>(sphere_bytes + p),
-                       reinterpret_cast<const float*>(sphere_bytes + q))
-                   ? 1
-                   : 0;
-    }
-    if (run == 0) {  // `pairs` is full: count only
-      count +=
-          Overlap(spheres.xyzr.data(), NodePairFirst(leaf_pairs[k]), NodePairSecond(leaf_pairs[k]))
-              ? 1
-              : 0;
-      ++k;
-    }
+  void TestSmallPair(SphereBvhNodePair pq, bool checked) {
+    const SphereBvhTraversalNode& np = Record(static_cast<std::uint32_t>(pq));
+    const SphereBvhTraversalNode& nq = Record(static_cast<std::uint32_t>(pq >> 32));
+    TestLeaves(np.lo, nq.lo, (np.size == 2 ? 15u : 3u) & (nq.size == 2 ? 15u : 5u), checked);
   }
-  // Breadth first, in runs that cannot overflow either ring: the starting pairs, then the
-  // queue. A full small ring is drained; with the main ring full, one pair is finished depth
-  // first on the stack.
-  auto run_length = [&](unsigned available) {
-    if (small_tail - small_head + 2 > small_size) drain_small();
-    const unsigned free_ring = (ring_size - (tail - head)) / 2;
-    const unsigned free_small = (small_size - (small_tail - small_head)) / 2;
+
+  // Runs of the ring that leave two free slots per pair in both rings.
+  unsigned RunLength(unsigned available) {
+    if (small_tail_ - small_head_ + 2 > small_size_) DrainSmall();
+    const unsigned free_ring = (ring_size_ - (tail_ - head_)) / 2;
+    const unsigned free_small = (small_size_ - (small_tail_ - small_head_)) / 2;
     return std::min(available, std::min(free_ring, free_small));
-  };
-  const SphereBvhNodePair* start = t.self_pairs.data();
-  const unsigned num_start = static_cast<unsigned>(t.self_pairs.size());
-  for (unsigned k = 0; k < num_start;) {
-    const unsigned run = std::min(num_start - k, ring_size - (tail - head));
-    if (run == 0) {
-      count = FindCollisionOnStack(t, sphere, start[k++], pairs, capacity, count);
-      continue;
-    }
-    for (const unsigned end = k + run; k < end; ++k) {
-      ring[tail & (ring_size - 1)] = start[k];
-      tail += overlap(start[k]);
-    }
   }
-  while (head != tail) {
-    const unsigned run = run_length(tail - head);
-    if (run == 0) {  // the pair overlaps: the stack's first test repeats that
-      count =
-          FindCollisionOnStack(t, sphere, ring[head++ & (ring_size - 1)], pairs, capacity, count);
-      continue;
-    }
-    for (const unsigned end = head + run; head != end; ++head) step(ring[head & (ring_size - 1)]);
-  }
-  // The small pairs pushed.
-  drain_small();
-  return count;
+
+  const SphereBvhTopology& t_;
+  const float* sphere_;
+  const char* sphere_bytes_;
+  const char* node_bytes_;
+  SphereBvhNodePair* ring_;
+  SphereBvhNodePair* small_ring_;
+  unsigned ring_size_, small_size_;
+  unsigned head_ = 0, tail_ = 0, small_head_ = 0, small_tail_ = 0;
+  LinkPair* pairs_;
+  int capacity_;
+  int count_ = 0;
+};
+
+}  // namespace
+
+int FindSelfCollisions(const SphereBvhTopology& t, SphereBvhSpheres& spheres, LinkPair* pairs,
+                       int capacity) {
+  SelfCollisionTraversal traversal(t, spheres, pairs, capacity);
+  traversal.TestStartLeafPairs();
+  traversal.QueueStartPairs();
+  traversal.DrainRing();
+  traversal.DrainSmall();
+  return traversal.count();
 }
 
 int FindSelfCollisionsAllPairs(const SphereBvhTopology& t, const SphereBvhSpheres& spheres,
