@@ -77,8 +77,6 @@ struct SpDiagnostics {
   bool fallback = false;          // the lifted circle was too ill-conditioned: robust path used
   bool quartic_fallback = false;  // the closed form failed its check: bracketed search used
   bool phi_constant = false;      // φ(θ) constant on the lifted circle: no isolated extrema
-  bool deep_fallback = false;     // a point ≥ R from the core circle that the quick test could
-                                  // not certify (or wall_pass_first): exact method answered
   int certify_passes = 0;         // certificate rounds against level tori: the quick test,
                                   // then a lifted pass (deep: extrema along the needle)
   int certify_improvements = 0;   // of which found a farther point than the ascent had
@@ -89,6 +87,10 @@ struct SpDiagnostics {
   int num_sign_changes = 0;       // sign changes of φ along the clipped arc (§4.2.4)
   double min_phi = 0;             // min of φ (4.28) over the clipped arc: > 0 ⇔ no contact
   double lifted_radius = 0;       // radius of the lifted circle in R⁴ (4.9)
+
+  // A point ≥ R from the core circle that the quick test could not certify (or
+  // wall_pass_first): the exact method answered.
+  bool deep_fallback() const { return decision == SpDecision::kExact; }
 };
 
 ArcTorusClearance CalcArcTorusClearanceSP(const ArcDef& arc, const TorusSegmentDef& torus,

@@ -19,7 +19,6 @@ void AddUniformCandidates(const NeedleInV& nv, double core_r, const Interval* iv
 
 ArcTorusClearance FallBackToExact(const ArcDef& arc, const TorusSegmentDef& torus,
                                   SpDiagnostics* diag) {
-  diag->deep_fallback = true;
   diag->decision = SpDecision::kExact;
   return CalcArcTorusClearanceExact(arc, torus);
 }

@@ -331,7 +331,7 @@ TEST(SpFallback, ExactFallbackIsTheExactMethodAndIsRecorded) {
   const ArcTorusClearance b = CalcArcTorusClearanceExact(c.arc, c.torus);
   EXPECT_EQ(a.status, b.status);
   EXPECT_EQ(a.clearance_m, b.clearance_m);
-  EXPECT_TRUE(diag.deep_fallback);
+  EXPECT_TRUE(diag.deep_fallback());
   EXPECT_EQ(diag.decision, SpDecision::kExact);
 }
 
@@ -353,7 +353,7 @@ TEST(SpQuery, DiagnosticsDoNotChangeTheAnswerAndNameTheDecidingStage) {
       EXPECT_EQ(diag.decision, SpDecision::kEmptyRange);
     }
     if (diag.decision == SpDecision::kExact) {
-      EXPECT_TRUE(diag.deep_fallback);
+      EXPECT_TRUE(diag.deep_fallback());
     }
   }
   EXPECT_EQ(counts[static_cast<int>(SpDecision::kThesisPass)], 0) << "the default certifies";

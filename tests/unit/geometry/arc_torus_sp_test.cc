@@ -503,7 +503,7 @@ TEST(ArcTorusSpTest, NeedleThroughTorusHole) {
   SpDiagnostics diag;
   const ArcTorusClearance sp = CalcArcTorusClearanceSP(q.arc, q.torus, {}, &diag);
   EXPECT_TRUE(sp.contact);
-  EXPECT_TRUE(diag.deep_fallback);
+  EXPECT_TRUE(diag.deep_fallback());
   ExpectAgrees(q);
   // And a small needle crossing the hole through the wall near the inner equator.
   Query q2 = MakeQuery(R, r, 1.2 * r, kPi);

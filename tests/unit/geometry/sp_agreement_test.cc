@@ -375,10 +375,10 @@ TEST(SpAgreementTest, DeepContactsAreCertifiedBySp) {
     SpDiagnostics diag;
     const ArcTorusClearance sp = CalcArcTorusClearanceSP(c.arc, c.torus, SpOptions{}, &diag);
     EXPECT_NEAR(sp.clearance_m, exact.clearance_m, kClearanceRelTol * R) << Stats::Describe(c);
-    by_exact += diag.deep_fallback;
+    by_exact += diag.deep_fallback();
     if (t < 10 * R) {
       ++within_10r;
-      by_exact_within_10r += diag.deep_fallback;
+      by_exact_within_10r += diag.deep_fallback();
     }
     if (::testing::Test::HasFailure()) break;
   }
