@@ -73,6 +73,7 @@ void HapticLoop::Run(const std::atomic<bool>& stop, std::uint64_t max_steps) {
     Tick(start, prev_start < 0 ? period_ns_ : start - prev_start, clock_.RealtimeNs(), overrun);
     prev_start = start;
     if (late > kResyncPeriods * period_ns_) deadline = start;
+    if (config_.stop_at_task_end && state_.score.outcome != 0) break;
   }
 }
 

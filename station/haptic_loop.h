@@ -43,6 +43,9 @@ struct HapticLoopConfig {
   // thread yields until the publisher has drained it, so that no snapshot is lost and the final
   // score is the last step's. Paced runs drop and count (ring_dropped) instead of waiting.
   bool wait_for_ring = false;
+  // Stop after the step at which the scene's task ends (completed or at its time limit): a
+  // simulated trainee's run is over then. A trainee at a device goes on (the scores freeze).
+  bool stop_at_task_end = true;
 };
 
 class HapticLoop {

@@ -5,37 +5,103 @@
 #include <limits>
 
 namespace microdex::station {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Ratio(double num, double den) { return den > 0 ? num / den : kNaN; }
+
+// The demos' formula (score.h, follow_path).
+double CalcFollowPathScore(const scene::SceneModel& scene, const net::Score& s,
+                           const state::ScoreState& t) {
+  const double contact_fraction = std::clamp(t.time_in_contact_s / t.time_s, 0.0, 1.0);
+  if (!scene.HasModule("needle")) return 100.0 * (1.0 - contact_fraction);
+  if (t.clearance_samples == 0) return 0;
+  const double g = std::clamp(s.mean_clearance_m / scene.vessel.tube_radius_m, 0.0, 1.0);
+  return 100.0 * (1.0 - contact_fraction) * (1.0 + g) / 2.0;
+}
+
+}  // namespace
+
+double CalcTaskPathLength(const scene::SceneModel& scene) {
+  const scene::TaskDef& t = scene.task;
+  if (t.kind == scene::TaskKind::kTremorHold) return 0;
+  const double one_pass = t.path == scene::PathKind::kLine
+                              ? (t.line_end_m - t.line_start_m).norm()
+                              : scene.needle.radius_m * (t.end_azimuth_rad - t.start_azimuth_rad);
+  return one_pass * t.passes;
+}
+
+double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& t,
+                       const std::string& metric) {
+  const auto samples = static_cast<double>(t.deviation_samples);
+  if (metric == "time_s") return t.time_s;
+  if (metric == "deviation_mean_m") return Ratio(t.deviation_sum_m, samples);
+  if (metric == "deviation_max_m") return t.deviation_max_m;
+  if (metric == "drift_m") return Ratio(t.drift_sum_m, samples);
+  if (metric == "outside_fraction") return Ratio(t.time_outside_s, t.time_s);
+  if (metric == "tremor_rms_m") {
+    return std::sqrt(Ratio(t.tremor_sq_sum_m2, static_cast<double>(t.tremor_samples)));
+  }
+  if (metric == "contact_fraction") return Ratio(t.time_in_contact_s, t.time_s);
+  if (metric == "contacts") return t.contacts;
+  if (metric == "clearance_deficit") {
+    const double mean = Ratio(t.clearance_sum_m, static_cast<double>(t.clearance_samples));
+    return 1.0 - std::clamp(mean / scene.vessel.tube_radius_m, 0.0, 1.0);
+  }
+  if (metric == "excess_path") return Ratio(t.path_length_m, CalcTaskPathLength(scene)) - 1.0;
+  if (metric == "progress_deficit") {
+    if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
+    const scene::TaskDef& task = scene.task;
+    if (task.kind == scene::TaskKind::kTremorHold) return 1.0 - t.progress;
+    return 1.0 - (t.passes_done + t.progress) / task.passes;
+  }
+  return kNaN;
+}
 
 net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& t) {
   net::Score s;
   s.duration_s = t.time_s;
   s.time_in_contact_s = t.time_in_contact_s;
   s.contacts = t.contacts;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  s.mean_clearance_m =
-      t.clearance_samples > 0 ? t.clearance_sum_m / static_cast<double>(t.clearance_samples) : nan;
-  s.min_clearance_m = t.clearance_samples > 0 ? t.min_clearance_m : nan;
+  s.mean_clearance_m = Ratio(t.clearance_sum_m, static_cast<double>(t.clearance_samples));
+  s.min_clearance_m = t.clearance_samples > 0 ? t.min_clearance_m : kNaN;
   s.path_length_m = t.path_length_m;
   s.ideal_path_length_m = t.ideal_path_length_m;
   s.tremor_rms_m = t.tremor_samples > 0
                        ? std::sqrt(t.tremor_sq_sum_m2 / static_cast<double>(t.tremor_samples))
                        : 0.0;
+  s.task = scene::TaskKindName(scene.task.kind);
+  s.outcome = t.outcome;
+  s.deviation_mean_m = Ratio(t.deviation_sum_m, static_cast<double>(t.deviation_samples));
+  s.progress = t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)
+                   ? 1.0
+                   : 1.0 - CalcScoreMetric(scene, t, "progress_deficit");
+  if (scene.task.kind == scene::TaskKind::kFollowPath) s.progress = 0;
   if (t.time_s <= 0) {
     s.score = 0;
     return s;
   }
-  const double contact_fraction = std::clamp(t.time_in_contact_s / t.time_s, 0.0, 1.0);
-  if (!scene.HasModule("needle")) {
-    // Thread and tissue tasks: the share of the time without fault.
-    s.score = 100.0 * (1.0 - contact_fraction);
+  if (scene.task.kind == scene::TaskKind::kFollowPath) {
+    s.score = CalcFollowPathScore(scene, s, t);
     return s;
   }
-  if (t.clearance_samples == 0) {
-    s.score = 0;
-    return s;
+  double points = 0, weights = 0;
+  for (const scene::ScoreTermDef& term : scene.scoring) {
+    net::ScoreTerm out;
+    out.metric = term.metric;
+    out.value = CalcScoreMetric(scene, t, term.metric);
+    out.limit = term.limit;
+    out.weight = term.weight;
+    // A metric without a value (no samples yet) earns nothing.
+    out.points = std::isfinite(out.value)
+                     ? term.weight * std::clamp(1.0 - out.value / term.limit, 0.0, 1.0)
+                     : 0.0;
+    points += out.points;
+    weights += term.weight;
+    s.terms.push_back(out);
   }
-  const double g = std::clamp(s.mean_clearance_m / scene.vessel.tube_radius_m, 0.0, 1.0);
-  s.score = 100.0 * (1.0 - contact_fraction) * (1.0 + g) / 2.0;
+  s.score = weights > 0 ? 100.0 * points / weights : 0.0;
   return s;
 }
 

@@ -1,13 +1,28 @@
 #pragma once
-// The task score of a needle-in-tube run, from the running totals the haptic thread keeps
-// (state::ScoreState). Simple and explainable:
-//   contact fraction  c = time in contact / time
-//   clearance factor  g = clamp(mean clearance / tube radius, 0, 1)
-//   score             = 100 (1 − c) (1 + g) / 2
-// so a run that never touches and keeps the needle on the core circle scores 100, one that
-// never touches but rides the wall 50, and time in contact takes its share off.
-// Scenes without the needle module (thread, tissue): "contact" is any module's fault (thread
-// overstretched, tissue pressed too hard) and score = 100 (1 − c).
+// The task score, from the running totals the haptic thread keeps (state::ScoreState).
+//
+// Scenes of a training task (scene::TaskKind other than follow_path) name their terms in the
+// scene file (`scoring:`): each metric's value v scores
+//     points = weight · clamp(1 − v / limit, 0, 1)
+// and the score is 100 Σ points / Σ weights, so a term at 0 earns its whole weight and one at
+// or beyond its limit nothing. The metrics:
+//   time_s             time to the task's end (completion, or the time limit), s
+//   deviation_mean_m   mean distance of the device from the ideal path (the hold target), m
+//   deviation_max_m    the largest such distance, m
+//   drift_m            the same for the device's slow motion (its 8–12 Hz band removed), m
+//   outside_fraction   share of the time farther than task.tolerance_m
+//   tremor_rms_m       RMS of the device's 8–12 Hz band (the tremor module), m
+//   contact_fraction   share of the time at fault (needle on the wall, thread overstretched,
+//                      tissue pressed too hard)
+//   contacts           fault episodes
+//   clearance_deficit  1 − mean needle clearance / tube radius (0: on the core circle)
+//   excess_path        device path length / the path the task asks for − 1
+//   progress_deficit   share of the task not done when it ended (0 when completed)
+//
+// follow_path (the module demos) keeps its own formula:
+//   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean
+//                  clearance / tube radius, 0, 1)
+//   other modules: 100 (1 − c)
 
 #include "common/net/messages.h"
 #include "common/scene/scene.h"
@@ -16,5 +31,12 @@
 namespace microdex::station {
 
 net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& totals);
+
+// The value of a named metric (the list above); NaN for an unknown name.
+double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& totals,
+                       const std::string& metric);
+
+// The length of the path the task asks for (all passes), m; 0 for a hold.
+double CalcTaskPathLength(const scene::SceneModel& scene);
 
 }  // namespace microdex::station

@@ -21,6 +21,19 @@ void SimTraineeDef::Validate() const {
   if (!(drift_min_hz > 0 && drift_min_hz < drift_max_hz)) {
     throw std::invalid_argument("drift_min_hz: expected 0 < drift_min_hz < drift_max_hz");
   }
+  if (!(pace_novice > 0 && pace_expert > 0 && pace_novice <= 10 && pace_expert <= 10)) {
+    throw std::invalid_argument("pace: expected (0, 10]");
+  }
+  if (!(reaction_delay_novice_s >= 0 && reaction_delay_expert_s >= 0 &&
+        reaction_delay_novice_s <= 2 && reaction_delay_expert_s <= 2)) {
+    throw std::invalid_argument("reaction_delay_s: expected 0..2 s");
+  }
+  if (!(correction_threshold_novice_m > 0 && correction_threshold_expert_m > 0)) {
+    throw std::invalid_argument("correction_threshold_m: expected > 0");
+  }
+  if (!(correction_duration_s > 0 && correction_duration_s <= 2)) {
+    throw std::invalid_argument("correction_duration_s: expected (0, 2] s");
+  }
   if (!(hand_stiffness_N_per_m > 0))
     throw std::invalid_argument("hand_stiffness_N_per_m: expected > 0");
   if (!(hand_time_constant_s > 0))
@@ -34,7 +47,12 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
       drift_std_m_(Lerp(def.drift_std_novice_m, def.drift_std_expert_m, def.skill)),
       drift_std_rad_(Lerp(def.drift_std_novice_rad, def.drift_std_expert_rad, def.skill)),
       hand_stiffness_N_per_m_(def.hand_stiffness_N_per_m),
-      hand_time_constant_s_(std::max(def.hand_time_constant_s, 1.0 / scene.haptic.rate_hz)) {
+      hand_time_constant_s_(std::max(def.hand_time_constant_s, 1.0 / scene.haptic.rate_hz)),
+      pace_(Lerp(def.pace_novice, def.pace_expert, def.skill)),
+      reaction_delay_s_(Lerp(def.reaction_delay_novice_s, def.reaction_delay_expert_s, def.skill)),
+      correction_threshold_m_(
+          Lerp(def.correction_threshold_novice_m, def.correction_threshold_expert_m, def.skill)),
+      correction_duration_s_(def.correction_duration_s) {
   // All randomness is drawn here, from the seed; Read() is a pure function of the step and
   // the previous force. SplitMix64 rather than <random> distributions, whose algorithms the
   // standard leaves to the library: the samples are then the same on every platform.
@@ -60,6 +78,31 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
   }
 }
 
+Eigen::Vector3d SimTrainee::CalcDrift(double t_s, Eigen::Vector3d* drift_rad) const {
+  // n sinusoids of amplitude b have standard deviation b √(n/2).
+  const double drift_scale = 1.0 / std::sqrt(kDriftComponents / 2.0);
+  Eigen::Vector3d drift_m;
+  for (int axis = 0; axis < 6; ++axis) {
+    if (axis >= 3 && drift_rad == nullptr) break;
+    double sum = 0;
+    for (int c = 0; c < kDriftComponents; ++c) {
+      sum += std::sin(kTwoPi * drift_freq_hz_[axis][c] * t_s + drift_phase_rad_[axis][c]);
+    }
+    if (axis < 3) {
+      drift_m[axis] = drift_std_m_ * drift_scale * sum;
+    } else {
+      (*drift_rad)[axis - 3] = drift_std_rad_ * drift_scale * sum;
+    }
+  }
+  return drift_m;
+}
+
+Eigen::Vector3d SimTrainee::CalcCorrection(double t_s) const {
+  const double tau = std::clamp((t_s - correction_start_s_) / correction_duration_s_, 0.0, 1.0);
+  const double shape = tau * tau * tau * (10 + tau * (-15 + 6 * tau));
+  return correction_from_m_ + shape * (correction_to_m_ - correction_from_m_);
+}
+
 DeviceSample SimTrainee::Read(std::uint64_t step) {
   const double t = static_cast<double>(step) * dt_s_;
   // Each of the three components has amplitude a, RMS a/√2; three independent ones: RMS
@@ -73,21 +116,26 @@ DeviceSample SimTrainee::Read(std::uint64_t step) {
     }
     tremor[axis] = amplitude * sum;
   }
-  // Drift: n sinusoids of amplitude b have standard deviation b √(n/2).
-  const double drift_scale = 1.0 / std::sqrt(kDriftComponents / 2.0);
-  Eigen::Vector3d drift_m, drift_rad;
-  for (int axis = 0; axis < 6; ++axis) {
-    double sum = 0;
-    for (int c = 0; c < kDriftComponents; ++c) {
-      sum += std::sin(kTwoPi * drift_freq_hz_[axis][c] * t + drift_phase_rad_[axis][c]);
-    }
-    if (axis < 3) {
-      drift_m[axis] = drift_std_m_ * drift_scale * sum;
-    } else {
-      drift_rad[axis - 3] = drift_std_rad_ * drift_scale * sum;
+  Eigen::Vector3d drift_rad;
+  const Eigen::Vector3d drift_m = CalcDrift(t, &drift_rad);
+  // A corrective sub-movement starts when none is under way and the drift seen τ_r ago, less
+  // the corrections made, is beyond the threshold.
+  Eigen::Vector3d correction = CalcCorrection(t);
+  if (t - correction_start_s_ >= correction_duration_s_ && t >= reaction_delay_s_) {
+    // What was seen, extrapolated by the velocity seen over the delay and half the movement
+    // (the hand's internal model predicts where the drift will be).
+    const double lead_s = reaction_delay_s_ + 0.5 * correction_duration_s_;
+    const double h = 0.01;
+    const Eigen::Vector3d d0 = CalcDrift(t - reaction_delay_s_, nullptr);
+    const Eigen::Vector3d d1 = CalcDrift(t - reaction_delay_s_ - h, nullptr);
+    const Eigen::Vector3d seen = d0 + (lead_s / h) * (d0 - d1) - correction;
+    if (seen.norm() > correction_threshold_m_) {
+      correction_from_m_ = correction;
+      correction_to_m_ = correction + seen;
+      correction_start_s_ = t;
     }
   }
-  const Eigen::Isometry3d X_ideal = scene_.CalcIdealToolPose(t);
+  const Eigen::Isometry3d X_ideal = scene_.CalcIdealToolPose(pace_ * t);
   DeviceSample sample;
   sample.X_WT = X_ideal;
   const double angle = drift_rad.norm();
@@ -96,7 +144,8 @@ DeviceSample SimTrainee::Read(std::uint64_t step) {
   }
   hand_offset_m_ +=
       (dt_s_ / hand_time_constant_s_) * (f_prev_W_ / hand_stiffness_N_per_m_ - hand_offset_m_);
-  sample.X_WT.translation() = X_ideal.translation() + tremor + drift_m + hand_offset_m_;
+  sample.X_WT.translation() =
+      X_ideal.translation() + tremor + drift_m - correction + hand_offset_m_;
   return sample;
 }
 

@@ -6,13 +6,20 @@
 // give the same samples bit for bit.
 //
 // Model, per step k (t = k dt):
-//   p_WT = p_ideal(t) + tremor(t) + drift(t) + f_prev / k_hand
+//   p_WT = p_ideal(v t) + tremor(t) + drift(t) − correction(t) + f_prev / k_hand
+//   v:      the trainee's pace along the task's path (minimum-jerk passes, the scene's
+//           timing scaled by v), slower for a novice (pace_novice … pace_expert);
 //   tremor: per axis, three sinusoids with frequencies drawn in [8, 12] Hz and random phases,
 //           scaled to an RMS of tremor_rms_m (novice … expert, interpolated by skill);
 //   drift:  per axis, four sinusoids with frequencies drawn in [drift_min_hz, drift_max_hz]
 //           and random phases, scaled to a standard deviation of drift_std_m (likewise for the
 //           orientation, a small rotation vector with drift_std_rad). Smooth, unlike a random
 //           walk, whose path length would grow without bound with the sampling rate;
+//   correction: corrective sub-movements. The trainee sees the drift with the reaction delay
+//           τ_r (visual loop, thesis §2.1: 200 ms or more for a novice): when the drift seen,
+//           less the corrections made, exceeds correction_threshold_m and no correction is
+//           under way, a minimum-jerk sub-movement of correction_duration_s removes it. The
+//           drift left is then bounded by the threshold plus what grows within τ_r;
 //   hand:   a spring of stiffness k_hand holding the planned pose, yielding with a time
 //           constant τ_hand: the offset o follows f / k_hand by o' = (f / k_hand − o) / τ_hand
 //           (explicit Euler, f the force of the previous step), so guidance fields and the
@@ -35,6 +42,13 @@ struct SimTraineeDef {
   double drift_std_expert_rad = 0.004;
   double drift_min_hz = 0.05;
   double drift_max_hz = 0.5;
+  double pace_novice = 0.6;  // of the scene's pass timing
+  double pace_expert = 1.3;
+  double reaction_delay_novice_s = 0.30;
+  double reaction_delay_expert_s = 0.15;
+  double correction_threshold_novice_m = 250e-6;
+  double correction_threshold_expert_m = 40e-6;
+  double correction_duration_s = 0.25;
   double hand_stiffness_N_per_m = 400;
   double hand_time_constant_s = 0.05;
   // Throws std::invalid_argument("field: reason") (the contract of every Def's Validate()).
@@ -51,6 +65,7 @@ class SimTrainee final : public Device {
   void WriteForce(const Eigen::Vector3d& f_T_W) override { f_prev_W_ = f_T_W; }
 
   double tremor_rms_m() const { return tremor_rms_m_; }
+  double pace() const { return pace_; }
   double drift_std_m() const { return drift_std_m_; }
 
  private:
@@ -64,6 +79,13 @@ class SimTrainee final : public Device {
   double drift_freq_hz_[6][kDriftComponents];
   double drift_phase_rad_[6][kDriftComponents];
   double hand_time_constant_s_;
+  double pace_, reaction_delay_s_, correction_threshold_m_, correction_duration_s_;
+  // The corrective sub-movement under way (or the last one): from, to, start time.
+  Eigen::Vector3d correction_from_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d correction_to_m_ = Eigen::Vector3d::Zero();
+  double correction_start_s_ = -1e9;
+  Eigen::Vector3d CalcDrift(double t_s, Eigen::Vector3d* drift_rad) const;
+  Eigen::Vector3d CalcCorrection(double t_s) const;
   Eigen::Vector3d f_prev_W_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d hand_offset_m_ = Eigen::Vector3d::Zero();
 };

@@ -77,6 +77,21 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
   f << "  \"ideal_path_length_m\": " << JsonNumber(s.ideal_path_length_m) << ",\n";
   f << "  \"tremor_rms_m\": " << JsonNumber(s.tremor_rms_m) << ",\n";
   f << "  \"score\": " << JsonNumber(s.score) << ",\n";
+  f << "  \"task\": " << JsonString(s.task) << ",\n";
+  f << "  \"outcome\": "
+    << JsonString(s.outcome == 1 ? "completed" : (s.outcome == 2 ? "time_limit" : "running"))
+    << ",\n";
+  f << "  \"progress\": " << JsonNumber(s.progress) << ",\n";
+  f << "  \"deviation_mean_m\": " << JsonNumber(s.deviation_mean_m) << ",\n";
+  f << "  \"terms\": [";
+  for (std::size_t i = 0; i < s.terms.size(); ++i) {
+    const net::ScoreTerm& term = s.terms[i];
+    f << (i ? ", " : "") << "{\"metric\": " << JsonString(term.metric)
+      << ", \"value\": " << JsonNumber(term.value) << ", \"limit\": " << JsonNumber(term.limit)
+      << ", \"weight\": " << JsonNumber(term.weight) << ", \"points\": " << JsonNumber(term.points)
+      << "}";
+  }
+  f << "],\n";
   f << "  \"loop\": {\"ticks\": " << t.snapshots
     << ", \"period_mean_ms\": " << JsonNumber(p.mean_s() * 1e3)
     << ", \"period_p99_ms\": " << JsonNumber(p.Quantile_s(0.99) * 1e3)
@@ -123,7 +138,6 @@ std::string StationOptions::Validate() const {
   }
   if (!(skill >= 0 && skill <= 1)) return "--skill: expected 0..1";
   if (!(duration_s >= 0) || !std::isfinite(duration_s)) return "--duration: expected >= 0 s";
-  if (unpaced && !(duration_s > 0)) return "--unpaced: needs --duration S (simulated seconds)";
   if (station_id.empty() || station_id.size() > 64) return "--station-id: expected 1..64 chars";
   if (station_id == "all") return "--station-id: 'all' is reserved for cues to every station";
   if (trainee.size() > 128) return "--trainee: longer than 128 characters";

@@ -1,5 +1,6 @@
 #include "station/station_step.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -163,6 +164,62 @@ void UpdateScore(const scene::SceneModel& scene, double dt_s, state::StationStat
   }
 }
 
+// The device's distance from what the task asks: the hold target, or the ideal path.
+double CalcDeviation(const scene::SceneModel& scene, const cues::IdealPath& path,
+                     const Eigen::Vector3d& p_W) {
+  if (scene.task.kind == scene::TaskKind::kTremorHold) return (p_W - scene.task.target_m).norm();
+  if (path.is_segment) return (p_W - cues::CalcNearestOnSegment(path.segment, p_W)).norm();
+  Eigen::Vector3d q_W;
+  if (!cues::CalcNearestOnCircle(path.circle, p_W, &q_W)) return path.circle.radius_m;
+  return (p_W - q_W).norm();
+}
+
+// Where the device is along the path, 0 at the start and 1 at the end (unclamped).
+double CalcPathProgress(const scene::SceneModel& scene, const Eigen::Vector3d& p_W) {
+  const scene::TaskDef& t = scene.task;
+  if (t.path == scene::PathKind::kLine) {
+    const Eigen::Vector3d ab = t.line_end_m - t.line_start_m;
+    return (p_W - t.line_start_m).dot(ab) / ab.squaredNorm();
+  }
+  const Eigen::Vector3d p_V = scene.vessel.X_WV.inverse() * p_W;
+  double theta = std::atan2(p_V.y(), p_V.x());
+  if (theta < 0) theta += 2 * 3.141592653589793;
+  return (theta - t.start_azimuth_rad) / (t.end_azimuth_rad - t.start_azimuth_rad);
+}
+
+// Reads the device, the tremor band and state.score; writes the task's part of state.score:
+// deviation, time beyond the tolerance, passes and the outcome. Frozen once the task ended.
+void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, double dt_s,
+                state::StationState& s) {
+  state::ScoreState& t = s.score;
+  const scene::TaskDef& task = scene.task;
+  const Eigen::Vector3d p_device = s.tool.X_WT_device.translation();
+  const double deviation = CalcDeviation(scene, path, p_device);
+  t.deviation_sum_m += deviation;
+  t.deviation_max_m = std::max(t.deviation_max_m, deviation);
+  t.drift_sum_m += CalcDeviation(scene, path, p_device - s.cues.tremor_band_m);
+  ++t.deviation_samples;
+  if (deviation > task.tolerance_m) t.time_outside_s += dt_s;
+  if (task.kind == scene::TaskKind::kTremorHold) {
+    t.progress = std::min(t.time_s / task.hold_s, 1.0);
+    if (t.time_s >= task.hold_s - 0.5 * dt_s) t.outcome = 1;
+  } else if (task.kind != scene::TaskKind::kFollowPath) {
+    // A pass ends when the device reaches the far end of the path (forward passes) or the
+    // start (return passes).
+    constexpr double kEndMargin = 0.02;
+    const double f = CalcPathProgress(scene, p_device);
+    const bool forward = t.passes_done % 2 == 0;
+    t.progress = std::clamp(forward ? f : 1.0 - f, 0.0, 1.0);
+    if (t.progress >= 1.0 - kEndMargin) {
+      ++t.passes_done;
+      t.progress = 0;
+    }
+    if (t.passes_done >= task.passes) t.outcome = 1;
+  }
+  if (t.outcome == 0 && t.time_s >= task.time_limit_s - 0.5 * dt_s) t.outcome = 2;
+  if (t.outcome != 0) t.end_step = s.step;
+}
+
 }  // namespace
 
 void StepStation(Simulation& sim, const StationInput& in, state::StationState& s) {
@@ -196,7 +253,12 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
   }
 
   SaturateForce(f, scene.haptic.max_force_N, s);
-  UpdateScore(scene, sim.dt_s_, s);
+  if (s.score.outcome == 0) {  // the scores freeze when the task ends
+    UpdateScore(scene, sim.dt_s_, s);
+    UpdateTask(scene, sim.path_, sim.dt_s_, s);
+  } else {
+    s.score.contact_event = 0;
+  }
   ++s.step;
 }
 

@@ -13,6 +13,8 @@
 //     StepModules      each module of the scene, in the scene's order (module sections)
 //     SaturateForce    finite and saturated, always (state.tool)
 //     UpdateScore      running totals and fault episodes (state.score)
+//     UpdateTask       deviation from the path or target, passes, the task's outcome
+//                      (state.score; both frozen once the task has ended)
 //
 // Given a scene, a seed and the input stream (device samples and cue requests), the states
 // are bit-for-bit the same on the same build: tests/unit/station/station_step_test.cc.

@@ -132,6 +132,10 @@ void YamlSection::Required(const char* key) const {
 }
 
 void YamlSection::CheckNoUnknownKeys(std::initializer_list<std::string_view> known) const {
+  CheckNoUnknownKeys(std::span<const std::string_view>(known.begin(), known.size()));
+}
+
+void YamlSection::CheckNoUnknownKeys(std::span<const std::string_view> known) const {
   for (const auto& entry : node_) {
     std::string key = "?";
     try {

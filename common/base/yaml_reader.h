@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 #include <initializer_list>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -76,6 +77,7 @@ class YamlSection {
   void Required(const char* key) const;
   // Throws "FIELD: unknown key" for the first key not in `known`.
   void CheckNoUnknownKeys(std::initializer_list<std::string_view> known) const;
+  void CheckNoUnknownKeys(std::span<const std::string_view> known) const;
 
   // The line of a field given by its dotted path below this section ("level",
   // "vessel.tube_radius_m"): its key's line, or the line of the nearest enclosing map present

@@ -632,6 +632,23 @@ void ToMsg(const Score& in, msg::Score& out) {
   out.ideal_path_length_m(in.ideal_path_length_m);
   out.tremor_rms_m(in.tremor_rms_m);
   out.score(in.score);
+  CheckModuleName(in.task);
+  MICRODEX_CHECK(in.terms.size() <= kMaxScoreTerms);
+  out.task(in.task);
+  out.outcome(in.outcome);
+  out.deviation_mean_m(in.deviation_mean_m);
+  out.progress(in.progress);
+  out.terms().resize(in.terms.size());
+  for (std::size_t i = 0; i < in.terms.size(); ++i) {
+    const ScoreTerm& t = in.terms[i];
+    CheckModuleName(t.metric);
+    msg::ScoreTerm& o = out.terms()[i];
+    o.metric(t.metric);
+    o.value(t.value);
+    o.limit(t.limit);
+    o.weight(t.weight);
+    o.points(t.points);
+  }
 }
 
 bool FromMsg(const msg::Score& in, Score& out, std::string* why) {
@@ -644,6 +661,17 @@ bool FromMsg(const msg::Score& in, Score& out, std::string* why) {
   c.Finite(in.ideal_path_length_m(), "ideal_path_length_m");
   c.Finite(in.tremor_rms_m(), "tremor_rms_m");
   c.Finite(in.score(), "score");
+  c.String(S(in.task()), kMaxModuleNameLength, "task");
+  if (in.outcome() > 2) c.Fail("outcome: expected 0, 1 or 2");
+  c.Finite(in.progress(), "progress");
+  if (in.terms().size() > kMaxScoreTerms) c.Fail("terms: more than 12");
+  for (const auto& t : in.terms()) {
+    c.String(S(t.metric()), kMaxModuleNameLength, "terms[].metric");
+    c.Finite(t.limit(), "terms[].limit");
+    c.Finite(t.weight(), "terms[].weight");
+    c.Finite(t.points(), "terms[].points");
+  }
+  if (!c.ok()) return false;
   out.is_final = in.is_final() == 1;
   out.duration_s = in.duration_s();
   out.time_in_contact_s = in.time_in_contact_s();
@@ -654,6 +682,14 @@ bool FromMsg(const msg::Score& in, Score& out, std::string* why) {
   out.ideal_path_length_m = in.ideal_path_length_m();
   out.tremor_rms_m = in.tremor_rms_m();
   out.score = in.score();
+  out.task = S(in.task());
+  out.outcome = in.outcome();
+  out.deviation_mean_m = in.deviation_mean_m();
+  out.progress = in.progress();
+  out.terms.clear();
+  for (const auto& t : in.terms()) {
+    out.terms.push_back({S(t.metric()), t.value(), t.limit(), t.weight(), t.points()});
+  }
   return c.ok();
 }
 

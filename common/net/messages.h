@@ -160,6 +160,17 @@ struct TaskEvent {
   std::string text;
 };
 
+inline constexpr std::size_t kMaxScoreTerms = 12;
+
+// A term of the score (station/score.h).
+struct ScoreTerm {
+  std::string metric;
+  double value = 0;
+  double limit = 1;
+  double weight = 0;
+  double points = 0;  // weight · clamp(1 − value / limit, 0, 1)
+};
+
 struct Score {
   Header header;
   bool is_final = false;
@@ -172,6 +183,11 @@ struct Score {
   double ideal_path_length_m = 0;
   double tremor_rms_m = 0;
   double score = 0;
+  std::string task;          // scene::TaskKindName
+  std::uint8_t outcome = 0;  // state::TaskOutcome
+  double deviation_mean_m = 0;
+  double progress = 0;  // of the whole task, 0..1
+  std::vector<ScoreTerm> terms;
 };
 
 }  // namespace microdex::net

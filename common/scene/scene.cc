@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -38,6 +39,21 @@ TissueToolKind ParseToolKind(const std::string& text) {
   throw std::invalid_argument("expected point or bar");
 }
 
+cues::CueKind ParseCueName(const std::string& text) {
+  cues::CueKind kind{};
+  if (!cues::ParseCueKind(text, &kind) || kind == cues::CueKind::kClear) {
+    throw std::invalid_argument("unknown cue '" + text +
+                                "' (known: convergent, divergent, tremor)");
+  }
+  return kind;
+}
+
+// The metrics a scene's scoring may name (station/score.h defines them).
+constexpr const char* kScoreMetrics[] = {
+    "time_s",          "deviation_mean_m", "deviation_max_m", "outside_fraction",  "tremor_rms_m",
+    "drift_m",         "contact_fraction", "contacts",        "clearance_deficit", "excess_path",
+    "progress_deficit"};
+
 // A parameter file named in the scene: relative names are taken from the scene's folder.
 std::string ResolveBeside(const std::string& origin, const std::string& name) {
   const std::filesystem::path p(name);
@@ -59,10 +75,20 @@ Def LoadParams(const YamlSection& section, const std::string& path,
   }
 }
 
+// A mesh the scene names: it must exist, be readable and not be empty (the views load it
+// through assimp; a bad file is the scene's error at the field that names it).
+void CheckMeshReadable(const YamlSection& visual, const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) visual.Fail("mesh", "cannot open file " + path);
+  std::ifstream f(path, std::ios::binary);
+  if (!f) visual.Fail("mesh", "cannot read file " + path);
+  if (std::filesystem::file_size(path, ec) == 0 || ec) visual.Fail("mesh", "empty file " + path);
+}
+
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
-  root.CheckNoUnknownKeys(
-      {"name", "modules", "vessel", "needle", "task", "haptic", "thread", "tissue"});
+  root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
+                           "tissue", "scoring", "microscope", "visuals", "cues"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -86,8 +112,15 @@ SceneModel ReadScene(const YamlReader& reader) {
     s.needle.sweep_rad = n->FiniteDouble("sweep_rad", s.needle.sweep_rad);
   }
   if (const std::optional<YamlSection> t = root.OptionalMap("task")) {
-    t->CheckNoUnknownKeys({"pass_duration_s", "start_azimuth_rad", "end_azimuth_rad", "path",
+    t->CheckNoUnknownKeys({"kind", "passes", "time_limit_s", "tolerance_m", "target_m", "hold_s",
+                           "pass_duration_s", "start_azimuth_rad", "end_azimuth_rad", "path",
                            "line_start_m", "line_end_m", "tool_rpy_rad"});
+    s.task.kind = t->Enum("kind", &ParseTaskKind, TaskKind::kFollowPath);
+    s.task.passes = t->Int("passes", s.task.passes);
+    s.task.time_limit_s = t->FiniteDouble("time_limit_s", s.task.time_limit_s);
+    s.task.tolerance_m = t->FiniteDouble("tolerance_m", s.task.tolerance_m);
+    s.task.target_m = t->Vec3("target_m", s.task.target_m);
+    s.task.hold_s = t->FiniteDouble("hold_s", s.task.hold_s);
     s.task.path = t->Enum("path", &ParsePathKind, PathKind::kArc);
     s.task.line_start_m = t->Vec3("line_start_m", s.task.line_start_m);
     s.task.line_end_m = t->Vec3("line_end_m", s.task.line_end_m);
@@ -152,6 +185,61 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.max_force_N = ti->FiniteDouble("max_force_N", d.max_force_N);
     s.tissue = d;
   }
+  if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
+    std::vector<std::string_view> known(std::begin(kScoreMetrics), std::end(kScoreMetrics));
+    for (const char* metric : kScoreMetrics) {
+      const std::optional<YamlSection> term = sc->OptionalMap(metric);
+      if (!term) continue;
+      term->CheckNoUnknownKeys({"weight", "limit"});
+      term->Required("limit");
+      s.scoring.push_back(
+          {metric, term->FiniteDouble("weight", 1.0), term->FiniteDouble("limit", 1.0)});
+    }
+    sc->CheckNoUnknownKeys(known);
+  }
+  if (const std::optional<YamlSection> m = root.OptionalMap("microscope")) {
+    m->CheckNoUnknownKeys({"magnification", "look_at_m", "view_dir"});
+    s.microscope.magnification = m->FiniteDouble("magnification", s.microscope.magnification);
+    s.microscope.look_at_m = m->Vec3("look_at_m", s.microscope.look_at_m);
+    const Eigen::Vector3d dir = m->Vec3("view_dir", s.microscope.view_dir_W);
+    if (!(dir.norm() > 0)) m->Fail("view_dir", "expected a non-zero vector");
+    s.microscope.view_dir_W = dir.normalized();
+  }
+  if (const std::optional<YamlSection> vs = root.OptionalMap("visuals")) {
+    std::vector<std::string_view> known(std::begin(kVisualRoles), std::end(kVisualRoles));
+    for (const char* role : kVisualRoles) {
+      const std::optional<YamlSection> v = vs->OptionalMap(role);
+      if (!v) continue;
+      v->CheckNoUnknownKeys({"mesh", "position_m", "rpy_rad"});
+      v->Required("mesh");
+      VisualDef d;
+      d.role = role;
+      d.mesh_path = ResolveBeside(s.path, v->String("mesh", ""));
+      CheckMeshReadable(*v, d.mesh_path);
+      d.X_WM.translate(v->Vec3("position_m", Eigen::Vector3d::Zero()));
+      d.X_WM.rotate(RotationFromRpy(v->Vec3("rpy_rad", Eigen::Vector3d::Zero())));
+      s.visuals.push_back(d);
+    }
+    vs->CheckNoUnknownKeys(known);
+  }
+  if (const std::optional<YamlSection> c = root.OptionalMap("cues")) {
+    c->CheckNoUnknownKeys({"available", "on"});
+    if (c->Has("available")) {
+      for (const std::string& name : c->StringList("available")) {
+        try {
+          s.cues.available.push_back(ParseCueName(name));
+        } catch (const std::invalid_argument& e) {
+          c->Fail("available", e.what());
+        }
+      }
+    }
+    if (const std::optional<YamlSection> on = c->OptionalMap("on")) {
+      on->CheckNoUnknownKeys({"convergent", "divergent", "tremor"});
+      for (const char* name : {"convergent", "divergent", "tremor"}) {
+        if (on->Has(name)) s.cues.on.emplace_back(ParseCueName(name), on->FiniteDouble(name, 0));
+      }
+    }
+  }
   try {
     ValidateScene(s);
   } catch (const std::invalid_argument& e) {
@@ -162,6 +250,25 @@ SceneModel ReadScene(const YamlReader& reader) {
 }
 
 }  // namespace
+
+const char* TaskKindName(TaskKind kind) {
+  switch (kind) {
+    case TaskKind::kFollowPath:
+      return "follow_path";
+    case TaskKind::kTremorHold:
+      return "tremor_hold";
+    case TaskKind::kNeedleAlongTube:
+      return "needle_along_tube";
+  }
+  return "unknown";
+}
+
+TaskKind ParseTaskKind(const std::string& text) {
+  for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube}) {
+    if (text == TaskKindName(k)) return k;
+  }
+  throw std::invalid_argument("expected follow_path, tremor_hold or needle_along_tube");
+}
 
 bool SceneModel::HasModule(const std::string& module) const {
   return std::find(modules.begin(), modules.end(), module) != modules.end();
@@ -194,6 +301,12 @@ double SceneModel::CalcIdealPathFraction(double t_s) const {
 }
 
 Eigen::Isometry3d SceneModel::CalcIdealToolPose(double t_s) const {
+  if (task.kind == TaskKind::kTremorHold) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = task.R_WT_line;
+    X.translation() = task.target_m;
+    return X;
+  }
   if (task.path == PathKind::kArc) return CalcIdealX_WT(CalcIdealAzimuth(t_s));
   const double u = CalcIdealPathFraction(t_s);
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
@@ -312,6 +425,40 @@ void ValidateScene(const SceneModel& s) {
       Invalid("tissue.bar_length_m", "expected 0 < length < the patch side");
     }
     if (!(ti.max_force_N > 0)) Invalid("tissue.max_force_N", "expected > 0 N");
+  }
+  if (!(t.passes >= 1 && t.passes <= 100)) Invalid("task.passes", "expected 1..100");
+  if (!(t.time_limit_s > 0 && t.time_limit_s <= 3600)) {
+    Invalid("task.time_limit_s", "expected (0, 3600] s");
+  }
+  if (!(t.tolerance_m > 0)) Invalid("task.tolerance_m", "expected > 0 m");
+  if (t.kind == TaskKind::kTremorHold && !(t.hold_s > 0 && t.hold_s <= t.time_limit_s)) {
+    Invalid("task.hold_s", "expected 0 < hold_s <= time_limit_s");
+  }
+  if (t.kind == TaskKind::kNeedleAlongTube && !s.HasModule("needle")) {
+    Invalid("task.kind", "needle_along_tube needs the needle module");
+  }
+  if (t.kind == TaskKind::kNeedleAlongTube && t.path != PathKind::kArc) {
+    Invalid("task.path", "needle_along_tube needs path: arc");
+  }
+  if (t.kind != TaskKind::kFollowPath && s.scoring.empty()) {
+    Invalid("scoring", std::string("required by task kind ") + TaskKindName(t.kind));
+  }
+  double weights = 0;
+  for (const ScoreTermDef& term : s.scoring) {
+    if (!(term.weight >= 0)) Invalid("scoring." + term.metric + ".weight", "expected >= 0");
+    if (!(term.limit > 0)) Invalid("scoring." + term.metric + ".limit", "expected > 0");
+    weights += term.weight;
+  }
+  if (!s.scoring.empty() && !(weights > 0)) Invalid("scoring", "expected a positive weight");
+  if (!(s.microscope.magnification >= 1 && s.microscope.magnification <= 50)) {
+    Invalid("microscope.magnification", "expected 1..50 (a surgical microscope: 10–20)");
+  }
+  for (const auto& [kind, param] : s.cues.on) {
+    if (!s.cues.available.empty() && std::find(s.cues.available.begin(), s.cues.available.end(),
+                                               kind) == s.cues.available.end()) {
+      Invalid(std::string("cues.on.") + cues::CueKindName(kind), "not in cues.available");
+    }
+    if (!(param > 0)) Invalid(std::string("cues.on.") + cues::CueKindName(kind), "expected > 0");
   }
   const HapticDef& h = s.haptic;
   if (!(h.rate_hz >= 100 && h.rate_hz <= 10000)) Invalid("haptic.rate_hz", "expected 100..10000");

@@ -16,9 +16,11 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/base/input_error.h"
+#include "common/cues/cue_kind.h"
 #include "common/fem/tissue_def.h"
 #include "common/geometry/arc_torus.h"
 #include "common/thread/thread_def.h"
@@ -46,9 +48,27 @@ enum class PathKind {
   kLine,  // a straight segment from line_start_m to line_end_m, fixed tool orientation
 };
 
+// What the trainee is asked to do (assets/scenes/README.md, "Tasks"): the dexterity primitives
+// of thesis §2.2 and the demos of the single modules.
+enum class TaskKind {
+  kFollowPath,       // passes along the path; scored by time without fault (module demos)
+  kTremorHold,       // hold the tool tip on target_m for hold_s under magnification
+  kNeedleAlongTube,  // slide the needle along the tube and back, `passes` passes, no touching
+};
+const char* TaskKindName(TaskKind kind);          // follow_path, tremor_hold, needle_along_tube
+TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
+
 // The task: passes along the path from start to end and back, each pass lasting
-// pass_duration_s (minimum-jerk timing).
+// pass_duration_s (minimum-jerk timing) for the scripted ideal; the task ends when the tool
+// has made `passes` passes (or, for a hold, after hold_s) or at time_limit_s.
 struct TaskDef {
+  TaskKind kind = TaskKind::kFollowPath;
+  int passes = 2;
+  double time_limit_s = 60;
+  // How far from the ideal path (or the target) the tool may be and still count as on it.
+  double tolerance_m = 0.5e-3;
+  Eigen::Vector3d target_m = Eigen::Vector3d::Zero();  // kTremorHold, world
+  double hold_s = 10;                                  // kTremorHold
   double pass_duration_s = 4.0;
   PathKind path = PathKind::kArc;
   double start_azimuth_rad = 0.2;  // kArc
@@ -104,6 +124,36 @@ struct HapticDef {
   double wall_stiffness_N_per_m = 1000.0;  // penalty force of the tube wall on contact
 };
 
+// A term of the score: the metric's value v scores weight · clamp(1 − v / limit, 0, 1); the
+// score is 100 Σ points / Σ weights (station/score.h lists the metrics).
+struct ScoreTermDef {
+  std::string metric;
+  double weight = 1;
+  double limit = 1;  // the value that scores nothing, in the metric's unit
+};
+
+// The view through the microscope (the station's view and the instructor's mirror).
+struct MicroscopeDef {
+  double magnification = 15;                               // 10–20×
+  Eigen::Vector3d look_at_m = Eigen::Vector3d::Zero();     // world
+  Eigen::Vector3d view_dir_W = -Eigen::Vector3d::UnitZ();  // from the objective to look_at
+};
+
+// A mesh the views draw (the physics keeps its analytic shapes): role, file, pose.
+inline constexpr const char* kVisualRoles[] = {"vessel", "needle", "tissue", "forceps",
+                                               "wire",   "loop",   "target", "needle_holder"};
+struct VisualDef {
+  std::string role;
+  std::string mesh_path;  // resolved against the scene's folder; checked readable at load
+  Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
+};
+
+// The cues a scene offers and those on from its first step.
+struct CueSetDef {
+  std::vector<cues::CueKind> available;              // empty: every kind
+  std::vector<std::pair<cues::CueKind, double>> on;  // kind, parameter
+};
+
 struct SceneModel {
   std::string path;  // where it was loaded from ("" when parsed from text)
   std::string name;
@@ -116,6 +166,10 @@ struct SceneModel {
   HapticDef haptic;
   std::optional<ThreadSceneDef> thread;  // present exactly when modules has "thread"
   std::optional<TissueSceneDef> tissue;  // present exactly when modules has "tissue"
+  std::vector<ScoreTermDef> scoring;     // empty for kFollowPath (its own formula)
+  MicroscopeDef microscope;
+  std::vector<VisualDef> visuals;
+  CueSetDef cues;
 
   bool HasModule(const std::string& module) const;
   // The scripted ideal tool pose at azimuth theta: the needle tail on its path circle (radius

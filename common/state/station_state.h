@@ -87,12 +87,24 @@ struct ScoreState {
   std::uint8_t have_prev = 0;
   std::array<double, 3> p_WT_device_prev{};  // (plain arrays: the snapshot copies this struct
   std::array<double, 3> p_WT_ideal_prev{};   // as plain data)
+  // The task (scene::TaskDef): the device's distance from the ideal path (or the hold target)
+  // and its slow part (the tremor band removed), the time beyond the tolerance, the progress.
+  double deviation_sum_m = 0;
+  double deviation_max_m = 0;
+  double drift_sum_m = 0;
+  std::uint64_t deviation_samples = 0;
+  double time_outside_s = 0;
+  double progress = 0;  // along the path in the current pass, 0 start .. 1 end
+  std::int32_t passes_done = 0;
+  std::uint8_t outcome = 0;    // TaskOutcome: 0 running, 1 completed, 2 time limit
+  std::uint64_t end_step = 0;  // the step at which the task ended
   // This step.
   std::uint8_t fault = 0;
   double fault_value = 0;         // of the first module at fault (clearance, strain, force)
   std::int8_t contact_event = 0;  // +1 a fault episode began, -1 one ended
 };
 inline constexpr int kContactReleaseSteps = 50;
+enum class TaskOutcome : std::uint8_t { kRunning = 0, kCompleted = 1, kTimeLimit = 2 };
 
 // The needle–vessel module: the needle's pose and its clearance to the tube.
 struct NeedleState {

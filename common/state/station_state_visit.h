@@ -99,6 +99,15 @@ void Score(S& s, V& v) {
   v("score.have_prev", &s.have_prev, 1);
   v("score.p_WT_device_prev", s.p_WT_device_prev.data(), 3);
   v("score.p_WT_ideal_prev", s.p_WT_ideal_prev.data(), 3);
+  v("score.deviation_sum_m", &s.deviation_sum_m, 1);
+  v("score.deviation_max_m", &s.deviation_max_m, 1);
+  v("score.drift_sum_m", &s.drift_sum_m, 1);
+  v("score.deviation_samples", &s.deviation_samples, 1);
+  v("score.time_outside_s", &s.time_outside_s, 1);
+  v("score.progress", &s.progress, 1);
+  v("score.passes_done", &s.passes_done, 1);
+  v("score.outcome", &s.outcome, 1);
+  v("score.end_step", &s.end_step, 1);
   v("score.fault", &s.fault, 1);
   v("score.fault_value", &s.fault_value, 1);
   v("score.contact_event", &s.contact_event, 1);

@@ -130,7 +130,6 @@ TEST(AppCli, UnpacedRunEqualsPacedRun) {
     EXPECT_EQ(field(paced, key), field(unpaced, key)) << key;
   }
   EXPECT_EQ(field(paced, "steps"), "2000");
-  ExpectBadInput("microdex-station", {"--scene", kScene, "--unpaced"}, "--unpaced");
 }
 
 TEST(AppCli, InstructorRefusesBadInput) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <complex>
 #include <stdexcept>
 #include <vector>
@@ -24,7 +25,7 @@ std::vector<Eigen::Vector3d> Deviation(const scene::SceneModel& scene, const Sim
   const double dt = 1.0 / scene.haptic.rate_hz;
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector3d p = t.Read(static_cast<std::uint64_t>(k)).X_WT.translation();
-    out.push_back(p - scene.CalcIdealX_WT(scene.CalcIdealAzimuth(k * dt)).translation());
+    out.push_back(p - scene.CalcIdealToolPose(t.pace() * k * dt).translation());
   }
   return out;
 }
@@ -59,6 +60,7 @@ TEST(SimTrainee, TremorIsInThePhysiologicalBandAtItsRms) {
   def.skill = 0.0;
   def.drift_std_novice_m = 0;  // tremor alone
   def.drift_std_novice_rad = 0;
+  def.correction_threshold_novice_m = 1;  // no corrective sub-movements
   const auto dev = Deviation(scene, def, 4000);
   for (int axis = 0; axis < 3; ++axis) {
     EXPECT_GT(BandFraction(dev, axis, 1000, 7.5, 12.5), 0.97) << "axis " << axis;
@@ -76,6 +78,7 @@ TEST(SimTrainee, DriftIsSlow) {
   def.skill = 0.0;
   def.tremor_rms_novice_m = 0;  // drift alone
   def.drift_std_novice_rad = 0;
+  def.correction_threshold_novice_m = 1;  // no corrective sub-movements
   const auto dev = Deviation(scene, def, 8000);
   for (int axis = 0; axis < 3; ++axis) {
     EXPECT_GT(BandFraction(dev, axis, 1000, 0.0, 1.0), 0.97) << "axis " << axis;
@@ -101,6 +104,45 @@ TEST(SimTrainee, NoviceDeviatesMoreThanExpert) {
   EXPECT_GT(novice, middle);
   EXPECT_GT(middle, expert);
   EXPECT_GT(novice, 3 * expert);
+}
+
+// Corrective sub-movements: the slow error left is bounded by the threshold plus what the drift
+// adds within the reaction delay, far below the uncorrected drift's excursions.
+TEST(SimTrainee, CorrectiveSubMovementsBoundTheDrift) {
+  const auto scene = Scene();
+  auto max_error = [&](double threshold_m) {
+    SimTraineeDef def;
+    def.skill = 0.0;
+    def.tremor_rms_novice_m = 0;
+    def.drift_std_novice_rad = 0;
+    def.correction_threshold_novice_m = threshold_m;
+    double sq = 0;
+    const auto dev = Deviation(scene, def, 60000);
+    for (const auto& v : dev) sq += v.squaredNorm();
+    return std::sqrt(sq / static_cast<double>(dev.size()));
+  };
+  const double uncorrected = max_error(1.0);
+  const double corrected = max_error(SimTraineeDef{}.correction_threshold_novice_m);
+  // Uncorrected: three axes of standard deviation σ, RMS √3 σ.
+  const double sigma = SimTraineeDef{}.drift_std_novice_m;
+  EXPECT_NEAR(uncorrected, std::sqrt(3.0) * sigma, 0.15 * sigma);
+  std::printf("drift RMS: uncorrected %.0f um, corrected %.0f um\n", uncorrected * 1e6,
+              corrected * 1e6);
+  EXPECT_LT(corrected, 0.6 * uncorrected);
+  EXPECT_LT(corrected, 1.5 * SimTraineeDef{}.correction_threshold_novice_m);
+}
+
+// A skilled trainee moves along the task faster: pace rises with skill.
+TEST(SimTrainee, PaceRisesWithSkill) {
+  const auto scene = Scene();
+  double prev = 0;
+  for (double skill : {0.0, 0.2, 0.5, 0.9, 1.0}) {
+    SimTraineeDef def;
+    def.skill = skill;
+    const SimTrainee t(scene, def);
+    EXPECT_GT(t.pace(), prev) << skill;
+    prev = t.pace();
+  }
 }
 
 TEST(SimTrainee, DeterministicForASeed) {
