@@ -8,31 +8,19 @@
 
 namespace microdex::station {
 
-const char* CheckCue(cues::CueKind kind, double param) {
-  switch (kind) {
-    case cues::CueKind::kClear:
-      return "";
-    case cues::CueKind::kConvergentField:
-    case cues::CueKind::kDivergentField:
-      if (!(param > 0 && param <= kMaxFieldStiffness_N_per_m)) {
-        return "stiffness: expected 0 < k <= 2000 N/m";
-      }
-      return "";
-    case cues::CueKind::kAmplifiedTremor:
-      if (!(param >= 1 && param <= kMaxTremorGain)) return "gain: expected 1 <= gain <= 20";
-      return "";
-  }
-  return "unknown cue kind";
-}
-
 Simulation::Simulation(const scene::SceneModel& scene)
     : scene_(scene), dt_s_(1.0 / scene.haptic.rate_hz), modules_(MakeModules(scene)) {
   MICRODEX_CHECK(modules_.size() <= static_cast<std::size_t>(kMaxStationModules));
-  path_.is_segment = scene.task.path == scene::PathKind::kLine;
+  // The guidance fields pull towards the task's path (a hold: its target point).
+  path_.is_segment =
+      scene.task.path == scene::PathKind::kLine || scene.task.kind == scene::TaskKind::kTremorHold;
   path_.circle.X_WC = scene.vessel.X_WV;
   path_.circle.radius_m = scene.needle.radius_m;
   path_.segment.a_W = scene.task.line_start_m;
   path_.segment.b_W = scene.task.line_end_m;
+  if (scene.task.kind == scene::TaskKind::kTremorHold) {
+    path_.segment.a_W = path_.segment.b_W = scene.task.target_m;
+  }
   cues::TremorFilterDef tf;
   tf.sample_rate_hz = scene.haptic.rate_hz;
   tremor_filter_ = cues::MakeTremorFilter(tf);
@@ -44,6 +32,12 @@ state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
   state::SeedStationState(seed, s);
   s.score.min_clearance_m = std::numeric_limits<double>::infinity();
   for (const auto& m : modules_) m->InitState(s);
+  // The scene's cues on from the first step (cue id 0: the scene's own).
+  for (const auto& [kind, param] : scene_.cues.on) {
+    if (s.cues.pending_count < state::kMaxPendingCues && cues::CheckCue(kind, param)[0] == '\0') {
+      s.cues.pending[s.cues.pending_count++] = {0, kind, param, 0};
+    }
+  }
   return s;
 }
 

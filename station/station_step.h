@@ -79,10 +79,6 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
 // The snapshot's share of the state after a step (everything but the tick's timing).
 void ProjectSnapshot(const Simulation& sim, const state::StationState& state, TickSnapshot& out);
 
-// Cue limits: a request outside them is rejected before it reaches the simulation.
-inline constexpr double kMaxFieldStiffness_N_per_m = 2000;
-inline constexpr double kMaxTremorGain = 20;
-// Empty when the cue can be applied; otherwise why not.
-const char* CheckCue(cues::CueKind kind, double param);
+using cues::CheckCue;  // cue limits: common/cues/cue_kind.h
 
 }  // namespace microdex::station

@@ -26,4 +26,21 @@ bool ParseCueKind(const std::string& name, CueKind* kind) {
   return false;
 }
 
+const char* CheckCue(CueKind kind, double param) {
+  switch (kind) {
+    case CueKind::kClear:
+      return "";
+    case CueKind::kConvergentField:
+    case CueKind::kDivergentField:
+      if (!(param > 0 && param <= kMaxFieldStiffness_N_per_m)) {
+        return "stiffness: expected 0 < k <= 2000 N/m";
+      }
+      return "";
+    case CueKind::kAmplifiedTremor:
+      if (!(param >= 1 && param <= kMaxTremorGain)) return "gain: expected 1 <= gain <= 20";
+      return "";
+  }
+  return "unknown cue kind";
+}
+
 }  // namespace microdex::cues

@@ -20,4 +20,11 @@ const char* CueKindName(CueKind kind);
 // False when the name is none of those.
 bool ParseCueKind(const std::string& name, CueKind* kind);
 
+// Cue limits: a request outside them is rejected before it reaches the simulation (and a
+// scene's default cue outside them is a bad scene).
+inline constexpr double kMaxFieldStiffness_N_per_m = 2000;
+inline constexpr double kMaxTremorGain = 20;
+// Empty when the cue can be applied; otherwise why not ("stiffness: expected ...").
+const char* CheckCue(CueKind kind, double param);
+
 }  // namespace microdex::cues

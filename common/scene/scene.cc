@@ -458,7 +458,9 @@ void ValidateScene(const SceneModel& s) {
                                                kind) == s.cues.available.end()) {
       Invalid(std::string("cues.on.") + cues::CueKindName(kind), "not in cues.available");
     }
-    if (!(param > 0)) Invalid(std::string("cues.on.") + cues::CueKindName(kind), "expected > 0");
+    if (const char* why = cues::CheckCue(kind, param); *why != '\0') {
+      Invalid(std::string("cues.on.") + cues::CueKindName(kind), why);
+    }
   }
   const HapticDef& h = s.haptic;
   if (!(h.rate_hz >= 100 && h.rate_hz <= 10000)) Invalid("haptic.rate_hz", "expected 100..10000");

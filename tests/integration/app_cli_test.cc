@@ -7,6 +7,8 @@
 #include <fstream>
 #include <string>
 
+#include "common/scene/scene.h"
+#include "station/scene_run.h"
 #include "tests/integration/process.h"
 
 namespace microdex {
@@ -130,6 +132,34 @@ TEST(AppCli, UnpacedRunEqualsPacedRun) {
     EXPECT_EQ(field(paced, key), field(unpaced, key)) << key;
   }
   EXPECT_EQ(field(paced, "steps"), "2000");
+}
+
+// A training scene's station stops by itself when its task ends, and an unpaced station's
+// final score is the one the in-process run (microdex-bench scores) computes for the same
+// scene, skill and seed.
+TEST(AppCli, StationStopsAtTaskEndWithTheSceneRunsScore) {
+  const std::string scene_path = testing::SourceDir() + "/assets/scenes/tremor_hold.yaml";
+  const std::string out = ::testing::TempDir() + "/tremor_hold.json";
+  const Outcome o =
+      RunApp("microdex-station", {"--scene", scene_path, "--skill", "0.4", "--seed", "3",
+                                  "--unpaced", "--no-realtime", "--score-out", out});
+  ASSERT_EQ(o.status, 0) << o.output;
+  const std::string json = testing::ReadFile(out);
+  const auto field = [&](const std::string& key) {
+    const size_t at = json.find("\"" + key + "\": ");
+    if (at == std::string::npos) return std::string("(missing)");
+    const size_t from = at + key.size() + 4;
+    return json.substr(from, json.find_first_of(",\n", from) - from);
+  };
+  EXPECT_EQ(field("outcome"), "\"completed\"");
+  const scene::SceneModel scene = scene::LoadScene(scene_path);
+  station::SimTraineeDef def;
+  def.skill = 0.4;
+  def.seed = 3;
+  const station::SceneRunResult r = station::RunSceneWithTrainee(scene, def, 3);
+  EXPECT_EQ(field("steps"), std::to_string(r.steps));
+  EXPECT_NEAR(std::stod(field("score")), r.score.score, 1e-6);
+  EXPECT_EQ(r.steps, 10000u);  // hold_s = 10 at 1 kHz
 }
 
 TEST(AppCli, InstructorRefusesBadInput) {
