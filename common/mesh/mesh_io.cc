@@ -20,6 +20,8 @@
 namespace microdex::mesh {
 namespace {
 
+constexpr double kGltfUnitsPerMetre = 1024;  // see SaveMesh
+
 Eigen::Matrix4d ToEigen(const aiMatrix4x4& m) {
   Eigen::Matrix4d out;
   out << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3,
@@ -162,11 +164,28 @@ void SaveMesh(const TriangleMesh& mesh, const std::string& path) {
                                   ": index out of range");
     }
   }
-  const bool with_normals = mesh.normals.size() == mesh.vertices.size();
+  // Assimp's OBJ exporter always writes normals, making its own where there are none (and
+  // badly, for shared vertices): give it the area-weighted ones.
+  const std::vector<Eigen::Vector3d> normals = mesh.normals.size() == mesh.vertices.size()
+                                                   ? mesh.normals
+                                               : ext == ".obj" ? CalcVertexNormals(mesh)
+                                                               : std::vector<Eigen::Vector3d>{};
+  const bool with_normals = !normals.empty();
+  // Assimp's glTF exporter joins vertices closer than 1e-5 (file units): at the micrometre
+  // scale of a needle tip that closes holes and breaks the surface. For glTF the vertices are
+  // stored in units of 1/1024 m under a root node scaling them back to metres (a power of two,
+  // so both scalings are exact), which moves that threshold to 1e-8 m.
+  const bool gltf = ext == ".glb" || ext == ".gltf";
+  const double stored_per_m = gltf ? kGltfUnitsPerMetre : 1.0;
 
   // A one-mesh scene; the aiScene destructor frees what is allocated here.
   aiScene scene;
   scene.mRootNode = new aiNode("root");
+  if (gltf) {
+    const auto m_per_unit = static_cast<ai_real>(1.0 / kGltfUnitsPerMetre);
+    aiMatrix4x4::Scaling(aiVector3D(m_per_unit, m_per_unit, m_per_unit),
+                         scene.mRootNode->mTransformation);
+  }
   scene.mRootNode->mNumMeshes = 1;
   scene.mRootNode->mMeshes = new unsigned[1]{0};
   scene.mNumMaterials = 1;
@@ -181,11 +200,11 @@ void SaveMesh(const TriangleMesh& mesh, const std::string& path) {
   am.mVertices = new aiVector3D[n];
   if (with_normals) am.mNormals = new aiVector3D[n];
   for (int v = 0; v < n; ++v) {
-    const Eigen::Vector3d& p = mesh.vertices[v];
+    const Eigen::Vector3d p = stored_per_m * mesh.vertices[v];
     am.mVertices[v] = aiVector3D(static_cast<ai_real>(p.x()), static_cast<ai_real>(p.y()),
                                  static_cast<ai_real>(p.z()));
     if (with_normals) {
-      const Eigen::Vector3d& q = mesh.normals[v];
+      const Eigen::Vector3d& q = normals[v];
       am.mNormals[v] = aiVector3D(static_cast<ai_real>(q.x()), static_cast<ai_real>(q.y()),
                                   static_cast<ai_real>(q.z()));
     }

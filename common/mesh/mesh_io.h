@@ -25,9 +25,13 @@ TriangleMesh LoadMesh(const std::string& path);
 
 // Writes the mesh (and its normals, when there is one per vertex) in the format of the path's
 // extension: .obj (no material file), .ply (binary little-endian), .glb (binary glTF 2.0), .gltf
-// (glTF 2.0 JSON with a .bin beside it). Throws std::invalid_argument for an extension of none of
-// these, a mesh with no triangles, an index out of range or a non-finite coordinate, and
-// std::runtime_error ("FILE: reason") when assimp cannot write the file.
+// (glTF 2.0 JSON with a .bin beside it). An OBJ file always carries normals (assimp's exporter
+// insists): CalcVertexNormals' when the mesh has none. A glTF file stores the vertices in units
+// of 1/1024 m under a root node that scales them to metres (assimp's glTF exporter joins
+// vertices closer than 1e-5 file units, which at metres would merge a needle tip's); glTF
+// readers, LoadMesh among them, apply the node and see metres. Throws std::invalid_argument for an
+// extension of none of these, a mesh with no triangles, an index out of range or a non-finite
+// coordinate, and std::runtime_error ("FILE: reason") when assimp cannot write the file.
 void SaveMesh(const TriangleMesh& mesh, const std::string& path);
 
 }  // namespace microdex::mesh
