@@ -1,17 +1,15 @@
 #include "common/geometry/arc_torus_mesh.h"
 
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-
-#include <assimp/Importer.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <stdexcept>
 
-#include "fcl/geometry/bvh/BVH_model.h"
+#include "common/mesh/mesh_fcl.h"
+#include "common/mesh/mesh_io.h"
+#include "common/mesh/primitives.h"
 #include "fcl/narrowphase/distance.h"
 
 namespace microdex::geometry {
@@ -25,34 +23,19 @@ std::string FormatNumber(double v) {
   return buf;
 }
 
-// The BVH of a mesh with every length multiplied by `scale`.
-std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> MakeBvh(const TriangleMesh& mesh, double scale) {
-  std::vector<fcl::Vector3d> points;
-  points.reserve(mesh.vertices.size());
-  for (const Eigen::Vector3d& v : mesh.vertices) points.push_back(scale * v);
-  std::vector<fcl::Triangle> triangles;
-  triangles.reserve(mesh.triangles.size());
-  for (const Eigen::Vector3i& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
-  auto bvh = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-  bvh->beginModel(static_cast<int>(triangles.size()), static_cast<int>(points.size()));
-  bvh->addSubModel(points, triangles);
-  bvh->endModel();
-  return bvh;
-}
-
-TriangleMesh LoadOrCreate(const std::string& path, const TriangleMesh& generated) {
+mesh::TriangleMesh LoadOrCreate(const std::string& path, const mesh::TriangleMesh& generated) {
   if (!std::filesystem::exists(path)) {
     std::filesystem::create_directories(std::filesystem::path(path).parent_path());
-    WriteObjMesh(generated, path);
+    mesh::SaveMesh(generated, path);
   }
-  return LoadMeshWithAssimp(path);
+  return mesh::LoadMesh(path);
 }
 
 }  // namespace
 
-TriangleMesh MakeNeedleRibbonMesh(double radius_m, double sweep_rad, int segments,
-                                  double half_width_m) {
-  TriangleMesh mesh;
+mesh::TriangleMesh MakeNeedleRibbonMesh(double radius_m, double sweep_rad, int segments,
+                                        double half_width_m) {
+  mesh::TriangleMesh mesh;
   for (int i = 0; i <= segments; ++i) {
     const double s = sweep_rad * i / segments;
     const double x = radius_m * std::cos(s), y = radius_m * std::sin(s);
@@ -67,76 +50,8 @@ TriangleMesh MakeNeedleRibbonMesh(double radius_m, double sweep_rad, int segment
   return mesh;
 }
 
-TriangleMesh MakeTorusWallMesh(double core_radius_m, double tube_radius_m, double segment_angle_rad,
-                               int n_major, int n_minor) {
-  const bool closed = segment_angle_rad >= kTwoPi;
-  const int rings = closed ? n_major : n_major + 1;
-  TriangleMesh mesh;
-  for (int i = 0; i < rings; ++i) {
-    const double phi = segment_angle_rad * i / n_major;
-    for (int j = 0; j < n_minor; ++j) {
-      const double psi = kTwoPi * j / n_minor;
-      const double w = core_radius_m + tube_radius_m * std::cos(psi);
-      mesh.vertices.emplace_back(w * std::cos(phi), w * std::sin(phi),
-                                 tube_radius_m * std::sin(psi));
-    }
-  }
-  for (int i = 0; i < n_major; ++i) {
-    const int i1 = (i + 1) % rings;
-    for (int j = 0; j < n_minor; ++j) {
-      const int j1 = (j + 1) % n_minor;
-      const int a = i * n_minor + j, b = i1 * n_minor + j, c = i1 * n_minor + j1,
-                d = i * n_minor + j1;
-      mesh.triangles.emplace_back(a, b, c);
-      mesh.triangles.emplace_back(a, c, d);
-    }
-  }
-  return mesh;
-}
-
-void WriteObjMesh(const TriangleMesh& mesh, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  out << "# microdex generated mesh, metres\n";
-  char line[128];
-  for (const Eigen::Vector3d& v : mesh.vertices) {
-    std::snprintf(line, sizeof(line), "v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
-    out << line;
-  }
-  for (const Eigen::Vector3i& t : mesh.triangles) {
-    out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
-  }
-  if (!out) throw std::runtime_error(path + ": write failed");
-}
-
-TriangleMesh LoadMeshWithAssimp(const std::string& path) {
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
-  if (scene == nullptr) {
-    throw std::runtime_error(path + ": assimp could not read it: " + importer.GetErrorString());
-  }
-  TriangleMesh mesh;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* am = scene->mMeshes[m];
-    const int base = static_cast<int>(mesh.vertices.size());
-    for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      const aiVector3D& p = am->mVertices[v];
-      mesh.vertices.emplace_back(p.x, p.y, p.z);
-    }
-    for (unsigned f = 0; f < am->mNumFaces; ++f) {
-      const aiFace& face = am->mFaces[f];
-      if (face.mNumIndices != 3) continue;  // points and lines carry no area
-      mesh.triangles.emplace_back(base + static_cast<int>(face.mIndices[0]),
-                                  base + static_cast<int>(face.mIndices[1]),
-                                  base + static_cast<int>(face.mIndices[2]));
-    }
-  }
-  if (mesh.triangles.empty()) throw std::runtime_error(path + ": no triangles");
-  return mesh;
-}
-
 struct ArcTorusMeshModel::Impl {
-  std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> needle, vessel;
+  std::shared_ptr<mesh::FclMesh> needle, vessel;
   Eigen::Vector3d first_vertex_N;
   double core_radius_m = 0, tube_radius_m = 0;
   double scale = 1;  // BVH lengths per metre (1/R)
@@ -157,20 +72,24 @@ ArcTorusMeshModel::ArcTorusMeshModel(const ArcDef& arc, const TorusSegmentDef& t
                  FormatNumber(torus.tube_radius_m) + "_omega" +
                  FormatNumber(torus.segment_angle_rad) + "_" + std::to_string(n_major) + "x" +
                  std::to_string(res.n_minor) + ".obj";
-  const TriangleMesh needle = LoadOrCreate(
+  const mesh::TriangleMesh needle = LoadOrCreate(
       needle_path_,
       MakeNeedleRibbonMesh(arc.radius_m, arc.sweep_rad, res.needle_segments, half_width));
-  const TriangleMesh vessel =
-      LoadOrCreate(vessel_path_, MakeTorusWallMesh(torus.core_radius_m, torus.tube_radius_m,
-                                                   torus.segment_angle_rad, n_major, res.n_minor));
+  const mesh::TriangleMesh vessel = LoadOrCreate(
+      vessel_path_, mesh::MakeTorusTubeMesh({.core_radius_m = torus.core_radius_m,
+                                             .tube_radius_m = torus.tube_radius_m,
+                                             .segment_angle_rad = torus.segment_angle_rad,
+                                             .n_major = n_major,
+                                             .n_minor = res.n_minor,
+                                             .end_caps = false}));
   // FCL's triangle–triangle distance tests the vertex–face case only where the squared length
   // of a triangle's edge cross product exceeds 1e-15 (an absolute threshold, in length⁴):
   // millimetre-scale facets fall below it and get edge–edge distances only, up to ~1e-6 m too
   // large where a needle end faces a facet (checked against point–triangle distances). In
   // units of R the wall's facets are far above it (the needle's ribbon needs no face test).
   impl_->scale = 1 / torus.core_radius_m;
-  impl_->needle = MakeBvh(needle, impl_->scale);
-  impl_->vessel = MakeBvh(vessel, impl_->scale);
+  impl_->needle = mesh::MakeFclMesh(needle, impl_->scale);
+  impl_->vessel = mesh::MakeFclMesh(vessel, impl_->scale);
   impl_->first_vertex_N = needle.vertices.front();
   impl_->core_radius_m = torus.core_radius_m;
   impl_->tube_radius_m = torus.tube_radius_m;

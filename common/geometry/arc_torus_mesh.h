@@ -5,9 +5,10 @@
 // The needle is a ribbon of `segments` quads along the inscribed polyline of the arc, of
 // negligible width across the needle plane; the wall is the torus segment's surface with
 // n_major × n_minor quads (no end caps: the clearance ignores points outside the azimuth
-// range). Meshes are OBJ files in assets/meshes/, written when missing and always loaded
-// through assimp, so the method runs on exactly what an asset pipeline would give it. The
-// files are in metres; the BVHs are built in units of R and queried in the vessel frame (FCL's
+// range; common/mesh's MakeTorusTubeMesh without caps). Meshes are OBJ files in assets/meshes/,
+// written when missing and always loaded through common/mesh's LoadMesh (assimp), so the method
+// runs on exactly what an asset pipeline would give it. The files are in metres; the BVHs
+// (common/mesh/mesh_fcl.h) are built in units of R and queried in the vessel frame (FCL's
 // triangle distance has an absolute threshold that millimetre-scale facets fall below).
 //
 // The mesh "clearance" (README.md, "Mesh baseline"): FCL's mesh–mesh distance D is unsigned
@@ -24,26 +25,13 @@
 #include <vector>
 
 #include "common/geometry/arc_torus.h"
+#include "common/mesh/triangle_mesh.h"
 
 namespace microdex::geometry {
 
-struct TriangleMesh {
-  std::vector<Eigen::Vector3d> vertices;
-  std::vector<Eigen::Vector3i> triangles;
-};
-
 // In the needle frame N: ribbon along the polyline (ρ cos s_i, ρ sin s_i, ±half_width).
-TriangleMesh MakeNeedleRibbonMesh(double radius_m, double sweep_rad, int segments,
-                                  double half_width_m);
-// In the vessel frame V: the torus wall for azimuth φ ∈ [0, Ω] (closed around when Ω = 2π).
-TriangleMesh MakeTorusWallMesh(double core_radius_m, double tube_radius_m, double segment_angle_rad,
-                               int n_major, int n_minor);
-
-// OBJ writer (vertices and triangular faces). Throws std::runtime_error naming the path.
-void WriteObjMesh(const TriangleMesh& mesh, const std::string& path);
-// Loads every triangle of every mesh of the file through assimp. Throws std::runtime_error
-// naming the path and assimp's reason.
-TriangleMesh LoadMeshWithAssimp(const std::string& path);
+mesh::TriangleMesh MakeNeedleRibbonMesh(double radius_m, double sweep_rad, int segments,
+                                        double half_width_m);
 
 struct MeshResolution {
   int needle_segments = 32;
@@ -55,7 +43,8 @@ struct MeshResolution {
 class ArcTorusMeshModel {
  public:
   // Loads `dir`/needle_ribbon_….obj and `dir`/vessel_wall_….obj (names carry the geometry
-  // and resolution), writing them first when missing. Throws on unreadable/invalid files.
+  // and resolution), writing them first when missing. Throws microdex::InputError for an
+  // unreadable or invalid file.
   ArcTorusMeshModel(const ArcDef& arc, const TorusSegmentDef& torus,
                     const MeshResolution& resolution, const std::string& dir);
   ~ArcTorusMeshModel();
