@@ -98,7 +98,7 @@ struct NeedleMeshDef {
   double sweep_rad = 0.75 * std::numbers::pi;  // S ∈ (0, 2π): 3/8 of a circle by default
   double wire_radius_m = 0.1e-3;               // > 0
   double taper_length_m = 2e-3;                // ∈ (0, ρ S]
-  int n_along = 48;                            // rings along the arc, ≥ 2
+  int n_along = 48;                            // segments along the arc, ≥ 2
   int n_around = 12;                           // ≥ 3
   void Validate() const;
 };

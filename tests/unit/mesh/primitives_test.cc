@@ -27,7 +27,7 @@ void ExpectSecondOrder(const Measure& measure_at, double exact, const char* what
   EXPECT_GT(e2, e1 / 6) << what;
 }
 
-TEST(Primitives, TorusVerticesAtTheTubeRadiusFromTheCoreCircle) {
+TEST(MeshPrimitives, TorusVerticesAtTheTubeRadiusFromTheCoreCircle) {
   const TorusTubeMeshDef def{.core_radius_m = 5e-3,
                              .tube_radius_m = 0.5e-3,
                              .segment_angle_rad = 1.5 * kPi,
@@ -53,7 +53,7 @@ TEST(Primitives, TorusVerticesAtTheTubeRadiusFromTheCoreCircle) {
   EXPECT_TRUE(CalcEdgeTopology(MakeTorusTubeMesh({})).closed());  // full turn
 }
 
-TEST(Primitives, TorusVolumeAndAreaConverge) {
+TEST(MeshPrimitives, TorusVolumeAndAreaConverge) {
   const double R = 5e-3, r = 0.5e-3;
   for (const double omega : {2 * kPi, 0.75 * kPi}) {
     const auto mesh_at = [&](int k) {
@@ -74,7 +74,7 @@ TEST(Primitives, TorusVolumeAndAreaConverge) {
   }
 }
 
-TEST(Primitives, CylinderIsThePrismOfTheInscribedPolygon) {
+TEST(MeshPrimitives, CylinderIsThePrismOfTheInscribedPolygon) {
   const CylinderMeshDef def{.radius_m = 0.4e-3, .length_m = 1.5e-3, .n_around = 17};
   const TriangleMesh mesh = MakeCylinderMesh(def);
   EXPECT_TRUE(CalcEdgeTopology(mesh).closed());
@@ -95,7 +95,7 @@ TEST(Primitives, CylinderIsThePrismOfTheInscribedPolygon) {
       kPi * r * r * L, "cylinder volume");
 }
 
-TEST(Primitives, BoxAndSlabAreExact) {
+TEST(MeshPrimitives, BoxAndSlabAreExact) {
   const Eigen::Vector3d size(1e-3, 2e-3, 0.5e-3);
   const TriangleMesh box = MakeBoxMesh({.size_m = size});
   EXPECT_EQ(box.triangles.size(), 12u);
@@ -124,7 +124,7 @@ TEST(Primitives, BoxAndSlabAreExact) {
   }
 }
 
-TEST(Primitives, SphereOnItsRadiusAndConverging) {
+TEST(MeshPrimitives, SphereOnItsRadiusAndConverging) {
   const SphereMeshDef def{.radius_m = 0.5e-3, .n_lat = 9, .n_lon = 14};
   const TriangleMesh mesh = MakeSphereMesh(def);
   EXPECT_TRUE(CalcEdgeTopology(mesh).closed());
@@ -140,7 +140,7 @@ TEST(Primitives, SphereOnItsRadiusAndConverging) {
                     "sphere area");
 }
 
-TEST(Primitives, VesselIsTheAnnularPrismUpToTheCut) {
+TEST(MeshPrimitives, VesselIsTheAnnularPrismUpToTheCut) {
   for (const double cut : {0.0, 0.6}) {
     const VesselCylinderMeshDef def{.outer_radius_m = 0.5e-3,
                                     .wall_thickness_m = 0.1e-3,
@@ -166,7 +166,7 @@ TEST(Primitives, VesselIsTheAnnularPrismUpToTheCut) {
   }
 }
 
-TEST(Primitives, WireFollowsItsSectionsAndHasPappusVolume) {
+TEST(MeshPrimitives, WireFollowsItsSectionsAndHasPappusVolume) {
   // A straight 4 mm, then a quarter turn of radius 3 mm towards +y (N), then one towards +z
   // (B): the end is at (4 + 3, 3, 0) + 3 (0, 1, 1) heading +z.
   WireMeshDef def;
@@ -193,7 +193,7 @@ TEST(Primitives, WireFollowsItsSectionsAndHasPappusVolume) {
       kPi * r * r * length, "wire volume");
 }
 
-TEST(Primitives, NeedleTapersToItsTip) {
+TEST(MeshPrimitives, NeedleTapersToItsTip) {
   const NeedleMeshDef def{};
   const TriangleMesh mesh = MakeNeedleMesh(def);
   EXPECT_TRUE(CalcEdgeTopology(mesh).closed());
@@ -219,7 +219,7 @@ TEST(Primitives, NeedleTapersToItsTip) {
       kPi * r * r * (rho * S - Lt) + kPi * r * r * Lt / 3, "needle volume");
 }
 
-TEST(Primitives, JawIsAFrustumAndThePairOpens) {
+TEST(MeshPrimitives, JawIsAFrustumAndThePairOpens) {
   const JawMeshDef def{};
   const TriangleMesh jaw = MakeJawMesh(def);
   EXPECT_TRUE(CalcEdgeTopology(jaw).closed());
@@ -248,7 +248,7 @@ TEST(Primitives, JawIsAFrustumAndThePairOpens) {
   EXPECT_THROW(MakeJawPairMesh(def, -0.1), std::invalid_argument);
 }
 
-TEST(Primitives, LoopIsTwoClosedParts) {
+TEST(MeshPrimitives, LoopIsTwoClosedParts) {
   const LoopMeshDef def{};
   const TriangleMesh mesh = MakeLoopMesh(def);
   EXPECT_TRUE(CalcEdgeTopology(mesh).closed());
@@ -258,7 +258,7 @@ TEST(Primitives, LoopIsTwoClosedParts) {
   EXPECT_NEAR(box.max.z(), std::max(def.wire_radius_m, def.handle_radius_m), 1e-18);
 }
 
-TEST(Primitives, ValidateNamesTheField) {
+TEST(MeshPrimitives, ValidateNamesTheField) {
   const auto message = [](const auto& make) -> std::string {
     try {
       make();

@@ -15,7 +15,7 @@ namespace {
 // Both go through the same float conversion: equal up to the printing of OBJ text.
 constexpr double kAssetTol_m = 1e-9;
 
-TEST(SceneAssets, CommittedFilesMatchTheGenerators) {
+TEST(MeshSceneAssets, CommittedFilesMatchTheGenerators) {
   const std::filesystem::path dir = MICRODEX_MESH_ASSET_DIR;
   std::set<std::string> names;
   for (const SceneAsset& asset : SceneAssets()) {
@@ -39,7 +39,7 @@ TEST(SceneAssets, CommittedFilesMatchTheGenerators) {
   }
 }
 
-TEST(SceneAssets, ClosedWhereTheyAreSolids) {
+TEST(MeshSceneAssets, ClosedWhereTheyAreSolids) {
   // Every asset is a closed surface (the loop and the jaw pairs as closed parts).
   for (const SceneAsset& asset : SceneAssets()) {
     EXPECT_TRUE(mesh::CalcEdgeTopology(asset.make()).closed()) << asset.file;
