@@ -15,7 +15,10 @@
 #include "common/mesh/mesh_io.h"
 #include "tools/meshgen/scene_assets.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+// Writes the assets; bad arguments exit 2, a failed write 1.
+int Run(int argc, char** argv) {
   CLI::App app{"microdex-meshgen: writes the training scenes' mesh assets (metres)"};
   std::string out;
   std::vector<std::string> only;
@@ -24,38 +27,44 @@ int main(int argc, char** argv) {
   app.add_option("--only", only, "write only these files (names as --list prints them)");
   app.add_flag("--list", list, "print the asset names and purposes, write nothing");
   CLI11_PARSE(app, argc, argv);
-  try {
-    const auto& assets = microdex::meshgen::SceneAssets();
-    if (list) {
-      for (const auto& a : assets) std::printf("%-30s %s\n", a.file.c_str(), a.purpose.c_str());
-      return 0;
-    }
-    if (out.empty()) {
-      std::fprintf(stderr, "microdex-meshgen: --out is required (or --list)\n");
+  const auto& assets = microdex::meshgen::SceneAssets();
+  if (list) {
+    for (const auto& a : assets) std::printf("%-30s %s\n", a.file.c_str(), a.purpose.c_str());
+    return 0;
+  }
+  if (out.empty()) {
+    std::fprintf(stderr, "microdex-meshgen: --out is required (or --list)\n");
+    return 2;
+  }
+  for (const std::string& name : only) {
+    if (std::none_of(assets.begin(), assets.end(), [&](const auto& a) { return a.file == name; })) {
+      std::fprintf(stderr, "microdex-meshgen: --only: unknown asset '%s' (see --list)\n",
+                   name.c_str());
       return 2;
     }
-    for (const std::string& name : only) {
-      bool known = false;
-      for (const auto& a : assets) known = known || a.file == name;
-      if (!known) {
-        std::fprintf(stderr, "microdex-meshgen: --only: unknown asset '%s' (see --list)\n",
-                     name.c_str());
-        return 2;
-      }
-    }
-    std::filesystem::create_directories(out);
-    for (const auto& a : assets) {
-      if (!only.empty() && std::find(only.begin(), only.end(), a.file) == only.end()) continue;
-      const microdex::mesh::TriangleMesh mesh = a.make();
-      const std::string path = (std::filesystem::path(out) / a.file).string();
-      microdex::mesh::SaveMesh(mesh, path);
-      std::printf("%-30s %6zu vertices %6zu triangles %8ju bytes\n", a.file.c_str(),
-                  mesh.vertices.size(), mesh.triangles.size(),
-                  static_cast<std::uintmax_t>(std::filesystem::file_size(path)));
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "microdex-meshgen: %s\n", e.what());
-    return 1;
+  }
+  std::filesystem::create_directories(out);
+  for (const auto& a : assets) {
+    if (!only.empty() && std::find(only.begin(), only.end(), a.file) == only.end()) continue;
+    const microdex::mesh::TriangleMesh mesh = a.make();
+    const std::string path = (std::filesystem::path(out) / a.file).string();
+    microdex::mesh::SaveMesh(mesh, path);
+    std::printf("%-30s %6zu vertices %6zu triangles %8ju bytes\n", a.file.c_str(),
+                mesh.vertices.size(), mesh.triangles.size(),
+                static_cast<std::uintmax_t>(std::filesystem::file_size(path)));
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-meshgen: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "microdex-meshgen: unknown error\n");
+  }
+  return 1;
 }
