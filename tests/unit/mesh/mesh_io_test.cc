@@ -192,7 +192,7 @@ TEST(MeshIo, CorruptFiles) {
             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
             "end_header\n0 0 0\n1 0\n");
   const std::string garbage = TempPath("garbage.obj");
-  WriteText(garbage, std::string("\x01\x02\x03 binary \xff\xfe junk", 19));
+  WriteText(garbage, "\x01\x02\x03 binary \xff\xfe junk");
   for (const std::string& path : {glb, ply, garbage}) {
     const std::string error = LoadError(path);
     EXPECT_EQ(error.rfind(path + ": ", 0), 0u) << error;
