@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <set>
 #include <stdexcept>
 
 #include "common/base/yaml_reader.h"
+#include "common/mesh/mesh_io.h"
 
 namespace microdex::scene {
 namespace {
@@ -75,14 +75,14 @@ Def LoadParams(const YamlSection& section, const std::string& path,
   }
 }
 
-// A mesh the scene names: it must exist, be readable and not be empty (the views load it
-// through assimp; a bad file is the scene's error at the field that names it).
-void CheckMeshReadable(const YamlSection& visual, const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) visual.Fail("mesh", "cannot open file " + path);
-  std::ifstream f(path, std::ios::binary);
-  if (!f) visual.Fail("mesh", "cannot read file " + path);
-  if (std::filesystem::file_size(path, ec) == 0 || ec) visual.Fail("mesh", "empty file " + path);
+// A mesh the scene names: loaded through assimp once at load, so a missing, unreadable or
+// empty file is the scene's error at the field that names it (the views load it again).
+void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
+  try {
+    (void)mesh::LoadMesh(path);
+  } catch (const InputError& e) {
+    visual.Fail("mesh", e.what());
+  }
 }
 
 SceneModel ReadScene(const YamlReader& reader) {
@@ -215,9 +215,9 @@ SceneModel ReadScene(const YamlReader& reader) {
       VisualDef d;
       d.role = role;
       d.mesh_path = ResolveBeside(s.path, v->String("mesh", ""));
-      CheckMeshReadable(*v, d.mesh_path);
-      d.X_WM.translate(v->Vec3("position_m", Eigen::Vector3d::Zero()));
-      d.X_WM.rotate(RotationFromRpy(v->Vec3("rpy_rad", Eigen::Vector3d::Zero())));
+      CheckMeshLoads(*v, d.mesh_path);
+      d.X_PM.translate(v->Vec3("position_m", Eigen::Vector3d::Zero()));
+      d.X_PM.rotate(RotationFromRpy(v->Vec3("rpy_rad", Eigen::Vector3d::Zero())));
       s.visuals.push_back(d);
     }
     vs->CheckNoUnknownKeys(known);

@@ -139,13 +139,15 @@ struct MicroscopeDef {
   Eigen::Vector3d view_dir_W = -Eigen::Vector3d::UnitZ();  // from the objective to look_at
 };
 
-// A mesh the views draw (the physics keeps its analytic shapes): role, file, pose.
+// A mesh the views draw (the physics keeps its analytic shapes): role, file, pose. The pose of
+// a held role (needle, forceps, needle_holder, loop) is in the tool frame T, the others' in
+// world; a mesh file is in metres (common/mesh/README.md).
 inline constexpr const char* kVisualRoles[] = {"vessel", "needle", "tissue", "forceps",
                                                "wire",   "loop",   "target", "needle_holder"};
 struct VisualDef {
   std::string role;
   std::string mesh_path;  // resolved against the scene's folder; checked readable at load
-  Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d X_PM = Eigen::Isometry3d::Identity();  // P: world, or T when held
 };
 
 // The cues a scene offers and those on from its first step.

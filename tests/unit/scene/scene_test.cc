@@ -231,3 +231,65 @@ TEST(Scene, ThreadAndTissueSectionsAreChecked) {
 
 }  // namespace
 }  // namespace microdex::scene
+
+namespace microdex::scene {
+namespace {
+
+// A training scene: its task, scoring terms, microscope, visual meshes (loaded through
+// assimp) and default cues.
+TEST(Scene, TrainingScenesLoadWithTaskScoringAndMeshes) {
+  const SceneModel h = LoadScene(SceneDir() + "/tremor_hold.yaml");
+  EXPECT_EQ(h.task.kind, TaskKind::kTremorHold);
+  EXPECT_DOUBLE_EQ(h.task.hold_s, 10);
+  EXPECT_EQ(h.scoring.size(), 3u);
+  EXPECT_DOUBLE_EQ(h.microscope.magnification, 20);
+  ASSERT_EQ(h.visuals.size(), 2u);  // in the order of kVisualRoles
+  EXPECT_EQ(h.visuals[0].role, "forceps");
+  EXPECT_EQ(h.visuals[1].role, "target");
+  EXPECT_NEAR(h.visuals[1].X_PM.translation().z(), 0.002, 1e-15);
+  // A hold's ideal pose is the target at every time.
+  EXPECT_TRUE(h.CalcIdealToolPose(3.7).translation().isApprox(h.task.target_m));
+  const SceneModel n = LoadScene(SceneDir() + "/needle_along_tube.yaml");
+  EXPECT_EQ(n.task.kind, TaskKind::kNeedleAlongTube);
+  EXPECT_EQ(n.task.passes, 2);
+}
+
+// Bad task, scoring, cue and mesh fields name the file, line and field.
+TEST(Scene, BadTrainingFieldsNameFileLineAndField) {
+  const std::string base = std::string(kGood) + "task: {kind: needle_along_tube}\n";
+  std::string y = kGood;
+  EXPECT_EQ(ErrorOf(y + "scoring: {speed: {limit: 1}}\n"),
+            "test.yaml:7: scoring.speed: unknown key");
+  EXPECT_EQ(ErrorOf(y + "scoring: {time_s: {limit: 0}}\n"),
+            "test.yaml:7: scoring.time_s.limit: expected > 0");
+  EXPECT_EQ(ErrorOf(y + "cues: {on: {tremor: 50}}\n"),
+            "test.yaml:7: cues.on.tremor: gain: expected 1 <= gain <= 20");
+  EXPECT_EQ(ErrorOf(y + "microscope: {magnification: 0}\n"),
+            "test.yaml:7: microscope.magnification: expected 1..50 (a surgical microscope: 10–20)");
+  std::string kind = kGood;
+  kind.replace(kind.find("task: {"), 7, "task: {kind: juggling, ");
+  EXPECT_EQ(ErrorOf(kind),
+            "test.yaml:6: task.kind: expected follow_path, tremor_hold or needle_along_tube");
+  kind = kGood;
+  kind.replace(kind.find("task: {"), 7, "task: {kind: tremor_hold, ");
+  EXPECT_EQ(ErrorOf(kind), "test.yaml:2: scoring: required by task kind tremor_hold");
+  // Meshes: missing, empty and unreadable files are the scene's error at the mesh field.
+  std::string dir = ::testing::TempDir();
+  if (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+  std::ofstream(dir + "/empty.obj").close();
+  std::ofstream(dir + "/garbage.ply") << "ply\nthis is not a mesh\n";
+  for (const char* file : {"missing.obj", "empty.obj", "garbage.ply"}) {
+    const std::string yaml = y + "visuals:\n  vessel: {mesh: " + file + "}\n";
+    std::string what;
+    try {
+      ParseScene(yaml, dir + "/scene.yaml");
+    } catch (const SceneError& e) {
+      what = e.what();
+    }
+    EXPECT_EQ(what.rfind(dir + "/scene.yaml:8: visuals.vessel.mesh: " + dir + "/" + file, 0), 0u)
+        << "[" << what << "]";
+  }
+}
+
+}  // namespace
+}  // namespace microdex::scene
