@@ -361,9 +361,9 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
   std::ostringstream os;
   char line[512];
   std::snprintf(line, sizeof line,
-                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-28s %4s %-12s %6s %7s %13s\n", "STATION",
-                "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "MODULE_STATE", "FLT",
-                "CUES", "SCORE", "AGE_ms", "INPUT_rx/lost");
+                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-28s %4s %-12s %6s %-6s %7s %13s\n",
+                "STATION", "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "MODULE_STATE",
+                "FLT", "CUES", "SCORE", "TASK", "AGE_ms", "INPUT_rx/lost");
   os << line;
   for (const StationView& v : stations) {
     std::string modules;
@@ -409,20 +409,30 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
         }
       }
     }
+    // The task: its progress, or how it ended; "-" for a scene without one (follow_path).
+    std::string task = "-";
     if (v.score.latest) {
       score = v.score.latest->score;
       contacts = v.score.latest->contacts;
+      const net::Score& sc = *v.score.latest;
+      if (sc.outcome == 1) {
+        task = "done";
+      } else if (sc.outcome == 2) {
+        task = "limit";
+      } else if (sc.task != "follow_path" && !sc.task.empty()) {
+        task = std::to_string(static_cast<int>(std::lround(100 * sc.progress))) + "%";
+      }
     }
     char io[64];
     std::snprintf(io, sizeof io, "%llu/%llu", static_cast<unsigned long long>(v.inputs_received),
                   static_cast<unsigned long long>(v.inputs_lost));
     std::snprintf(line, sizeof line,
                   "%-12.12s %-18.18s %-22.22s %-20.20s %-6s %7.3f %5llu %-28.28s %4u %-12.12s "
-                  "%6.1f %7.1f %13s\n",
+                  "%6.1f %-6.6s %7.1f %13s\n",
                   v.info.header.station_id.c_str(), v.info.trainee.c_str(), scene.c_str(),
                   modules.c_str(), PresenceName(v.presence), p99,
                   static_cast<unsigned long long>(overruns), state.empty() ? "-" : state.c_str(),
-                  contacts, cues.empty() ? "-" : cues.c_str(), score, age, io);
+                  contacts, cues.empty() ? "-" : cues.c_str(), score, task.c_str(), age, io);
     os << line;
   }
   return os.str();
