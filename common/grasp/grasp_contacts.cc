@@ -31,6 +31,21 @@ Eigen::Isometry3d JawPose(const Eigen::Isometry3d& X_WT, double half_gap, int j)
   return X_WJ;
 }
 
+// Clips the segment a + t (b - a), t in [t0, t1], to the band |axis . (p - centre)| <= half.
+bool ClipToBand(const Eigen::Vector3d& axis, const Eigen::Vector3d& centre, double half,
+                const Eigen::Vector3d& a, const Eigen::Vector3d& b, double& t0, double& t1) {
+  const double pa = axis.dot(a - centre), d = axis.dot(b - a);
+  if (std::abs(d) < 1e-300) return std::abs(pa) <= half;
+  double lo = (-half - pa) / d, hi = (half - pa) / d;
+  if (lo > hi) std::swap(lo, hi);
+  t0 = std::max(t0, lo);
+  t1 = std::min(t1, hi);
+  return t0 <= t1;
+}
+
+// An edge end this close to a vertex (in edge parameter) is the vertex itself.
+constexpr double kUnclipped = 1e-9;
+
 }  // namespace
 
 double CalcHalfGap(const JawDef& jaws, double gripper) {
@@ -67,7 +82,7 @@ void ContactsFromTable(const GraspModel& model, const GraspState& state, double 
     if (!(p_W.z() < margin)) continue;
     Contact c;
     c.pair = kTablePair;
-    c.key = kTablePair * 32 + k;
+    c.key = kTablePair * kKeysPerPair + k;
     c.p_W = p_W;
     c.n_W = Eigen::Vector3d::UnitZ();
     c.separation_m = p_W.z();
@@ -112,12 +127,39 @@ void ContactsFromJaws(const GraspModel& model, const GraspState& state, double h
       if (std::abs(f.u_W.dot(d)) > half_width || std::abs(f.w_W.dot(d)) > half_length) continue;
       Contact c;
       c.pair = pair;
-      c.key = pair * 32 + k;
+      c.key = pair * kKeysPerPair + k;
       c.p_W = p_W;
       c.n_W = f.n_W;
       c.separation_m = s;
       c.v_other_W = velocity_at(p_W);
       if (!Push(w, c)) return;
+    }
+    // The object's edges clipped to the face's sides: where an edge leaves the face sideways
+    // (an edge across the face, or a box edge on a jaw narrower than the box), the clipped end
+    // is a contact; unclipped ends are support points, already in.
+    SupportEdges edges;
+    const int num_edges = CalcSupportEdges(model.shape, edges);
+    for (int e = 0; e < num_edges; ++e) {
+      const Eigen::Vector3d a_W = p_WO + R_WO * points_O[edges[e][0]];
+      const Eigen::Vector3d b_W = p_WO + R_WO * points_O[edges[e][1]];
+      double t0 = 0.0, t1 = 1.0;
+      if (!ClipToBand(f.u_W, f.c_W, half_width, a_W, b_W, t0, t1)) continue;
+      if (!ClipToBand(f.w_W, f.c_W, half_length, a_W, b_W, t0, t1)) continue;
+      for (int end = 0; end < 2; ++end) {
+        const double t = end == 0 ? t0 : t1;
+        if (!(t > kUnclipped && t < 1.0 - kUnclipped)) continue;
+        const Eigen::Vector3d p_W = a_W + t * (b_W - a_W);
+        const double s = f.n_W.dot(p_W - f.c_W);
+        if (!(s < margin && s > deepest)) continue;
+        Contact c;
+        c.pair = pair;
+        c.key = pair * kKeysPerPair + kMaxSupportPoints + kJawLineSamples + 2 * e + end;
+        c.p_W = p_W;
+        c.n_W = f.n_W;
+        c.separation_m = s;
+        c.v_other_W = velocity_at(p_W);
+        if (!Push(w, c)) return;
+      }
     }
     // Lines from the face's corners, edge midpoints and centre along its normal: where one
     // enters the object behind the face (or within the margin in front of it), the object's
@@ -134,7 +176,7 @@ void ContactsFromJaws(const GraspModel& model, const GraspState& state, double h
       if (!(s_in < margin && s_in > deepest && s_out > 0.0)) continue;
       Contact c;
       c.pair = pair;
-      c.key = pair * 32 + kMaxSupportPoints + k;
+      c.key = pair * kKeysPerPair + kMaxSupportPoints + k;
       c.p_W = q_W + s_in * f.n_W;
       c.n_W = f.n_W;
       c.separation_m = s_in;

@@ -52,11 +52,12 @@ void UpdateMetrics(const GraspModel& model, double dt, const GraspWorkspace& w, 
     if (!m.grasping) {
       m.grasping = true;
       ++m.grasps;
-      m.touch_pose = state.X_WO;
+      // The object as the jaws found it: at the start of the step in which they touched.
+      m.touch_pose = w.X_WO_start;
       const Eigen::Quaterniond q_WT(state.X_WT.q());
       const Eigen::Vector3d closing_W = q_WT * Eigen::Vector3d::UnitY();
-      m.alignment_angle_rad = CalcAlignmentAngle(model, state.X_WO.q(), closing_W);
-      m.closing_offset_m = CalcClosingOffset(state.X_WO.p_W, state.X_WT.p_W, closing_W);
+      m.alignment_angle_rad = CalcAlignmentAngle(model, m.touch_pose.q(), closing_W);
+      m.closing_offset_m = CalcClosingOffset(m.touch_pose.p_W, state.X_WT.p_W, closing_W);
     }
     m.time_since_jaw_contact_s = 0.0;
   } else if (m.grasping) {

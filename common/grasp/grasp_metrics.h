@@ -16,8 +16,9 @@ double CalcClosingOffset(const Eigen::Vector3d& p_WO, const Eigen::Vector3d& p_W
 // Rotation angle between two orientations, in [0, pi].
 double CalcRotationAngle(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b);
 
-// Stage: reads the step's outputs (state.out), the tool (state.X_WT, the new one) and the
-// slip of the step (w.slip_m); writes state.metrics.
+// Stage: reads the step's outputs (state.out), the tool (state.X_WT, the new one), the slip
+// of the step (w.slip_m) and the object's pose at its start (w.X_WO_start); writes
+// state.metrics.
 void UpdateMetrics(const GraspModel& model, double dt, const GraspWorkspace& w, GraspState& state);
 
 }  // namespace microdex::grasp

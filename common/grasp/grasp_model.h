@@ -15,10 +15,15 @@ namespace microdex::grasp {
 // Contact pairs, the index of a contact's pair.
 enum ContactPair : int { kTablePair = 0, kJawPlusPair = 1, kJawMinusPair = 2, kNumPairs = 3 };
 
-// Capacity of the contact list: per jaw the object's support points plus the 9 line samples of
-// the face (grasp_contacts.cc), plus the object's support points on the table.
+// Capacity of the contact list. The candidates per jaw are the object's support points, the 9
+// line samples of the face and the two clipped ends of each support edge (grasp_contacts.cc),
+// and on the table the support points; of those only the ones near the face count, which for
+// the shapes here stays below this bound (an overflow is counted in the warnings).
 inline constexpr int kJawLineSamples = 9;
-inline constexpr int kMaxContacts = 3 * kMaxSupportPoints + 2 * kJawLineSamples;
+inline constexpr int kMaxContacts = 64;
+// Contact keys: pair * kKeysPerPair + feature (support point, then line sample, then clipped
+// edge end).
+inline constexpr int kKeysPerPair = 64;
 
 struct GraspModel {
   GraspDef def;  // validated
@@ -55,7 +60,7 @@ struct Pose {
 };
 
 // A contact's accumulated impulse, kept for the next step's warm start. key identifies the
-// contact across steps: pair * 32 + feature (support point or line sample index); -1: unused.
+// contact across steps (kKeysPerPair); -1: unused.
 struct ContactImpulse {
   int key = -1;
   double normal_N_s = 0.0;
@@ -139,6 +144,7 @@ struct Contact {
   Eigen::Vector3d t2_W = Eigen::Vector3d::Zero();
   double normal_mass_kg = 0.0;
   Eigen::Matrix2d tangent_mass_kg = Eigen::Matrix2d::Zero();
+  double slide_mass_kg = 0.0;
   double softness = 0.0;  // m/(N s) per N s
   double bias_m_per_s = 0.0;
   double normal_N_s = 0.0;
@@ -171,6 +177,7 @@ struct GraspWorkspace {
   Eigen::Vector3d f_impulse_T_W = Eigen::Vector3d::Zero();
   Eigen::Vector3d tau_impulse_T_W = Eigen::Vector3d::Zero();
   double slip_m = 0.0;
+  Pose X_WO_start;  // the object at the start of the step
 };
 
 // An object of the model at rest on the table (lowest point at z = 0), centre of mass above

@@ -123,6 +123,26 @@ int CalcSupportPoints(const ShapeGeometry& shape, const Eigen::Vector3d& d_O,
   return 0;
 }
 
+int CalcSupportEdges(const ShapeGeometry& shape, SupportEdges& edges) {
+  switch (shape.kind) {
+    case ShapeKind::kBox: {
+      int n = 0;
+      for (int k = 0; k < 8; ++k) {
+        for (int bit = 1; bit < 8; bit <<= 1) {
+          if ((k & bit) == 0) edges[n++] = {k, k | bit};
+        }
+      }
+      return n;
+    }
+    case ShapeKind::kCylinder:
+      for (int k = 0; k < 4; ++k) edges[k] = {k, k + 4};
+      return 4;
+    case ShapeKind::kSphere:
+      return 0;
+  }
+  return 0;
+}
+
 bool CalcLineInterval(const ShapeGeometry& shape, const Eigen::Vector3d& p_O,
                       const Eigen::Vector3d& d_O, double& s_in, double& s_out) {
   s_in = -kInf;

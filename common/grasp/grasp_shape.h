@@ -44,6 +44,15 @@ MassProperties CalcMassProperties(const ShapeDef& def, double density_kg_per_m3)
 int CalcSupportPoints(const ShapeGeometry& shape, const Eigen::Vector3d& d_O,
                       std::array<Eigen::Vector3d, kMaxSupportPoints>& points_O);
 
+// At most this many support edges per shape.
+inline constexpr int kMaxSupportEdges = 12;
+using SupportEdges = std::array<std::array<int, 2>, kMaxSupportEdges>;
+
+// The straight edges between support points (indices into CalcSupportPoints' output), which a
+// bounded face clips: a box's 12 edges, a cylinder's 4 side lines through its rim points; none
+// for a sphere. Returns how many were written.
+int CalcSupportEdges(const ShapeGeometry& shape, SupportEdges& edges);
+
 // Where the line p_O + s d_O (d_O unit) is inside the body: [s_in, s_out]. Returns false when
 // the line misses it.
 bool CalcLineInterval(const ShapeGeometry& shape, const Eigen::Vector3d& p_O,

@@ -52,6 +52,9 @@ void PrepareContact(const GraspModel& model, const Body& body, const Eigen::Vect
   k(1, 1) = body.inv_mass + rt2.dot(body.inv_inertia_W * rt2);
   k(0, 1) = k(1, 0) = rt1.dot(body.inv_inertia_W * rt2);
   c.tangent_mass_kg = k.inverse();
+  const double mean = 0.5 * (k(0, 0) + k(1, 1));
+  const double spread = std::hypot(0.5 * (k(0, 0) - k(1, 1)), k(0, 1));
+  c.slide_mass_kg = 1.0 / (mean + spread);
   // Implicit spring and damper: the impulse over h is lambda = -h k (C + h Cdot+) - h c Cdot+,
   // i.e. the row Cdot+ + bias + softness lambda = 0 with softness 1 / (h (h k + c)) and
   // bias k C / (h k + c) (Catto, "Soft Constraints", GDC 2011; ODE's ERP/CFM).
@@ -106,6 +109,8 @@ void SolveContacts(const GraspModel& model, double h, GraspWorkspace& w, GraspSt
   // Projected Gauss–Seidel: each normal row solves its soft constraint and is clamped to
   // pushing; each friction pair stops the contact's slip and is projected onto the Coulomb disc
   // |p_t| <= mu p_n.
+  // (Alternating forward and backward sweeps was tried and left a symmetric grasp turned by
+  // about three times more at 20 iterations.)
   for (int it = 0; it < model.def.solver.iterations; ++it) {
     for (int i = 0; i < n; ++i) {
       Contact& c = w.contacts[i];
@@ -119,10 +124,17 @@ void SolveContacts(const GraspModel& model, double h, GraspWorkspace& w, GraspSt
       const double mu = model.friction[c.pair];
       const Eigen::Vector3d v_rel = body.PointVelocity(c.r_W) - c.v_other_W;
       const Eigen::Vector2d vt(c.t1_W.dot(v_rel), c.t2_W.dot(v_rel));
+      // Sticking: the 2x2 block stops the slip exactly. Sliding: a step with a scalar mass
+      // (1 / the block's largest inverse mass) projected onto the disc, whose fixed point has
+      // the friction exactly opposite the slip (maximal dissipation); projecting the block
+      // step instead tilts the friction off the slip and was measured to spin a sliding box.
       Eigen::Vector2d pt = c.friction_N_s - c.tangent_mass_kg * vt;
       const double bound = mu * pn;
-      const double norm = pt.norm();
-      if (norm > bound) pt *= norm > 0.0 ? bound / norm : 0.0;
+      if (pt.norm() > bound) {
+        pt = c.friction_N_s - c.slide_mass_kg * vt;
+        const double norm = pt.norm();
+        pt *= norm > bound ? bound / norm : 1.0;
+      }
       const Eigen::Vector2d dt = pt - c.friction_N_s;
       body.Apply(c.r_W, dt.x() * c.t1_W + dt.y() * c.t2_W);
       c.friction_N_s = pt;

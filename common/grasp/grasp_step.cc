@@ -96,7 +96,7 @@ void StepGrasp(const GraspModel& model, const GraspInput& in, GraspWorkspace& w,
   Pose tool;
   double gripper = 0.0;
   const bool has_jaws = ReadTool(in, state, tool, gripper);
-  const Pose X_WO_before = state.X_WO;
+  w.X_WO_start = state.X_WO;
 
   w.warm = state.impulses;
   w.normal_impulse_N_s.fill(0.0);
@@ -124,7 +124,7 @@ void StepGrasp(const GraspModel& model, const GraspInput& in, GraspWorkspace& w,
   FinishOutputs(dt, w, state);
   if (!Finite(state)) {
     ++state.warnings.nonfinite_resets;
-    state.X_WO = X_WO_before;
+    state.X_WO = w.X_WO_start;
     state.v_WO.setZero();
     state.w_WO.setZero();
     state.impulses = {};
