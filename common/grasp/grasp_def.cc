@@ -69,6 +69,10 @@ void GraspDef::Validate() const {
           "a ratio in [0, 100]");
   Require(InRange(contact.speculative_margin_m, 0.0, 0.01), "contact.speculative_margin_m",
           "a length in [0, 0.01] m");
+  Require(InRange(contact.jaw_stiffness_limit, 1e-3, 1e12), "contact.jaw_stiffness_limit",
+          "a ratio in [1e-3, 1e12]");
+  Require(InRange(contact.table_stiffness_limit, 1e-3, 1e12), "contact.table_stiffness_limit",
+          "a ratio in [1e-3, 1e12]");
   Require(solver.iterations >= 1 && solver.iterations <= 1000, "solver.iterations",
           "an integer in [1, 1000]");
   Require(solver.substeps >= 1 && solver.substeps <= 100, "solver.substeps",

@@ -50,6 +50,12 @@ struct ContactDef {
   // Points closer than this (plus the distance the object moves in a step) become speculative
   // contacts, so a fast object cannot pass through a face between two steps.
   double speculative_margin_m = 20e-6;
+  // A contact point's spring is at most this times m_eff / h^2 (m_eff its effective mass, h the
+  // sub-step): the stiffest spring the step resolves for that mass (README.md "Solver"). The
+  // jaws squeeze from both sides and need the tighter limit; the table's sets its sag under
+  // the weight, at most g h^2 / limit.
+  double jaw_stiffness_limit = 1.0;
+  double table_stiffness_limit = 10.0;
 };
 
 // The contact solver: projected Gauss–Seidel on the normal and friction impulses, warm started.

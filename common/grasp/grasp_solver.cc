@@ -58,8 +58,18 @@ void PrepareContact(const GraspModel& model, const Body& body, const Eigen::Vect
   // Implicit spring and damper: the impulse over h is lambda = -h k (C + h Cdot+) - h c Cdot+,
   // i.e. the row Cdot+ + bias + softness lambda = 0 with softness 1 / (h (h k + c)) and
   // bias k C / (h k + c) (Catto, "Soft Constraints", GDC 2011; ODE's ERP/CFM).
-  const double k_point = model.stiffness_N_per_m[c.pair] / kPointsPerFace;
-  const double c_point = model.damping_N_s_per_m[c.pair] / kPointsPerFace;
+  // The stiffness a step resolves: at most stiffness_limit m_eff / h^2 (Box2D v3 likewise
+  // bounds its contact frequency by the sub-step rate). Stiffer springs on light objects were
+  // measured to pump energy when a rotating object is squeezed between the jaws: the implicit
+  // spring is stable only for the linearised contact geometry.
+  // The table pushes from one side only and takes a higher limit (its sag under the weight,
+  // at most g h^2 / limit, stays about a micrometre at 1 kHz).
+  const double ratio = c.pair == kTablePair ? model.def.contact.table_stiffness_limit
+                                            : model.def.contact.jaw_stiffness_limit;
+  const double k_limit = ratio * c.normal_mass_kg / (h * h);
+  const double k_point = std::min(model.stiffness_N_per_m[c.pair] / kPointsPerFace, k_limit);
+  const double c_point =
+      2.0 * model.def.contact.damping_ratio * std::sqrt(k_point * c.normal_mass_kg);
   const double hk_c = h * k_point + c_point;
   c.softness = 1.0 / (h * hk_c);
   c.bias_m_per_s = k_point * c.separation_m / hk_c;
