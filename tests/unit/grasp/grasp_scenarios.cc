@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 
@@ -73,7 +74,8 @@ InclineResult RunIncline(GraspDef def, double theta_rad, double t0_s, double t1_
   return r;
 }
 
-LiftResult RunLift(const GraspDef& def, double width_m, const LiftOptions& o) {
+LiftResult RunLift(const GraspDef& def, double width_m, const LiftOptions& o,
+                   std::vector<double>* step_us) {
   const GraspModel model = MakeGraspModel(def);
   GraspState state = MakeGraspStateOnTable(model, Eigen::Vector3d::Zero());
   GraspWorkspace w;
@@ -94,7 +96,12 @@ LiftResult RunLift(const GraspDef& def, double width_m, const LiftOptions& o) {
     in.gripper = g_closed * Smooth(t / t_close);
     const double rise = o.lift_m * Smooth((t - t_settle) / o.lift_s);
     in.X_WT.translation() = p0_WT + Eigen::Vector3d(0.0, 0.0, rise);
+    const auto t0 = std::chrono::steady_clock::now();
     StepGrasp(model, in, w, state);
+    if (step_us != nullptr) {
+      step_us->push_back(
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    }
     if (k == static_cast<int>(std::lround(t_settle / o.dt_s))) {
       r.grip_force_N = state.metrics.grip_force_N;
     }

@@ -3,6 +3,7 @@
 // forceps that close on an object, lift it and hold it.
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "common/grasp/grasp_model.h"
 
@@ -41,7 +42,9 @@ struct LiftResult {
   GraspState final;
 };
 // The object's width along the closing direction must be given (the jaws' gap is set from it).
-LiftResult RunLift(const GraspDef& def, double width_m, const LiftOptions& options);
+// step_us, when given, receives the wall time of every StepGrasp call in microseconds.
+LiftResult RunLift(const GraspDef& def, double width_m, const LiftOptions& options,
+                   std::vector<double>* step_us = nullptr);
 
 // The smallest grip force that lifts the object, by bisection on the squeeze: the grip forces
 // of the last squeeze that dropped it and the first that lifted it.
