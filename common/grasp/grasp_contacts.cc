@@ -166,8 +166,9 @@ void ContactsFromJaws(const GraspModel& model, const GraspState& state, double h
     // entry point is a contact.
     const Eigen::Vector3d d_O = R_WO.transpose() * f.n_W;
     for (int k = 0; k < kJawLineSamples; ++k) {
-      const double a = static_cast<double>(k % 3 - 1) * half_width;
-      const double b = static_cast<double>(k / 3 - 1) * half_length;
+      const int column = k % 3, row = k / 3;
+      const double a = static_cast<double>(column - 1) * half_width;
+      const double b = static_cast<double>(row - 1) * half_length;
       const Eigen::Vector3d q_W = f.c_W + a * f.u_W + b * f.w_W;
       double s_in = 0.0, s_out = 0.0;
       if (!CalcLineInterval(model.shape, R_WO.transpose() * (q_W - p_WO), d_O, s_in, s_out)) {

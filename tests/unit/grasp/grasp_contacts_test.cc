@@ -99,9 +99,9 @@ double Extent(const GraspModel& model, const Eigen::Quaterniond& q, const Eigen:
   return e;
 }
 
-class ContactPeerTest : public ::testing::TestWithParam<ShapeKind> {};
+class GraspContactPeerTest : public ::testing::TestWithParam<ShapeKind> {};
 
-TEST_P(ContactPeerTest, TableDepthMatchesFclHalfspace) {
+TEST_P(GraspContactPeerTest, TableDepthMatchesFclHalfspace) {
   const GraspDef def = ShapeDef(GetParam());
   const GraspModel model = MakeGraspModel(def);
   const auto shape = FclShape(def);
@@ -131,7 +131,7 @@ TEST_P(ContactPeerTest, TableDepthMatchesFclHalfspace) {
   }
 }
 
-TEST_P(ContactPeerTest, JawDepthMatchesFclPlate) {
+TEST_P(GraspContactPeerTest, JawDepthMatchesFclPlate) {
   const GraspDef def = ShapeDef(GetParam());
   const GraspModel model = MakeGraspModel(def);
   const auto shape = FclShape(def);
@@ -182,7 +182,7 @@ TEST_P(ContactPeerTest, JawDepthMatchesFclPlate) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Shapes, ContactPeerTest,
+INSTANTIATE_TEST_SUITE_P(GraspShapes, GraspContactPeerTest,
                          ::testing::Values(ShapeKind::kBox, ShapeKind::kCylinder,
                                            ShapeKind::kSphere),
                          [](const auto& p) { return std::string(ShapeKindName(p.param)); });
@@ -192,7 +192,7 @@ INSTANTIATE_TEST_SUITE_P(Shapes, ContactPeerTest,
 // exactly for a polyhedron. FCL's box-box returns the minimum translation over all separating
 // axes: never deeper than the depth along the jaw's normal, and equal to it whenever its normal
 // is the jaw's.
-TEST(ContactPeer, NarrowJawOnABoxMatchesFclAlongTheFaceNormal) {
+TEST(GraspContactPeer, NarrowJawOnABoxMatchesFclAlongTheFaceNormal) {
   GraspDef def = ShapeDef(ShapeKind::kBox);
   def.shape.box_size_m = Eigen::Vector3d(1e-3, 1e-3, 1e-3);
   def.jaws.width_m = 0.3e-3;
@@ -258,7 +258,7 @@ TEST(ContactPeer, NarrowJawOnABoxMatchesFclAlongTheFaceNormal) {
   EXPECT_GT(along_normal, trials / 10) << "the equal-depth branch is exercised";
 }
 
-TEST(MassProperties, MatchFcl) {
+TEST(GraspMassProperties, MatchFcl) {
   for (ShapeKind kind : {ShapeKind::kBox, ShapeKind::kCylinder, ShapeKind::kSphere}) {
     const GraspDef def = ShapeDef(kind);
     const double density = 2500.0;
@@ -277,7 +277,7 @@ TEST(MassProperties, MatchFcl) {
 // FCL's collide reports its contacts in a std::vector, so it allocates per call; the step's
 // analytic contact generation for the same pair does not. (If a later FCL stops allocating,
 // this fails and the choice is worth revisiting.)
-TEST(ContactPeer, FclCollideAllocatesTheAnalyticGenerationDoesNot) {
+TEST(GraspContactPeer, FclCollideAllocatesTheAnalyticGenerationDoesNot) {
   const GraspDef def = ShapeDef(ShapeKind::kBox);
   const GraspModel model = MakeGraspModel(def);
   GraspState state;

@@ -115,7 +115,7 @@ SweepReport RunSweepCase(const SweepCase& c) {
   return r;
 }
 
-TEST(Stability, SweepOfSizesMassesFrictionStiffnessAndJawSpeed) {
+TEST(GraspStability, SweepOfSizesMassesFrictionStiffnessAndJawSpeed) {
   int runs = 0;
   double max_table = 0.0;
   for (ShapeKind kind : {ShapeKind::kBox, ShapeKind::kCylinder, ShapeKind::kSphere}) {
@@ -152,7 +152,7 @@ TEST(Stability, SweepOfSizesMassesFrictionStiffnessAndJawSpeed) {
 // With the jaws away, the object and the table are a closed system: dropped, spinning and
 // sliding, its kinetic plus potential energy never rises (the soft contact's stored energy is
 // not counted, which only lowers the measured sum while it is compressed).
-TEST(Stability, DroppedObjectNeverGainsEnergy) {
+TEST(GraspStability, DroppedObjectNeverGainsEnergy) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int runs = 0;
