@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cstdio>
 #include <memory>
 #include <random>
 
@@ -17,6 +18,7 @@
 #include "fcl/geometry/shape/sphere.h"
 #include "fcl/narrowphase/collision.h"
 #include "fcl/narrowphase/collision_object.h"
+#include "fcl/narrowphase/distance.h"
 #include "tests/support/alloc_counter.h"
 
 namespace microdex::grasp {
@@ -274,9 +276,9 @@ TEST(GraspMassProperties, MatchFcl) {
   }
 }
 
-// FCL's collide reports its contacts in a std::vector, so it allocates per call; the step's
-// analytic contact generation for the same pair does not. (If a later FCL stops allocating,
-// this fails and the choice is worth revisiting.)
+// FCL's collide reports its contacts in a std::vector and its distance allocates too (two
+// allocations per call each, measured); the step's analytic contact generation does not. (If a
+// later FCL stops allocating, this fails and the choice is worth revisiting.)
 TEST(GraspContactPeer, FclCollideAllocatesTheAnalyticGenerationDoesNot) {
   const GraspDef def = ShapeDef(ShapeKind::kBox);
   const GraspModel model = MakeGraspModel(def);
@@ -296,10 +298,24 @@ TEST(GraspContactPeer, FclCollideAllocatesTheAnalyticGenerationDoesNot) {
   ClearContacts(w);
   ContactsFromTable(model, state, 1e-3, w);
   const std::uint64_t ours = microdex::testing::StopCountingAllocations();
+  // fcl::distance between the object and a jaw plate (box-box, GJK).
+  const fcl::CollisionObjectd plate(std::make_shared<fcl::Boxd>(1e-3, 0.3e-3, 1e-3),
+                                    fcl::Transform3d(Eigen::Translation3d(0.0, 1e-3, 0.19e-3)));
+  fcl::DistanceRequestd distance_request(true);
+  fcl::DistanceResultd distance_result;
+  microdex::testing::StartCountingAllocations();
+  const double distance = fcl::distance(&object, &plate, distance_request, distance_result);
+  const std::uint64_t fcl_distance_allocations = microdex::testing::StopCountingAllocations();
   ASSERT_EQ(result.numContacts(), 1u);
+  EXPECT_GT(distance, 0.0);
   EXPECT_GT(w.num_contacts, 0);
   EXPECT_GT(fcl_allocations, 0u);
+  EXPECT_GT(fcl_distance_allocations, 0u);
   EXPECT_EQ(ours, 0u);
+  std::printf("allocations per call: fcl::collide %llu, fcl::distance %llu, ours %llu\n",
+              static_cast<unsigned long long>(fcl_allocations),
+              static_cast<unsigned long long>(fcl_distance_allocations),
+              static_cast<unsigned long long>(ours));
 }
 
 }  // namespace
