@@ -346,8 +346,10 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
   strand_b.push_back(out.p_puncture_last_W);
   for (int i = out.last_below + 1; i < n; ++i) strand_b.push_back(polyline[i]);
 
-  if (options.classify_closure) out.closure = RecognizeKnot(polyline);
-  out.gauss_linking = GaussLinkingIntegral(strand_a, strand_b);
+  if (options.full_evidence) {
+    out.closure = RecognizeKnot(polyline);
+    out.gauss_linking = GaussLinkingIntegral(strand_a, strand_b);
+  }
 
   for (int i = out.first_below; i <= out.last_below; ++i) {
     if (polyline[i].z() > kStitchGraze_diameters * diameter) {
@@ -466,7 +468,7 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
 StitchKnotType RecogniseStitchKnot(std::span<const Eigen::Vector3d> polyline,
                                    const StitchKnotOptions& options) {
   StitchKnotOptions fast = options;
-  fast.classify_closure = false;
+  fast.full_evidence = false;
   return AnalyzeStitchKnot(polyline, fast).type;
 }
 

@@ -69,8 +69,9 @@ struct StitchKnotOptions {
   // it). In a throw both strands wind about their common axis.
   double post_straightness = 0.85;
   double hitch_length_ratio = 0.75;
-  // Also classify the closure of the whole thread (RecognizeKnot) as evidence.
-  bool classify_closure = true;
+  // Also compute the evidence the class does not need: the Gauss linking integral and the
+  // knot type of the whole thread closed far outside (RecognizeKnot).
+  bool full_evidence = true;
   // Throws std::invalid_argument naming the bad field.
   void Validate() const;
 };
@@ -108,10 +109,10 @@ struct StitchKnotAnalysis {
   double total_twist_turns = 0.0;
   // Gauss linking integral of the two strands above the tissue, both oriented away from it:
   // a projection-free double integral, close to total_twist_turns when the strands' common
-  // axis is nearly straight (Calugareanu-White: Lk = Tw + Wr).
+  // axis is nearly straight (Calugareanu-White: Lk = Tw + Wr). Full evidence only.
   double gauss_linking = 0.0;
   // Knot of the whole thread closed far outside (RecognizeKnot): none for every knot made of
-  // throws and hitches (README.md); kUnknown when not computed.
+  // throws and hitches (README.md); kUnknown when not computed (full evidence only).
   KnotType closure = KnotType::kUnknown;
 };
 

@@ -1,6 +1,7 @@
 // microdex-bench knot: the recognised knot of an OBJ polyline (README.md "Command-line
-// contracts"), and
-// --speed, the cost of recognition against thread length (common/knot/README.md "Speed").
+// contracts"; a thread through the tissue gets the class of the knot tied around its stitch),
+// --speed, the cost of recognition against thread length (common/knot/README.md "Speed"), and
+// --stitch-report, the stitch-knot confusion matrix and timings (common/knot/README.md).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -15,7 +16,10 @@
 #include "common/knot/invariants.h"
 #include "common/knot/obj.h"
 #include "common/knot/recognition.h"
+#include "common/knot/stitch_knot.h"
+#include "common/knot/stitch_knot_shapes.h"
 #include "tests/support/knot_shapes.h"
+#include "tests/support/stitch_knot_variants.h"
 
 namespace microdex::bench {
 namespace {
@@ -26,6 +30,39 @@ namespace shapes = knot::shapes;
 // Thread diameter of the speed cases (10-0 nylon); nodes one diameter apart.
 constexpr double kDiameter_m = 3e-5;
 
+// The class of the knot tied around the stitch of a thread through the tissue.
+int PrintStitchKnot(const std::string& path, const std::vector<Eigen::Vector3d>& nodes,
+                    bool verbose) {
+  knot::StitchKnotAnalysis a;
+  try {
+    a = knot::AnalyzeStitchKnot(nodes, {.full_evidence = verbose});
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "microdex-bench knot: %s: %s\n", path.c_str(), e.what());
+    return 2;
+  }
+  std::printf("%s\n", std::string(knot::StitchKnotName(a.type)).c_str());
+  if (verbose) {
+    std::fprintf(stderr,
+                 "stitch: nodes %zu, below the tissue %d..%d, diameter %.3g m, total twist %.3f "
+                 "turns, Gauss linking %.3f, closure %s%s%s\n",
+                 nodes.size(), a.first_below, a.last_below, a.thread_diameter_m,
+                 a.total_twist_turns, a.gauss_linking,
+                 std::string(knot::KnotName(a.closure)).c_str(), a.reason.empty() ? "" : ", ",
+                 a.reason.c_str());
+    for (std::size_t i = 0; i < a.throws.size(); ++i) {
+      const knot::StitchThrow& t = a.throws[i];
+      std::fprintf(stderr,
+                   "  %zu: %s %s x%d (twist %+.3f turns), strand straightness %.2f / %.2f, "
+                   "s = [%.3g, %.3g] m%s\n",
+                   i + 1, t.hitch ? "half hitch" : "throw", t.hand > 0 ? "right" : "left", t.turns,
+                   t.twist_turns, t.straightness[0], t.straightness[1], t.start_s_m, t.end_s_m,
+                   t.hitch ? (t.post_strand == 1 ? ", post: first strand" : ", post: last strand")
+                           : "");
+    }
+  }
+  return 0;
+}
+
 int PrintKnot(const std::string& path, bool verbose) {
   std::vector<Eigen::Vector3d> nodes;
   try {
@@ -34,6 +71,7 @@ int PrintKnot(const std::string& path, bool verbose) {
     std::fprintf(stderr, "microdex-bench knot: %s\n", e.what());
     return 2;
   }
+  if (knot::IsStitchPolyline(nodes)) return PrintStitchKnot(path, nodes, verbose);
   knot::KnotAnalysis a;
   try {
     a = knot::AnalyzeKnot(nodes, {.locate = verbose});
@@ -157,6 +195,53 @@ int RunSpeed(const std::vector<int>& sizes, int repeats, const std::string& json
   return wrong > 0 ? 1 : 0;
 }
 
+// Confusion matrix of RecogniseStitchKnot over the seeded variants (tests/support
+// stitch_knot_variants.h) at each noise level, and the time per recognition of ~2000-node
+// threads.
+int RunStitchReport(int count, const std::vector<double>& noises, int repeats) {
+  namespace variants = knot::variants;
+  int wrong = 0;
+  for (double noise : noises) {
+    variants::ConfusionMatrix confusion{};
+    for (std::size_t row = 0; row < variants::kStitchClasses.size(); ++row) {
+      for (const auto& v :
+           variants::RandomStitchVariants(variants::kStitchClasses[row], count, 77, noise)) {
+        const int col = static_cast<int>(knot::RecogniseStitchKnot(v.thread));
+        ++confusion[row][col];
+        if (col != static_cast<int>(variants::kStitchClasses[row])) ++wrong;
+      }
+    }
+    std::printf("seed 77, %d variants per class, noise +-%.2f diameters:\n%s\n", count, noise,
+                variants::FormatConfusion(confusion).c_str());
+  }
+  std::printf("%-11s %6s %-11s %14s %14s\n", "class", "nodes", "result", "recognise_us",
+              "analyse_us");
+  for (knot::StitchKnotType kind : variants::kStitchClasses) {
+    knot::StitchKnotShapeDef def;
+    def.kind = kind;
+    def.tightness = 0.5;
+    def.tail_length_m = 900.0 * def.thread_diameter_m;  // about 2000 nodes
+    def.tail_first_elevation_rad = 0.6;
+    def.tail_last_elevation_rad = 0.6;
+    const std::vector<Eigen::Vector3d> thread = knot::MakeStitchKnot(def);
+    knot::StitchKnotType type = knot::StitchKnotType::kUnknown;
+    const double recognise_us =
+        MedianMicroseconds([&] { type = knot::RecogniseStitchKnot(thread); }, repeats);
+    const double analyse_us =
+        MedianMicroseconds([&] { (void)knot::AnalyzeStitchKnot(thread); }, repeats);
+    if (type != kind) ++wrong;
+    std::printf("%-11s %6zu %-11s %14.1f %14.1f\n",
+                std::string(knot::StitchKnotName(kind)).c_str(), thread.size(),
+                std::string(knot::StitchKnotName(type)).c_str(), recognise_us, analyse_us);
+  }
+  std::printf(
+      "(medians over %d runs; recognise = RecogniseStitchKnot, analyse = AnalyzeStitchKnot "
+      "with the closure's knot type)\n",
+      repeats);
+  if (wrong > 0) std::fprintf(stderr, "microdex-bench knot: %d stitch knot(s) misrecognised\n", wrong);
+  return wrong > 0 ? 1 : 0;
+}
+
 int RunKnot(int argc, char** argv) {
   CLI::App app{"microdex-bench knot FILE.obj: print the recognised knot of the polyline"};
   std::string file;
@@ -165,7 +250,16 @@ int RunKnot(int argc, char** argv) {
   std::vector<int> sizes = {200, 500, 1000};
   int repeats = 21;
   std::string json;
+  bool stitch_report = false;
+  int stitch_variants = 60;
+  std::vector<double> stitch_noise = {0.15};
   app.add_option("file", file, "OBJ file with the thread as an 'l' element");
+  app.add_flag("--stitch-report", stitch_report,
+               "confusion matrix and timings of the stitch-knot recogniser instead");
+  app.add_option("--variants", stitch_variants, "--stitch-report: variants per class")
+      ->check(CLI::Range(1, 100000));
+  app.add_option("--noise", stitch_noise, "--stitch-report: noise levels, in thread diameters")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--speed", speed, "time recognition on reference threads instead");
   app.add_flag("--verbose,-v", verbose, "print the invariants and the knotted core on stderr");
   app.add_option("--nodes", sizes, "--speed: thread sizes")->check(CLI::Range(8, 100000));
@@ -178,6 +272,7 @@ int RunKnot(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   if (speed) return RunSpeed(sizes, repeats, json);
+  if (stitch_report) return RunStitchReport(stitch_variants, stitch_noise, repeats);
   if (file.empty()) {
     std::fprintf(stderr, "microdex-bench knot: expected FILE.obj (or --speed)\n");
     return 2;
@@ -187,7 +282,9 @@ int RunKnot(int argc, char** argv) {
 
 }  // namespace
 
-MICRODEX_REGISTER_BENCH(knot, "knot", "recognised knot of an OBJ polyline; --speed timings",
+MICRODEX_REGISTER_BENCH(knot, "knot",
+                        "recognised knot of an OBJ polyline (or of the knot around its stitch); "
+                        "--speed, --stitch-report",
                         RunKnot);
 
 }  // namespace microdex::bench
