@@ -220,7 +220,8 @@ std::optional<StitchKnotType> StitchKnotTypeFromName(std::string_view name) {
 void StitchKnotOptions::Validate() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   if (!std::isfinite(thread_diameter_m) || thread_diameter_m < 0.0) {
-    throw std::invalid_argument("StitchKnotOptions.thread_diameter_m: expected a finite value >= 0");
+    throw std::invalid_argument(
+        "StitchKnotOptions.thread_diameter_m: expected a finite value >= 0");
   }
   if (!positive(contact_diameters)) {
     throw std::invalid_argument("StitchKnotOptions.contact_diameters: expected > 0");
@@ -284,8 +285,8 @@ double GaussLinkingIntegral(std::span<const Eigen::Vector3d> a,
       const Eigen::Vector3d n2 = unit_cross(r14, r24);
       const Eigen::Vector3d n3 = unit_cross(r24, r23);
       const Eigen::Vector3d n4 = unit_cross(r23, r13);
-      const double omega = safe_asin(n1.dot(n2)) + safe_asin(n2.dot(n3)) +
-                           safe_asin(n3.dot(n4)) + safe_asin(n4.dot(n1));
+      const double omega = safe_asin(n1.dot(n2)) + safe_asin(n2.dot(n3)) + safe_asin(n3.dot(n4)) +
+                           safe_asin(n4.dot(n1));
       const double orient = (p4 - p3).cross(p2 - p1).dot(r13);
       if (orient != 0.0) sum += orient > 0 ? omega : -omega;
     }
@@ -303,8 +304,7 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
   }
   for (int i = 0; i < n; ++i) {
     if (!polyline[i].allFinite()) {
-      throw std::invalid_argument("stitch polyline: node " + std::to_string(i) +
-                                  " is not finite");
+      throw std::invalid_argument("stitch polyline: node " + std::to_string(i) + " is not finite");
     }
   }
   if (!(polyline.front().z() > 0.0) || !(polyline.back().z() > 0.0)) {
@@ -425,9 +425,10 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
   }
   std::vector<Run> runs = TwistRuns(twist, sigma, twisting, options.min_quiet_diameters * diameter,
                                     options.reversal_turns);
-  runs.erase(std::remove_if(runs.begin(), runs.end(),
-                            [&](const Run& r) { return std::abs(r.twist) < options.min_throw_turns; }),
-             runs.end());
+  runs.erase(
+      std::remove_if(runs.begin(), runs.end(),
+                     [&](const Run& r) { return std::abs(r.twist) < options.min_throw_turns; }),
+      runs.end());
   // A run's twist is counted from the middle of the quiet stretch before it to the middle of
   // the one after it: the slow start and end of a turn belong to the run.
   for (std::size_t q = 0; q < runs.size(); ++q) {

@@ -78,16 +78,16 @@ struct StitchKnotOptions {
 
 // A throw or half hitch found along the strands, in order from the tissue outwards.
 struct StitchThrow {
-  int hand = 0;                 // +1 right-handed, -1 left-handed
-  int turns = 0;                // full turns (1: single throw or hitch, 2: double throw)
-  double twist_turns = 0.0;     // measured signed twist of the run
-  bool hitch = false;           // one strand straight (the post), the other wound around it
-  int post_strand = 0;          // hitch: 1 the strand of the first node, 2 of the last node
-  double length_ratio = 0.0;    // shorter over longer strand length over the run
+  int hand = 0;               // +1 right-handed, -1 left-handed
+  int turns = 0;              // full turns (1: single throw or hitch, 2: double throw)
+  double twist_turns = 0.0;   // measured signed twist of the run
+  bool hitch = false;         // one strand straight (the post), the other wound around it
+  int post_strand = 0;        // hitch: 1 the strand of the first node, 2 of the last node
+  double length_ratio = 0.0;  // shorter over longer strand length over the run
   // Chord over arc length of each strand over the run (1: straight): [0] the strand of the
   // first node, [1] of the last node.
   std::array<double, 2> straightness = {0.0, 0.0};
-  double start_s_m = 0.0;       // along the strand of the first node, from its puncture
+  double start_s_m = 0.0;  // along the strand of the first node, from its puncture
   double end_s_m = 0.0;
   Eigen::Vector3d p_center_W = Eigen::Vector3d::Zero();
 };

@@ -180,7 +180,9 @@ std::vector<Eigen::Vector3d> MakeStitchKnot(const StitchKnotShapeDef& def) {
   Curve knot_b;
   double tau = 0.0;
   double phi = 0.0;
-  auto radial = [&](double angle) { return Eigen::Vector3d(std::cos(angle) * u + std::sin(angle) * v); };
+  auto radial = [&](double angle) {
+    return Eigen::Vector3d(std::cos(angle) * u + std::sin(angle) * v);
+  };
   auto emit = [&](double t, double angle) {
     knot_a.push_back(base + t * a - ra * radial(angle));
     knot_b.push_back(base + t * a + rb * radial(angle));
@@ -221,13 +223,13 @@ std::vector<Eigen::Vector3d> MakeStitchKnot(const StitchKnotShapeDef& def) {
   };
   Curve strand_a = leg(p_first, knot_a.front());
   strand_a.insert(strand_a.end(), knot_a.begin(), knot_a.end());
-  const Curve tail_a = tail(knot_a.back(), -1.0, 2.0 * d, def.tail_first_azimuth_rad,
-                            def.tail_first_elevation_rad);
+  const Curve tail_a =
+      tail(knot_a.back(), -1.0, 2.0 * d, def.tail_first_azimuth_rad, def.tail_first_elevation_rad);
   strand_a.insert(strand_a.end(), tail_a.begin(), tail_a.end());
   Curve strand_b = leg(p_last, knot_b.front());
   strand_b.insert(strand_b.end(), knot_b.begin(), knot_b.end());
-  const Curve tail_b = tail(knot_b.back(), 1.0, 4.0 * d, def.tail_last_azimuth_rad,
-                            def.tail_last_elevation_rad);
+  const Curve tail_b =
+      tail(knot_b.back(), 1.0, 4.0 * d, def.tail_last_azimuth_rad, def.tail_last_elevation_rad);
   strand_b.insert(strand_b.end(), tail_b.begin(), tail_b.end());
 
   // First free end -> first puncture -> stitch (half ellipse) -> last puncture -> last end.
@@ -256,9 +258,9 @@ std::vector<Eigen::Vector3d> MakeStitchKnot(const StitchKnotShapeDef& def) {
   }
   const double clearance = MinSelfDistance(thread, 2.5 * spacing);
   if (clearance < d) {
-    throw std::invalid_argument(
-        "StitchKnotShapeDef.tail_*_azimuth_rad: the tails would pass " +
-        std::to_string(clearance / d) + " diameters from the thread, less than one diameter");
+    throw std::invalid_argument("StitchKnotShapeDef.tail_*_azimuth_rad: the tails would pass " +
+                                std::to_string(clearance / d) +
+                                " diameters from the thread, less than one diameter");
   }
   return thread;
 }

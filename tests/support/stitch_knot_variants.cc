@@ -8,8 +8,8 @@
 
 namespace microdex::knot::variants {
 
-std::vector<StitchVariant> RandomStitchVariants(StitchKnotType kind, int count,
-                                                std::uint64_t seed, double noise_diameters,
+std::vector<StitchVariant> RandomStitchVariants(StitchKnotType kind, int count, std::uint64_t seed,
+                                                double noise_diameters,
                                                 double node_spacing_diameters) {
   constexpr double kPi = std::numbers::pi;
   std::mt19937_64 rng(seed);
@@ -69,7 +69,8 @@ std::string FormatConfusion(const ConfusionMatrix& m) {
   }
   s += "\n";
   for (std::size_t r = 0; r < m.size(); ++r) {
-    std::snprintf(cell, sizeof(cell), "%-22s", std::string(StitchKnotName(kStitchClasses[r])).c_str());
+    std::snprintf(cell, sizeof(cell), "%-22s",
+                  std::string(StitchKnotName(kStitchClasses[r])).c_str());
     s += cell;
     for (int c = 0; c < 7; ++c) {
       std::snprintf(cell, sizeof(cell), " %11d", m[r][c]);

@@ -29,8 +29,8 @@ inline constexpr std::array<StitchKnotType, 6> kStitchClasses = {
 // `count` variants of `kind` drawn from `seed`, with uniform noise of +-noise_diameters
 // thread diameters on every coordinate and nodes `node_spacing_diameters` apart. Parameter
 // draws that MakeStitchKnot rejects (tails aimed through the knot) are drawn again.
-std::vector<StitchVariant> RandomStitchVariants(StitchKnotType kind, int count,
-                                                std::uint64_t seed, double noise_diameters,
+std::vector<StitchVariant> RandomStitchVariants(StitchKnotType kind, int count, std::uint64_t seed,
+                                                double noise_diameters,
                                                 double node_spacing_diameters = 1.0);
 
 // Rows: generated class (kStitchClasses order); columns: recognised class (StitchKnotType

@@ -51,13 +51,13 @@ int PrintStitchKnot(const std::string& path, const std::vector<Eigen::Vector3d>&
                  a.reason.c_str());
     for (std::size_t i = 0; i < a.throws.size(); ++i) {
       const knot::StitchThrow& t = a.throws[i];
-      std::fprintf(stderr,
-                   "  %zu: %s %s x%d (twist %+.3f turns), strand straightness %.2f / %.2f, "
-                   "s = [%.3g, %.3g] m%s\n",
-                   i + 1, t.hitch ? "half hitch" : "throw", t.hand > 0 ? "right" : "left", t.turns,
-                   t.twist_turns, t.straightness[0], t.straightness[1], t.start_s_m, t.end_s_m,
-                   t.hitch ? (t.post_strand == 1 ? ", post: first strand" : ", post: last strand")
-                           : "");
+      std::fprintf(
+          stderr,
+          "  %zu: %s %s x%d (twist %+.3f turns), strand straightness %.2f / %.2f, "
+          "s = [%.3g, %.3g] m%s\n",
+          i + 1, t.hitch ? "half hitch" : "throw", t.hand > 0 ? "right" : "left", t.turns,
+          t.twist_turns, t.straightness[0], t.straightness[1], t.start_s_m, t.end_s_m,
+          t.hitch ? (t.post_strand == 1 ? ", post: first strand" : ", post: last strand") : "");
     }
   }
   return 0;
@@ -230,15 +230,16 @@ int RunStitchReport(int count, const std::vector<double>& noises, int repeats) {
     const double analyse_us =
         MedianMicroseconds([&] { (void)knot::AnalyzeStitchKnot(thread); }, repeats);
     if (type != kind) ++wrong;
-    std::printf("%-11s %6zu %-11s %14.1f %14.1f\n",
-                std::string(knot::StitchKnotName(kind)).c_str(), thread.size(),
-                std::string(knot::StitchKnotName(type)).c_str(), recognise_us, analyse_us);
+    std::printf("%-11s %6zu %-11s %14.1f %14.1f\n", std::string(knot::StitchKnotName(kind)).c_str(),
+                thread.size(), std::string(knot::StitchKnotName(type)).c_str(), recognise_us,
+                analyse_us);
   }
   std::printf(
       "(medians over %d runs; recognise = RecogniseStitchKnot, analyse = AnalyzeStitchKnot "
       "with the closure's knot type)\n",
       repeats);
-  if (wrong > 0) std::fprintf(stderr, "microdex-bench knot: %d stitch knot(s) misrecognised\n", wrong);
+  if (wrong > 0)
+    std::fprintf(stderr, "microdex-bench knot: %d stitch knot(s) misrecognised\n", wrong);
   return wrong > 0 ? 1 : 0;
 }
 

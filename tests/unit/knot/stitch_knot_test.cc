@@ -95,9 +95,9 @@ std::vector<int> FoundHands(const StitchKnotAnalysis& a) {
 
 TEST(StitchKnotTest, NamesAreTheCommandLineWords) {
   const std::vector<std::pair<StitchKnotType, const char*>> words = {
-      {StitchKnotType::kNone, "none"},         {StitchKnotType::kSquare, "square"},
-      {StitchKnotType::kGranny, "granny"},     {StitchKnotType::kSurgeons, "surgeons"},
-      {StitchKnotType::kSlip, "slip"},         {StitchKnotType::kHalfHitch, "half-hitch"},
+      {StitchKnotType::kNone, "none"},      {StitchKnotType::kSquare, "square"},
+      {StitchKnotType::kGranny, "granny"},  {StitchKnotType::kSurgeons, "surgeons"},
+      {StitchKnotType::kSlip, "slip"},      {StitchKnotType::kHalfHitch, "half-hitch"},
       {StitchKnotType::kUnknown, "unknown"}};
   for (const auto& [type, word] : words) {
     EXPECT_EQ(StitchKnotName(type), word);
@@ -166,7 +166,8 @@ TEST(StitchKnotTest, EveryClassAndItsThrowsFromRandomVariants) {
   for (StitchKnotType kind : kStitchClasses) {
     for (const auto& v : RandomStitchVariants(kind, 40, 2026, 0.1)) {
       SCOPED_TRACE(std::string(StitchKnotName(kind)) + " tightness " +
-                   std::to_string(v.def.tightness) + " tilt " + std::to_string(v.def.axis_tilt_rad));
+                   std::to_string(v.def.tightness) + " tilt " +
+                   std::to_string(v.def.axis_tilt_rad));
       const StitchKnotAnalysis a = AnalyzeStitchKnot(v.thread);
       EXPECT_EQ(StitchKnotName(a.type), StitchKnotName(kind)) << a.reason;
       EXPECT_EQ(FoundHands(a), GeneratedHands(v.def));
@@ -302,7 +303,8 @@ TEST(StitchKnotTest, ThreadThroughTheTissueTwiceIsUnknown) {
   const Eigen::Vector3d end = thread.back();
   const double d = def.thread_diameter_m;
   for (int k = 1; k <= 20; ++k) {
-    thread.push_back(end + Eigen::Vector3d(k * d, 0.0, -(end.z() + 3 * d) * std::sin(kPi * k / 21)));
+    thread.push_back(end +
+                     Eigen::Vector3d(k * d, 0.0, -(end.z() + 3 * d) * std::sin(kPi * k / 21)));
   }
   thread.push_back(thread.back() + Eigen::Vector3d(d, 0.0, end.z()));
   ASSERT_GT(thread.back().z(), 0.0);
