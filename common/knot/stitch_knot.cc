@@ -173,7 +173,8 @@ std::vector<Run> TwistRuns(const std::vector<double>& tw, const std::vector<doub
   return runs;
 }
 
-StitchKnotType Classify(const std::vector<StitchThrow>& throws, std::string* reason) {
+StitchKnotType Classify(const std::vector<StitchThrow>& throws, double total_twist,
+                        std::string* reason) {
   if (throws.empty()) return StitchKnotType::kNone;
   const bool all_hitches = std::all_of(throws.begin(), throws.end(), [&](const StitchThrow& t) {
     return t.hitch && t.post_strand == throws.front().post_strand;
@@ -196,7 +197,14 @@ StitchKnotType Classify(const std::vector<StitchThrow>& throws, std::string* rea
     const StitchThrow& a = throws[0];
     const StitchThrow& b = throws[1];
     if (a.turns == 1 && b.turns == 1) {
-      return a.hand == b.hand ? StitchKnotType::kGranny : StitchKnotType::kSquare;
+      // The total twist is the tangle's invariant (README.md): about 0 turns for a square,
+      // +-2 for a granny. A run structure that disagrees with it is not trusted.
+      const bool same = a.hand == b.hand;
+      if (same == (std::abs(total_twist) > 1.0)) {
+        return same ? StitchKnotType::kGranny : StitchKnotType::kSquare;
+      }
+      *reason = "the throws' hands disagree with the total twist";
+      return StitchKnotType::kUnknown;
     }
     if (a.turns == 2 && b.turns == 1 && a.hand != b.hand) return StitchKnotType::kSurgeons;
   }
@@ -462,7 +470,7 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
     t.p_center_W = c / (r.last - r.first + 1);
     out.throws.push_back(t);
   }
-  out.type = Classify(out.throws, &out.reason);
+  out.type = Classify(out.throws, out.total_twist_turns, &out.reason);
   return out;
 }
 

@@ -194,6 +194,16 @@ TEST(StitchKnotTest, EveryClassAndItsThrowsFromRandomVariants) {
       // The Gauss linking integral (projection-free) agrees with the ribbon twist up to the
       // writhe of the common axis and the far parts of legs and tails.
       EXPECT_NEAR(a.gauss_linking, a.total_twist_turns, 0.5);
+      // Square against granny by the topology alone (total twist 0 against +-2 turns), in
+      // both measures.
+      if (kind == StitchKnotType::kSquare) {
+        EXPECT_LT(std::abs(a.total_twist_turns), 1.0);
+        EXPECT_LT(std::abs(a.gauss_linking), 1.0);
+      }
+      if (kind == StitchKnotType::kGranny) {
+        EXPECT_GT(std::abs(a.total_twist_turns), 1.0);
+        EXPECT_GT(std::abs(a.gauss_linking), 1.0);
+      }
       EXPECT_EQ(RecogniseStitchKnot(v.thread), a.type);
     }
   }
