@@ -209,6 +209,18 @@ TEST(StitchKnotTest, EveryClassAndItsThrowsFromRandomVariants) {
   }
 }
 
+TEST(StitchKnotTest, ClosureIsTheUnknotFromEveryProjection) {
+  // The derivation's premise (README.md): closed far outside, a knot made of throws and
+  // hitches is the unknot. Nine projection directions of the closure must all agree.
+  for (StitchKnotType kind : kStitchClasses) {
+    for (const auto& v : RandomStitchVariants(kind, 5, 404, 0.1)) {
+      const KnotAnalysis a = AnalyzeKnot(v.thread, {.num_projections = 9, .locate = false});
+      EXPECT_EQ(a.type, KnotType::kNone) << StitchKnotName(kind);
+      EXPECT_EQ(a.projections_agreeing, a.crossings == 0 && a.reduced_vertices <= 3 ? 1 : 9);
+    }
+  }
+}
+
 TEST(StitchKnotTest, ConfusionMatrixIsDiagonal) {
   // A second test set (other seed, noise +-15 % of the diameter): square is never taken for
   // granny nor the reverse, and nothing is taken for anything else.
