@@ -58,7 +58,7 @@ struct StitchKnotOptions {
   double rate_threshold_turns = 0.08;
   // Throws are separated by at least this much untwisted axis (diameters); shorter quiet
   // stretches (noise) do not end a run.
-  double min_quiet_diameters = 1.0;
+  double min_quiet_diameters = 1.5;
   // A reversal of the twist smaller than this (turns) does not end a run.
   double reversal_turns = 0.3;
   // A run of twisting counts as a throw or a hitch from this many turns on.
