@@ -1,5 +1,6 @@
 #include <stdexcept>
 
+#include "station/grasp_module.h"
 #include "station/module.h"
 #include "station/needle_module.h"
 #include "station/thread_module.h"
@@ -19,6 +20,8 @@ std::vector<std::unique_ptr<Module>> MakeModules(const scene::SceneModel& scene)
       modules.push_back(std::make_unique<ThreadModule>(scene));
     } else if (name == "tissue") {
       modules.push_back(std::make_unique<TissueModule>(scene));
+    } else if (name == "grasp") {
+      modules.push_back(std::make_unique<GraspModule>(scene));
     } else {
       throw std::runtime_error(scene.path + ": modules: '" + name +
                                "' has no station module in this build yet");

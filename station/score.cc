@@ -26,6 +26,7 @@ double CalcFollowPathScore(const scene::SceneModel& scene, const net::Score& s,
 double CalcTaskPathLength(const scene::SceneModel& scene) {
   const scene::TaskDef& t = scene.task;
   if (t.kind == scene::TaskKind::kTremorHold) return 0;
+  if (t.kind == scene::TaskKind::kGrasp) return 2 * (t.line_end_m - t.line_start_m).norm();
   const double one_pass = t.path == scene::PathKind::kLine
                               ? (t.line_end_m - t.line_start_m).norm()
                               : scene.needle.radius_m * (t.end_azimuth_rad - t.start_azimuth_rad);
@@ -50,10 +51,15 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
     return 1.0 - std::clamp(mean / scene.vessel.tube_radius_m, 0.0, 1.0);
   }
   if (metric == "excess_path") return Ratio(t.path_length_m, CalcTaskPathLength(scene)) - 1.0;
+  if (metric == "object_rotation_rad") return t.object_rotation_rad;
+  if (metric == "jaw_alignment_rad") return t.jaw_alignment_rad;
+  if (metric == "object_drops") return t.object_drops;
   if (metric == "progress_deficit") {
     if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
     const scene::TaskDef& task = scene.task;
-    if (task.kind == scene::TaskKind::kTremorHold) return 1.0 - t.progress;
+    if (task.kind == scene::TaskKind::kTremorHold || task.kind == scene::TaskKind::kGrasp) {
+      return 1.0 - t.progress;
+    }
     return 1.0 - (t.passes_done + t.progress) / task.passes;
   }
   return kNaN;

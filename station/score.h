@@ -18,6 +18,9 @@
 //   clearance_deficit  1 − mean needle clearance / tube radius (0: on the core circle)
 //   excess_path        device path length / the path the task asks for − 1
 //   progress_deficit   share of the task not done when it ended (0 when completed)
+//   object_rotation_rad  grasp: the largest rotation the jaws induced in the object
+//   jaw_alignment_rad    grasp: angle between the closing direction and the object's face
+//   object_drops         grasp: lifted objects that fell out of the jaws
 //
 // follow_path (the module demos) keeps its own formula:
 //   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean

@@ -52,7 +52,8 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
       reaction_delay_s_(Lerp(def.reaction_delay_novice_s, def.reaction_delay_expert_s, def.skill)),
       correction_threshold_m_(
           Lerp(def.correction_threshold_novice_m, def.correction_threshold_expert_m, def.skill)),
-      correction_duration_s_(def.correction_duration_s) {
+      correction_duration_s_(def.correction_duration_s),
+      close_duration_s_(def.close_duration_s) {
   // All randomness is drawn here, from the seed; Read() is a pure function of the step and
   // the previous force. SplitMix64 rather than <random> distributions, whose algorithms the
   // standard leaves to the library: the samples are then the same on every platform.
@@ -76,6 +77,16 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
       drift_phase_rad_[axis][c] = uniform(0.0, kTwoPi);
     }
   }
+  // The jaws' misalignment (grasp): a misjudgement of about the skill's size, either way, within
+  // ±20 % of it.
+  const double yaw = Lerp(def.jaw_yaw_novice_rad, def.jaw_yaw_expert_rad, def.skill);
+  const double offset = Lerp(def.jaw_offset_novice_m, def.jaw_offset_expert_m, def.skill);
+  const auto either_way = [&uniform](double size) {
+    const double sign = uniform(-1.0, 1.0) < 0 ? -1.0 : 1.0;
+    return sign * size * uniform(0.8, 1.2);
+  };
+  jaw_yaw_rad_ = either_way(yaw);
+  jaw_offset_m_ = either_way(offset);
 }
 
 Eigen::Vector3d SimTrainee::CalcDrift(double t_s, Eigen::Vector3d* drift_rad) const {
@@ -101,6 +112,30 @@ Eigen::Vector3d SimTrainee::CalcCorrection(double t_s) const {
   const double tau = std::clamp((t_s - correction_start_s_) / correction_duration_s_, 0.0, 1.0);
   const double shape = tau * tau * tau * (10 + tau * (-15 + 6 * tau));
   return correction_from_m_ + shape * (correction_to_m_ - correction_from_m_);
+}
+
+Eigen::Isometry3d SimTrainee::CalcPlannedPose(double t_s, double* gripper) const {
+  *gripper = 0;
+  if (scene_.task.kind != scene::TaskKind::kGrasp) return scene_.CalcIdealToolPose(pace_ * t_s);
+  // Descend (one pass), close, lift (the return pass), hold at the top.
+  const double pass_s = scene_.task.pass_duration_s / pace_;
+  const double close_s = close_duration_s_ / pace_;
+  double plan_s = 0;  // time along the scene's passes
+  if (t_s < pass_s) {
+    plan_s = t_s;
+  } else if (t_s < pass_s + close_s) {
+    plan_s = pass_s;
+    const double tau = (t_s - pass_s) / close_s;
+    *gripper = tau * tau * tau * (10 + tau * (-15 + 6 * tau));
+  } else {
+    plan_s = std::min(t_s - close_s, 2 * pass_s);
+    *gripper = 1;
+  }
+  Eigen::Isometry3d X = scene_.CalcIdealToolPose(pace_ * plan_s);
+  if (plan_s >= 2 * pass_s) X = scene_.CalcIdealToolPose(0);  // back at the start, holding
+  X.linear() = X.linear() * Eigen::AngleAxisd(jaw_yaw_rad_, Eigen::Vector3d::UnitZ()).matrix();
+  X.translation() += X.linear().col(0) * jaw_offset_m_;
+  return X;
 }
 
 DeviceSample SimTrainee::Read(std::uint64_t step) {
@@ -135,8 +170,8 @@ DeviceSample SimTrainee::Read(std::uint64_t step) {
       correction_start_s_ = t;
     }
   }
-  const Eigen::Isometry3d X_ideal = scene_.CalcIdealToolPose(pace_ * t);
   DeviceSample sample;
+  const Eigen::Isometry3d X_ideal = CalcPlannedPose(t, &sample.gripper);
   sample.X_WT = X_ideal;
   const double angle = drift_rad.norm();
   if (angle > 0) {

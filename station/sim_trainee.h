@@ -20,6 +20,11 @@
 //           less the corrections made, exceeds correction_threshold_m and no correction is
 //           under way, a minimum-jerk sub-movement of correction_duration_s removes it. The
 //           drift left is then bounded by the threshold plus what grows within τ_r;
+//   grasp:  (task kind grasp) descend along the task's line, close the jaws (minimum jerk over
+//           close_duration_s), lift back along the line and hold. The jaws come down turned
+//           about the shaft by a yaw error and shifted across the jaw by an offset, each of the
+//           skill's size (jaw_yaw_rad, jaw_offset_m) within ±20 %, either way, drawn once from
+//           the seed: poorly aligned jaws make the object turn (thesis Fig. 2.2d);
 //   hand:   a spring of stiffness k_hand holding the planned pose, yielding with a time
 //           constant τ_hand: the offset o follows f / k_hand by o' = (f / k_hand − o) / τ_hand
 //           (explicit Euler, f the force of the previous step), so guidance fields and the
@@ -49,6 +54,11 @@ struct SimTraineeDef {
   double correction_threshold_novice_m = 250e-6;
   double correction_threshold_expert_m = 40e-6;
   double correction_duration_s = 0.25;
+  double close_duration_s = 0.4;
+  double jaw_yaw_novice_rad = 0.35;
+  double jaw_yaw_expert_rad = 0.02;
+  double jaw_offset_novice_m = 0.25e-3;
+  double jaw_offset_expert_m = 0.02e-3;
   double hand_stiffness_N_per_m = 400;
   double hand_time_constant_s = 0.05;
   // Throws std::invalid_argument("field: reason") (the contract of every Def's Validate()).
@@ -80,6 +90,9 @@ class SimTrainee final : public Device {
   double drift_phase_rad_[6][kDriftComponents];
   double hand_time_constant_s_;
   double pace_, reaction_delay_s_, correction_threshold_m_, correction_duration_s_;
+  double close_duration_s_, jaw_yaw_rad_ = 0, jaw_offset_m_ = 0;
+  // The planned tool pose and gripper at time t (the task's passes, or the grasp's phases).
+  Eigen::Isometry3d CalcPlannedPose(double t_s, double* gripper) const;
   // The corrective sub-movement under way (or the last one): from, to, start time.
   Eigen::Vector3d correction_from_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d correction_to_m_ = Eigen::Vector3d::Zero();

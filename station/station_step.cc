@@ -197,6 +197,15 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
   if (task.kind == scene::TaskKind::kTremorHold) {
     t.progress = std::min(t.time_s / task.hold_s, 1.0);
     if (t.time_s >= task.hold_s - 0.5 * dt_s) t.outcome = 1;
+  } else if (task.kind == scene::TaskKind::kGrasp) {
+    // Lift the object to the lift height and hold it there for hold_s.
+    const grasp::GraspState& g = s.grasp->grasp;
+    t.object_rotation_rad = g.metrics.max_induced_rotation_rad;
+    t.jaw_alignment_rad = g.metrics.alignment_angle_rad;
+    t.object_drops = g.metrics.drops;
+    if (g.metrics.held && g.X_WO.p_W.z() >= scene.grasp->lift_height_m) t.goal_time_s += dt_s;
+    t.progress = std::min(t.goal_time_s / task.hold_s, 1.0);
+    if (t.goal_time_s >= task.hold_s - 0.5 * dt_s) t.outcome = 1;
   } else if (task.kind != scene::TaskKind::kFollowPath) {
     // A pass ends when the device reaches the far end of the path (forward passes) or the
     // start (return passes).

@@ -49,10 +49,28 @@ cues::CueKind ParseCueName(const std::string& text) {
 }
 
 // The metrics a scene's scoring may name (station/score.h defines them).
-constexpr const char* kScoreMetrics[] = {
-    "time_s",          "deviation_mean_m", "deviation_max_m", "outside_fraction",  "tremor_rms_m",
-    "drift_m",         "contact_fraction", "contacts",        "clearance_deficit", "excess_path",
-    "progress_deficit"};
+constexpr const char* kScoreMetrics[] = {"time_s",
+                                         "deviation_mean_m",
+                                         "deviation_max_m",
+                                         "outside_fraction",
+                                         "tremor_rms_m",
+                                         "drift_m",
+                                         "contact_fraction",
+                                         "contacts",
+                                         "clearance_deficit",
+                                         "excess_path",
+                                         "progress_deficit",
+                                         "object_rotation_rad",
+                                         "jaw_alignment_rad",
+                                         "object_drops"};
+
+grasp::ShapeKind ParseGraspShape(const std::string& text) {
+  for (grasp::ShapeKind k :
+       {grasp::ShapeKind::kBox, grasp::ShapeKind::kCylinder, grasp::ShapeKind::kSphere}) {
+    if (text == grasp::ShapeKindName(k)) return k;
+  }
+  throw std::invalid_argument("expected box, cylinder or sphere");
+}
 
 // A parameter file named in the scene: relative names are taken from the scene's folder.
 std::string ResolveBeside(const std::string& origin, const std::string& name) {
@@ -88,7 +106,7 @@ void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
-                           "tissue", "scoring", "microscope", "visuals", "cues"});
+                           "tissue", "grasp", "scoring", "microscope", "visuals", "cues"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -185,6 +203,26 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.max_force_N = ti->FiniteDouble("max_force_N", d.max_force_N);
     s.tissue = d;
   }
+  if (const std::optional<YamlSection> g = root.OptionalMap("grasp")) {
+    g->CheckNoUnknownKeys({"shape", "size_m", "radius_m", "length_m", "density_kg_per_m3",
+                           "friction", "position_m", "yaw_rad", "lift_height_m",
+                           "jaw_stiffness_N_per_m", "jaw_open_gap_m", "jaw_closed_gap_m"});
+    GraspSceneDef d;
+    d.def.shape.kind = g->Enum("shape", &ParseGraspShape, d.def.shape.kind);
+    d.def.shape.box_size_m = g->Vec3("size_m", d.def.shape.box_size_m);
+    d.def.shape.radius_m = g->FiniteDouble("radius_m", d.def.shape.radius_m);
+    d.def.shape.length_m = g->FiniteDouble("length_m", d.def.shape.length_m);
+    d.def.density_kg_per_m3 = g->FiniteDouble("density_kg_per_m3", d.def.density_kg_per_m3);
+    d.def.jaw_friction = d.def.table_friction = g->FiniteDouble("friction", d.def.jaw_friction);
+    d.def.contact.jaw_stiffness_N_per_m =
+        g->FiniteDouble("jaw_stiffness_N_per_m", d.def.contact.jaw_stiffness_N_per_m);
+    d.def.jaws.open_gap_m = g->FiniteDouble("jaw_open_gap_m", d.def.jaws.open_gap_m);
+    d.def.jaws.closed_gap_m = g->FiniteDouble("jaw_closed_gap_m", d.def.jaws.closed_gap_m);
+    d.p_W_object = g->Vec3("position_m", d.p_W_object);
+    d.yaw_rad = g->FiniteDouble("yaw_rad", d.yaw_rad);
+    d.lift_height_m = g->FiniteDouble("lift_height_m", d.lift_height_m);
+    s.grasp = d;
+  }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
     std::vector<std::string_view> known(std::begin(kScoreMetrics), std::end(kScoreMetrics));
     for (const char* metric : kScoreMetrics) {
@@ -259,15 +297,18 @@ const char* TaskKindName(TaskKind kind) {
       return "tremor_hold";
     case TaskKind::kNeedleAlongTube:
       return "needle_along_tube";
+    case TaskKind::kGrasp:
+      return "grasp";
   }
   return "unknown";
 }
 
 TaskKind ParseTaskKind(const std::string& text) {
-  for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube}) {
+  for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube,
+                     TaskKind::kGrasp}) {
     if (text == TaskKindName(k)) return k;
   }
-  throw std::invalid_argument("expected follow_path, tremor_hold or needle_along_tube");
+  throw std::invalid_argument("expected follow_path, tremor_hold, needle_along_tube or grasp");
 }
 
 bool SceneModel::HasModule(const std::string& module) const {
@@ -328,7 +369,8 @@ void ValidateScene(const SceneModel& s) {
   for (const auto& m : s.modules) {
     if (std::find_if(std::begin(kKnownModules), std::end(kKnownModules),
                      [&](const char* k) { return m == k; }) == std::end(kKnownModules)) {
-      Invalid("modules", "unknown module '" + m + "' (known: needle, tremor, thread, tissue)");
+      Invalid("modules",
+              "unknown module '" + m + "' (known: needle, tremor, thread, tissue, grasp)");
     }
     if (!seen.insert(m).second) Invalid("modules", "module '" + m + "' named twice");
   }
@@ -399,6 +441,28 @@ void ValidateScene(const SceneModel& s) {
               "tool's start point");
     }
     if (!(th.max_strain > 0 && th.max_strain <= 1)) Invalid("thread.max_strain", "expected (0, 1]");
+  }
+  if (s.HasModule("grasp") != s.grasp.has_value()) {
+    Invalid("grasp", s.grasp ? "section given but 'grasp' is not in modules"
+                             : "section required by the 'grasp' module");
+  }
+  if (s.grasp) {
+    try {
+      s.grasp->def.Validate();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("grasp." + std::string(e.what()));
+    }
+    if (!(s.grasp->p_W_object.z() > 0))
+      Invalid("grasp.position_m", "expected above the table (z > 0)");
+    if (!(s.grasp->lift_height_m > s.grasp->p_W_object.z())) {
+      Invalid("grasp.lift_height_m", "expected above the object's resting height");
+    }
+  }
+  if (t.kind == TaskKind::kGrasp && !s.HasModule("grasp")) {
+    Invalid("task.kind", "grasp needs the grasp module");
+  }
+  if (t.kind == TaskKind::kGrasp && t.path != PathKind::kLine) {
+    Invalid("task.path", "grasp needs path: line (from above the object down to it)");
   }
   if (s.tissue) {
     const TissueSceneDef& ti = *s.tissue;

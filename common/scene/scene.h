@@ -23,6 +23,7 @@
 #include "common/cues/cue_kind.h"
 #include "common/fem/tissue_def.h"
 #include "common/geometry/arc_torus.h"
+#include "common/grasp/grasp_def.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::scene {
@@ -35,7 +36,7 @@ class SceneError : public InputError {
 };
 
 // Modules a scene may name; "thread" and "tissue" need their scene sections.
-inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue"};
+inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue", "grasp"};
 
 // The tube is a geometry::TorusSegmentDef (scene section `vessel`: core_radius_m,
 // tube_radius_m, segment_angle_rad, position_m, rpy_rad). The needle is a geometry::ArcDef
@@ -54,8 +55,9 @@ enum class TaskKind {
   kFollowPath,       // passes along the path; scored by time without fault (module demos)
   kTremorHold,       // hold the tool tip on target_m for hold_s under magnification
   kNeedleAlongTube,  // slide the needle along the tube and back, `passes` passes, no touching
+  kGrasp,            // close the forceps on the object, lift it to lift_height_m, hold it hold_s
 };
-const char* TaskKindName(TaskKind kind);          // follow_path, tremor_hold, needle_along_tube
+const char* TaskKindName(TaskKind kind);  // follow_path, tremor_hold, needle_along_tube, grasp
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
 // The task: passes along the path from start to end and back, each pass lasting
@@ -117,6 +119,17 @@ struct TissueSceneDef {
   double max_force_N = 0.5;
 };
 
+// The grasping primitive (station "grasp" module, thesis §2.2, Fig. 2.2d): a small object on
+// the table (the plane z = 0 of world) and the forceps' jaws on the tool (common/grasp). The
+// task line runs from above the object down to it: the simulated trainee descends, closes the
+// jaws, lifts back along the line and holds.
+struct GraspSceneDef {
+  grasp::GraspDef def;
+  Eigen::Vector3d p_W_object = Eigen::Vector3d(0, 0, 0.5e-3);  // centre of mass on the table
+  double yaw_rad = 0;                                          // the object's turn about z
+  double lift_height_m = 3e-3;  // the centre of mass this high above the table counts as lifted
+};
+
 // Haptic rendering limits.
 struct HapticDef {
   double rate_hz = 1000;
@@ -168,6 +181,7 @@ struct SceneModel {
   HapticDef haptic;
   std::optional<ThreadSceneDef> thread;  // present exactly when modules has "thread"
   std::optional<TissueSceneDef> tissue;  // present exactly when modules has "tissue"
+  std::optional<GraspSceneDef> grasp;    // present exactly when modules has "grasp"
   std::vector<ScoreTermDef> scoring;     // empty for kFollowPath (its own formula)
   MicroscopeDef microscope;
   std::vector<VisualDef> visuals;

@@ -22,6 +22,7 @@
 #include "common/cues/tremor_filter.h"
 #include "common/fem/tissue_step.h"
 #include "common/geometry/arc_torus.h"
+#include "common/grasp/grasp_model.h"
 #include "common/thread/thread_model.h"
 
 namespace microdex::state {
@@ -98,6 +99,11 @@ struct ScoreState {
   std::int32_t passes_done = 0;
   std::uint8_t outcome = 0;    // TaskOutcome: 0 running, 1 completed, 2 time limit
   std::uint64_t end_step = 0;  // the step at which the task ended
+  double goal_time_s = 0;      // grasp: time with the object held at the lift height
+  // The grasp module's metrics, copied for the score (common/grasp/README.md "Metrics").
+  double object_rotation_rad = 0;  // largest induced rotation
+  double jaw_alignment_rad = 0;    // at the first touch
+  std::int32_t object_drops = 0;
   // This step.
   std::uint8_t fault = 0;
   double fault_value = 0;         // of the first module at fault (clearance, strain, force)
@@ -132,6 +138,11 @@ struct TissueModuleState {
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // tissue on the tool, N (unsaturated)
 };
 
+// The grasping module: the object, the jaws' contacts and the grasp's metrics.
+struct GraspModuleState {
+  grasp::GraspState grasp;
+};
+
 struct StationState {
   std::uint64_t step = 0;  // steps taken; the next step has this index
   // The station's random numbers (SplitMix64; NextRandom). Seeded from the station's seed;
@@ -146,6 +157,7 @@ struct StationState {
   std::optional<TremorState> tremor;
   std::optional<ThreadModuleState> thread;
   std::optional<TissueModuleState> tissue;
+  std::optional<GraspModuleState> grasp;
 };
 
 // Seeds the generator (the sections are filled by the modules).

@@ -108,6 +108,10 @@ void Score(S& s, V& v) {
   v("score.passes_done", &s.passes_done, 1);
   v("score.outcome", &s.outcome, 1);
   v("score.end_step", &s.end_step, 1);
+  v("score.goal_time_s", &s.goal_time_s, 1);
+  v("score.object_rotation_rad", &s.object_rotation_rad, 1);
+  v("score.jaw_alignment_rad", &s.jaw_alignment_rad, 1);
+  v("score.object_drops", &s.object_drops, 1);
   v("score.fault", &s.fault, 1);
   v("score.fault_value", &s.fault_value, 1);
   v("score.contact_event", &s.contact_event, 1);
@@ -195,6 +199,56 @@ void Tissue(S& m, V& v) {
   Matrix("tissue.f_T_W", m.f_T_W, v);
 }
 
+template <typename P, typename V>
+void GraspPose(const char* p_name, const char* q_name, P& pose, V& v) {
+  Matrix(p_name, pose.p_W, v);
+  Matrix(q_name, pose.q_xyzw, v);
+}
+
+template <typename S, typename V>
+void Grasp(S& m, V& v) {
+  auto& g = m.grasp;
+  v("grasp.time_s", &g.time_s, 1);
+  v("grasp.steps", &g.steps, 1);
+  GraspPose("grasp.X_WO.p_W", "grasp.X_WO.q_xyzw", g.X_WO, v);
+  Matrix("grasp.v_WO", g.v_WO, v);
+  Matrix("grasp.w_WO", g.w_WO, v);
+  GraspPose("grasp.X_WT.p_W", "grasp.X_WT.q_xyzw", g.X_WT, v);
+  v("grasp.gripper", &g.gripper, 1);
+  v("grasp.has_tool", &g.has_tool, 1);
+  for (auto& c : g.impulses) {
+    v("grasp.impulses[].key", &c.key, 1);
+    v("grasp.impulses[].normal_N_s", &c.normal_N_s, 1);
+    Matrix("grasp.impulses[].friction_N_s_W", c.friction_N_s_W, v);
+  }
+  Matrix("grasp.out.f_T_W", g.out.f_T_W, v);
+  Matrix("grasp.out.tau_T_W", g.out.tau_T_W, v);
+  v("grasp.out.normal_force_N", g.out.normal_force_N.data(), g.out.normal_force_N.size());
+  v("grasp.out.max_penetration_m", &g.out.max_penetration_m, 1);
+  v("grasp.out.num_contacts", &g.out.num_contacts, 1);
+  auto& mt = g.metrics;
+  v("grasp.metrics.grasping", &mt.grasping, 1);
+  v("grasp.metrics.held", &mt.held, 1);
+  v("grasp.metrics.lifted", &mt.lifted, 1);
+  v("grasp.metrics.time_since_jaw_contact_s", &mt.time_since_jaw_contact_s, 1);
+  GraspPose("grasp.metrics.touch_pose.p_W", "grasp.metrics.touch_pose.q_xyzw", mt.touch_pose, v);
+  v("grasp.metrics.induced_rotation_rad", &mt.induced_rotation_rad, 1);
+  v("grasp.metrics.max_induced_rotation_rad", &mt.max_induced_rotation_rad, 1);
+  v("grasp.metrics.alignment_angle_rad", &mt.alignment_angle_rad, 1);
+  v("grasp.metrics.closing_offset_m", &mt.closing_offset_m, 1);
+  v("grasp.metrics.grip_force_N", &mt.grip_force_N, 1);
+  v("grasp.metrics.peak_grip_force_N", &mt.peak_grip_force_N, 1);
+  v("grasp.metrics.held_time_s", &mt.held_time_s, 1);
+  v("grasp.metrics.grip_impulse_held_N_s", &mt.grip_impulse_held_N_s, 1);
+  v("grasp.metrics.slip_distance_m", &mt.slip_distance_m, 1);
+  v("grasp.metrics.grasps", &mt.grasps, 1);
+  v("grasp.metrics.lifts", &mt.lifts, 1);
+  v("grasp.metrics.drops", &mt.drops, 1);
+  v("grasp.warnings.invalid_inputs", &g.warnings.invalid_inputs, 1);
+  v("grasp.warnings.nonfinite_resets", &g.warnings.nonfinite_resets, 1);
+  v("grasp.warnings.contact_overflows", &g.warnings.contact_overflows, 1);
+}
+
 // An optional section: its presence flag, then its fields when present.
 template <typename O, typename V, typename F>
 void Section(const char* name, O& section, V& v, F fields) {
@@ -219,6 +273,7 @@ void VisitStationState(S& s, V& v) {
   vi::Section("tremor", s.tremor, v, [](auto& t, V& w) { vi::Tremor(t, w); });
   vi::Section("thread", s.thread, v, [](auto& t, V& w) { vi::Thread(t, w); });
   vi::Section("tissue", s.tissue, v, [](auto& t, V& w) { vi::Tissue(t, w); });
+  vi::Section("grasp", s.grasp, v, [](auto& g, V& w) { vi::Grasp(g, w); });
 }
 
 }  // namespace microdex::state

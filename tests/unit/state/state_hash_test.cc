@@ -29,10 +29,13 @@ std::string SceneFile(const std::string& name) {
 }
 
 // A state with every module section present and busy: the suture-on-tissue scene (thread,
-// tissue, tremor) with the needle module added, after 400 steps of a novice with cues pending.
+// tissue, tremor) with the needle and grasp modules added, after 400 steps of a novice with cues
+// pending.
 struct BusyState {
   BusyState() : scene(scene::LoadScene(SceneFile("suture_on_tissue.yaml"))) {
     scene.modules.push_back("needle");
+    scene.modules.push_back("grasp");
+    scene.grasp = scene::GraspSceneDef{};
     station::Simulation sim(scene);
     s = sim.MakeInitialState(3);
     station::SimTraineeDef def;
@@ -78,8 +81,8 @@ struct PerturbSpreadElements {
   void operator()(const char* name, T* p, std::size_t n) {
     // Presence flags and the grasp count are read from the containers, not stored: changing
     // the visited copy changes nothing.
-    static const std::set<std::string> kDerived = {"needle", "tremor", "thread", "tissue",
-                                                   "thread.grasps.size"};
+    static const std::set<std::string> kDerived = {"needle", "tremor", "thread",
+                                                   "tissue", "grasp",  "thread.grasps.size"};
     if (kDerived.count(name)) return;
     names.insert(name);
     const std::size_t count = std::min<std::size_t>(n, 64);

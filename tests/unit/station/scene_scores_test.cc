@@ -50,7 +50,7 @@ TEST_P(SceneScores, RiseWithSkill) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TrainingScenes, SceneScores,
-                         ::testing::Values("tremor_hold", "needle_along_tube"),
+                         ::testing::Values("tremor_hold", "needle_along_tube", "grasp"),
                          [](const auto& p) { return std::string(p.param); });
 
 }  // namespace

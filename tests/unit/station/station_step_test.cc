@@ -21,9 +21,11 @@ std::string SceneFile(const std::string& name) {
   return std::string(dir ? dir : ".") + "/assets/scenes/" + name;
 }
 
-// The scenes of the station's modules: needle + tremor, thread, tissue, thread + tissue.
-const char* const kScenes[] = {"needle_tube.yaml", "thread_pull.yaml", "tissue_press.yaml",
-                               "suture_on_tissue.yaml"};
+// The scenes of the station's modules: needle + tremor, thread, tissue, thread + tissue, grasp,
+// and the training scenes' task tracking (a hold, the needle's passes).
+const char* const kScenes[] = {"needle_tube.yaml",      "thread_pull.yaml", "tissue_press.yaml",
+                               "suture_on_tissue.yaml", "grasp.yaml",       "tremor_hold.yaml",
+                               "needle_along_tube.yaml"};
 
 // One step's input as recorded: the device sample and the cues that arrived with it.
 struct RecordedStep {
