@@ -102,15 +102,16 @@ LoopWirePieceMin CalcSegmentCircleMin(const Eigen::Vector3d& a, const Eigen::Vec
   Consider(ln, ln.tau_hi, &best);
   // The increasing pieces of G: all of [τ_lo, τ_hi] when G' ≥ 0 throughout (α ≤ b, i.e.
   // α^{3/2} ≤ |cross|), otherwise the parts outside (τ₀ − σ*, τ₀ + σ*), where
-  // k(τ₀ ± σ*)³ = αb² = cross²: σ*² = (cross^{4/3} − b²)/α, b² = cross²/α.
+  // k(τ₀ ± σ*)³ = αb² = cross²: σ*² = (|cross|^{4/3} − b²)/α, b² = cross²/α.
   double lo[2] = {ln.tau_lo, 0}, hi[2] = {ln.tau_hi, 0};
   int n = 1;
   const double abs_cross = std::abs(ln.cross);
   if (ln.alpha > 0 && ln.alpha * std::sqrt(ln.alpha) > abs_cross) {
     const double tau0 = -(ln.pc.x() * ln.d.x() + ln.pc.y() * ln.d.y()) / ln.alpha;
     const double b2 = abs_cross * abs_cross / ln.alpha;
-    const double sigma =
-        std::sqrt(std::max(0.0, (std::cbrt(abs_cross * abs_cross) - b2)) / ln.alpha);
+    const double k_star = std::cbrt(abs_cross);  // k³ = cross², so k² = |cross|^{4/3}
+    const double k_star_sq = k_star * k_star * k_star * k_star;
+    const double sigma = std::sqrt(std::max(0.0, k_star_sq - b2) / ln.alpha);
     n = 0;
     if (ln.tau_lo < tau0 - sigma) {
       lo[n] = ln.tau_lo;
