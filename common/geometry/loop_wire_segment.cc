@@ -11,6 +11,9 @@ namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr int kMaxRootIters = 200;
+// Root brackets are refined to 2ε relative to their ends, and to 2ε R near τ = 0 (the
+// distance changes by at most as much: |d'| ≤ 1).
+constexpr double kTauFloor = 1;
 
 // The segment's line about its point nearest to the origin (units of R).
 struct Line {
@@ -39,14 +42,18 @@ Line MakeLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 Eigen::Vector3d PointAt(const Line& ln, double tau) { return ln.pc + tau * ln.d; }
 
-// G(τ) = F'(τ)/2 = τ − (p_xy·d_xy)/k. On the z axis (k = 0, only where the line crosses it)
-// the one-sided limit is taken: side = +1 from above, −1 from below.
+// G(τ) = F'(τ)/2 = (k − 1)k' + z z', k' = (p_xy·d_xy)/k, z' = d_z: the same function as
+// p·d − k', in the form whose rounding scales with the distance (k − 1, z) rather than with
+// |p|: where the nearest point grazes the circle, F' = 2dd' is as small as d, and an error of
+// ε in p·d − k' (p_c·d is zero only to rounding) would move the root by ~ε/d. On the z axis
+// (k = 0, only where the line crosses it) the one-sided limit of k' is taken: side = +1 from
+// above, −1 from below.
 double EvalG(const Line& ln, double tau, double side) {
   const double px = ln.pc.x() + tau * ln.d.x(), py = ln.pc.y() + tau * ln.d.y();
+  const double pz = ln.pc.z() + tau * ln.d.z();
   const double k = std::sqrt(px * px + py * py);
-  const double num = px * ln.d.x() + py * ln.d.y();
-  if (!(k > 0)) return tau - side * std::sqrt(ln.alpha);
-  return tau - num / k;
+  const double dk = k > 0 ? (px * ln.d.x() + py * ln.d.y()) / k : side * std::sqrt(ln.alpha);
+  return (k - 1) * dk + pz * ln.d.z();
 }
 
 // G' = 1 − cross²/k³ (≥ 0 on the pieces searched).
@@ -75,7 +82,7 @@ double FindIncreasingRoot(const Line& ln, double lo, double hi, int* iters) {
     double next = dg > 0 ? x - g / dg : 0.5 * (lo + hi);
     if (!(next > lo && next < hi) || (hi - lo) > 0.5 * width_before) next = 0.5 * (lo + hi);
     width_before = hi - lo;
-    const double tol = 2 * kEps * std::max({std::abs(lo), std::abs(hi), 1e-300});
+    const double tol = 2 * kEps * std::max({std::abs(lo), std::abs(hi), kTauFloor});
     if (hi - lo <= tol || std::abs(next - x) <= 0.5 * tol) return next;
     x = next;
   }

@@ -297,6 +297,26 @@ TEST(LoopWireAnalytic, WireInTheLoopsPlane) {
   }
 }
 
+TEST(LoopWireAnalytic, NearTangentChordsInAnyDirection) {
+  // As above, turned about the axis, so that the line's point nearest the centre is ⊥ to its
+  // direction only to rounding: the distance h − R is a minimum of F as flat as h − R is
+  // small. (Once off by up to 7e-11 R, when the slope of F was formed as p·d − k'.)
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const LoopDef loop{1e-3, 0.1e-3};
+  for (int i = 0; i < 300; ++i) {
+    const double h = 1 + std::pow(10.0, -12 + 5 * (u(rng) + 1)), phi = kPi * u(rng);
+    const double tilt = i % 2 ? 0 : std::pow(10.0, -12 + 4.5 * (u(rng) + 1));
+    const Eigen::Vector3d n(std::cos(phi), std::sin(phi), 0);
+    const Eigen::Vector3d t = std::cos(tilt) * Eigen::Vector3d(-n.y(), n.x(), 0) +
+                              std::sin(tilt) * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d p = h * loop.radius_m * n;
+    ExpectAgreesWithReference(
+        loop, SegmentWire(p - (2 + u(rng)) * 1e-3 * t, p + (2 + u(rng)) * 1e-3 * t, 10e-6),
+        Eigen::Isometry3d::Identity(), "h - 1 = " + std::to_string(h - 1));
+  }
+}
+
 TEST(LoopWireAnalytic, TangentAndGrazingContact) {
   // The segment x = R, z = z0 along y: distance |z0| at y = 0 (k ≥ R everywhere).
   const double R = 2e-3, r_l = 0.2e-3, r_w = 0.1e-3;
