@@ -64,27 +64,36 @@ double EvalDG(const Line& ln, double tau) {
   return 1 - ln.cross * ln.cross / (k2 * std::sqrt(k2));
 }
 
-// The root of G in [lo, hi] where G(lo) < 0 < G(hi), G increasing: Newton steps kept inside
-// the bracket (bisection when a step leaves it or does not shrink it by half).
-double FindIncreasingRoot(const Line& ln, double lo, double hi, int* iters) {
-  double x = 0.5 * (lo + hi);
-  double width_before = hi - lo;
-  for (int it = 0; it < kMaxRootIters; ++it) {
+// The root of G in [lo, hi] where g_lo = G(lo) < 0 < G(hi) = g_hi, G increasing: Newton
+// steps from the secant point, kept inside the bracket, and bisection when a step would leave
+// it or would not halve the step before last (Numerical Recipes' rtsafe).
+double FindIncreasingRoot(const Line& ln, double lo, double hi, double g_lo, double g_hi,
+                          int* iters) {
+  double x = lo + (hi - lo) * (g_lo / (g_lo - g_hi));
+  if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+  double dx_old = hi - lo, dx = dx_old;
+  double g = EvalG(ln, x, 1), dg = EvalDG(ln, x);
+  for (int it = 0; it < kMaxRootIters && g != 0; ++it) {
     ++*iters;
-    const double g = EvalG(ln, x, 1);
-    if (g == 0) return x;
     if (g < 0) {
       lo = x;
     } else {
       hi = x;
     }
-    const double dg = EvalDG(ln, x);
-    double next = dg > 0 ? x - g / dg : 0.5 * (lo + hi);
-    if (!(next > lo && next < hi) || (hi - lo) > 0.5 * width_before) next = 0.5 * (lo + hi);
-    width_before = hi - lo;
+    const bool newton_leaves = ((x - hi) * dg - g) * ((x - lo) * dg - g) > 0;
+    if (newton_leaves || !(dg > 0) || std::abs(2 * g) > std::abs(dx_old * dg)) {
+      dx_old = dx;
+      dx = 0.5 * (hi - lo);
+      x = lo + dx;
+    } else {
+      dx_old = dx;
+      dx = g / dg;
+      x -= dx;
+    }
     const double tol = 2 * kEps * std::max({std::abs(lo), std::abs(hi), kTauFloor});
-    if (hi - lo <= tol || std::abs(next - x) <= 0.5 * tol) return next;
-    x = next;
+    if (std::abs(dx) <= tol || hi - lo <= tol) return x;
+    g = EvalG(ln, x, 1);
+    dg = EvalDG(ln, x);
   }
   return x;
 }
@@ -139,7 +148,7 @@ LoopWirePieceMin CalcSegmentCircleMin(const Eigen::Vector3d& a, const Eigen::Vec
     } else if (g_hi <= 0) {
       Consider(ln, hi[i], &best);
     } else {
-      Consider(ln, FindIncreasingRoot(ln, lo[i], hi[i], &best.iterations), &best);
+      Consider(ln, FindIncreasingRoot(ln, lo[i], hi[i], g_lo, g_hi, &best.iterations), &best);
     }
   }
   return best;

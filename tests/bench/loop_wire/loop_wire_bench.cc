@@ -117,6 +117,7 @@ double Median(std::vector<double> v) {
 Family MakeFamily(bool threaded, int n, std::mt19937_64& rng, const geometry::LoopDef& loop,
                   const geometry::WireDef& wire, Progress* progress) {
   const geometry::testing::RandomLoopWire scene{loop, wire};
+  const LoopWireModel model(loop, wire);
   Family f;
   f.name = threaded ? "threaded" : "far";
   f.what = threaded ? "loop threaded on the wire: centre within R of the axis, tilt <= 60 deg"
@@ -132,10 +133,12 @@ Family MakeFamily(bool threaded, int n, std::mt19937_64& rng, const geometry::Lo
       const Eigen::Vector3d dir = geometry::testing::RandomRotation(rng) * Eigen::Vector3d::UnitX();
       X.translation() += (3 + 27 * u01(rng)) * R * dir;
     }
-    // Away from the course's ends (the analytic wire ends in a round cap, the mesh tube is open).
-    const geometry::WireProgress pr =
-        geometry::CalcWireProgress(LoopWireModel(loop, wire), X.translation());
+    // Away from the course's ends (the analytic wire ends in a round cap, the mesh tube is
+    // open): neither the loop's centre nor the nearest wire point at an end.
+    const geometry::WireProgress pr = geometry::CalcWireProgress(model, X.translation());
     if (pr.s_m < 3 * R || pr.s_m > length - 3 * R) continue;
+    const geometry::LoopWireClearance c = geometry::CalcLoopWireClearance(model, X);
+    if (c.s_m < 1e-9 * length || c.s_m > (1 - 1e-9) * length) continue;
     f.poses.push_back(X);
     f.ref_clearance.push_back(geometry::testing::CalcLoopWireReference(loop, wire, X).distance_m -
                               loop.wire_radius_m - wire.radius_m);
