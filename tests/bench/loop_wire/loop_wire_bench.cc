@@ -257,6 +257,7 @@ int RunReport(const Options& opt) {
   families.push_back(MakeFamily(true, n, rng, loop, wire, &progress));
   families.push_back(MakeFamily(false, n, rng, loop, wire, &progress));
   std::vector<std::unique_ptr<geometry::LoopWireMeshModel>> mesh_models;
+  mesh_models.reserve(meshes.size());
   for (const auto& r : meshes) {
     mesh_models.push_back(std::make_unique<geometry::LoopWireMeshModel>(model, r));
   }

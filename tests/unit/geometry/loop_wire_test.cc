@@ -506,6 +506,7 @@ TEST(LoopWireQuery, QueriesDoNotAllocate) {
   const RandomLoopWire s = testing::MakeRandomLoopWire(rng, 2e-3);
   const LoopWireModel model(s.loop, s.wire);
   std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(501);
   for (int k = 0; k < 500; ++k) poses.push_back(testing::MakeThreadedPose(rng, s, 2e-3, kPi / 3));
   poses.push_back(Eigen::Isometry3d(Eigen::Matrix4d::Constant(std::nan(""))));
   volatile double sink = 0;
