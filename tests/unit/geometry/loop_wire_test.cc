@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/geometry/arc_torus_sp.h"
 #include "common/geometry/loop_wire_arc.h"
 #include "common/geometry/loop_wire_segment.h"
 #include "tests/support/alloc_counter.h"
@@ -426,6 +427,26 @@ TEST(LoopWireAnalytic, FarPoses) {
       X.translation() += far * (testing::RandomRotation(rng) * Eigen::Vector3d::UnitX());
       ExpectAgreesWithReference(s.loop, s.wire, X, "far " + std::to_string(far));
     }
+  }
+}
+
+// The identity the arc's certificate rests on: the lifted level torus along an arc
+// (arc_torus_sp.h) is −(d² − t²)(D² − t²), d and D the distances to the nearest and the
+// farthest point of the unit core circle.
+TEST(LoopWireArc, LevelTorusAlongTheArcIsMinusTheProductOfTheDistanceGaps) {
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d o = 2 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    const Eigen::Matrix3d rot = testing::RandomRotation(rng).toRotationMatrix();
+    const double rho = 0.1 + 3 * (u(rng) + 1), t = 1.5 * (u(rng) + 1), s = kPi * u(rng);
+    double size = 0;
+    const CircleConic q =
+        CalcLevelTorusAlongNeedle(o, rot.col(0), rot.col(1), rho, rho * rho - 1, t * t, &size);
+    const Eigen::Vector3d x = o + rho * (std::cos(s) * rot.col(0) + std::sin(s) * rot.col(1));
+    const double k = std::hypot(x.x(), x.y());
+    const double d2 = (k - 1) * (k - 1) + x.z() * x.z(), D2 = (k + 1) * (k + 1) + x.z() * x.z();
+    EXPECT_NEAR(q.Eval(std::cos(s), std::sin(s)), -(d2 - t * t) * (D2 - t * t), 1e-13 * size);
   }
 }
 
