@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "common/geometry/arc_torus_sp.h"
+#include "common/geometry/quartic.h"
 
 namespace microdex::geometry {
 namespace {
@@ -13,6 +14,8 @@ namespace {
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kTwoPi = 2 * std::numbers::pi;
 constexpr int kMaxDescentIters = 100;
+// Pieces of the local forms: |τ| ≤ tan(π/8) keeps the half-angle quartic well conditioned.
+constexpr double kMaxLocalPiece_rad = std::numbers::pi / 2;
 // A certificate round counts as progress only when it lowers F by more than this relative
 // amount (rounding can make G̃_t slightly positive next to the best point itself).
 constexpr double kProgressRel = 64 * kEps;
@@ -93,11 +96,102 @@ double AngleOf(double c, double s) {
   return t;
 }
 
+// One certificate round on the whole circle (the SP query's level torus along the needle,
+// and the quartic (4.26) for its extrema): descends from every extremum inside the arc where
+// G̃_t > 0.
+void CertifyOnWholeCircle(const Arc& a, const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
+                          const Eigen::Vector3d& e2, double rho, double rho_sq_minus_one,
+                          double t_sq, LoopWirePieceMin* best) {
+  double size = 0;
+  const CircleConic q = CalcLevelTorusAlongNeedle(o, e1, e2, rho, rho_sq_minus_one, t_sq, &size);
+  double ct[8], st[8];
+  bool constant = false;
+  const int n = FindConicExtremaOnCircle(q, SpOptions{}, ct, st, &constant);
+  for (int j = 0; j < n; ++j) {
+    if (!(q.Eval(ct[j], st[j]) > 0)) continue;
+    const double s = AngleOf(ct[j], st[j]);
+    if (s > a.sweep) continue;
+    Descend(a, s, best);
+  }
+}
+
+// The same round with the level torus expanded about points of the arc (README.md, "Arcs":
+// large or far arcs). Only the part of the arc inside the ball |x| ≤ t + 1 (widened) can be
+// closer than t; it is cut into pieces of at most π/2, and on each, about its middle point q,
+// x(σ) = q + A(cos σ − 1) + B sin σ (A = ρ × radial, B = ρ × tangent), so that
+//   |x|² − 1 + t² = L₀ + 2(o·A)(cos σ − 1) + 2(q·B) sin σ        (|A| = |B| = ρ, A·B = 0),
+// and G̃_t = 4t²(x² + y²) − 4(1 − t²)z² − L² is a quadratic form in (cos σ − 1, sin σ) whose
+// coefficients are of the size of the quantities near q — no cancellation of terms of size ρ⁴
+// or |o|⁴ as in the whole-circle form. With τ = tan(σ/2), (1 + τ²)²G̃_t is a quartic in τ; its
+// maxima on the piece are at the ends or at the roots of its derivative (quartic.h).
+void CertifyWithLocalForms(const Arc& a, double t_sq, LoopWirePieceMin* best) {
+  // |x(s)|² = K + P₁ cos s + P₂ sin s.
+  const double K = a.o.squaredNorm() + a.rho * a.rho;
+  const double P1 = 2 * a.o.dot(a.u), P2 = 2 * a.o.dot(a.v);
+  const double amp = std::hypot(P1, P2);
+  const double rb = (std::sqrt(t_sq) + 1) * (1 + 1e-3) + 1e-3;
+  double win_lo = 0, win_width = kTwoPi;
+  if (amp > 0) {
+    const double gamma = (rb * rb - K) / amp;  // inside the ball where cos(s − φ) ≤ γ
+    if (gamma <= -1) return;
+    if (gamma < 1) {
+      const double phi = std::atan2(P2, P1), half = std::acos(gamma);
+      win_lo = phi + half;
+      win_width = kTwoPi - 2 * half;
+    }
+  } else if (K > rb * rb) {
+    return;
+  }
+  while (win_lo < 0) win_lo += kTwoPi;
+  while (win_lo >= kTwoPi) win_lo -= kTwoPi;
+  for (const double shift : {-kTwoPi, 0.0}) {
+    const double lo = std::max(0.0, win_lo + shift),
+                 hi = std::min(a.sweep, win_lo + win_width + shift);
+    if (!(hi > lo)) continue;
+    const int pieces = std::max(1, static_cast<int>(std::ceil((hi - lo) / kMaxLocalPiece_rad)));
+    for (int i = 0; i < pieces; ++i) {
+      const double p0 = lo + (hi - lo) * i / pieces, p1 = lo + (hi - lo) * (i + 1) / pieces;
+      const double m = 0.5 * (p0 + p1), half = 0.5 * (p1 - p0);
+      const double cm = std::cos(m), sm = std::sin(m);
+      const Eigen::Vector3d A = cm * a.u + sm * a.v, B = cm * a.v - sm * a.u;
+      const Eigen::Vector3d q = a.o + A;
+      const double L0 = q.squaredNorm() - 1 + t_sq, Lc = 2 * a.o.dot(A), Ls = 2 * q.dot(B);
+      // Coefficients of 1, c, s, c², cs, s² (c = cos σ − 1, s = sin σ).
+      const double kxy[6] = {
+          q.x() * q.x() + q.y() * q.y(),       2 * (q.x() * A.x() + q.y() * A.y()),
+          2 * (q.x() * B.x() + q.y() * B.y()), A.x() * A.x() + A.y() * A.y(),
+          2 * (A.x() * B.x() + A.y() * B.y()), B.x() * B.x() + B.y() * B.y()};
+      const double kz[6] = {q.z() * q.z(), 2 * q.z() * A.z(), 2 * q.z() * B.z(),
+                            A.z() * A.z(), 2 * A.z() * B.z(), B.z() * B.z()};
+      const double kl[6] = {L0 * L0, 2 * L0 * Lc, 2 * L0 * Ls, Lc * Lc, 2 * Lc * Ls, Ls * Ls};
+      double g[6];
+      for (int j = 0; j < 6; ++j) g[j] = 4 * t_sq * kxy[j] - 4 * (1 - t_sq) * kz[j] - kl[j];
+      // (1 + τ²)²·{1, c, s, c², cs, s²} = {(1 + τ²)², −2τ²(1 + τ²), 2τ(1 + τ²), 4τ⁴, −4τ³, 4τ²}.
+      const double poly[5] = {g[0], 2 * g[2], 2 * g[0] - 2 * g[1] + 4 * g[5], 2 * g[2] - 4 * g[4],
+                              g[0] - 2 * g[1] + 4 * g[3]};
+      const double dpoly[5] = {poly[1], 2 * poly[2], 3 * poly[3], 4 * poly[4], 0};
+      const double tau_hi = std::tan(0.5 * half);
+      double roots[4];
+      const int nr = FindPolyRootsInInterval(dpoly, -tau_hi, tau_hi, PolyRootOptions{}, roots);
+      double cand[6];
+      int nc = 0;
+      cand[nc++] = -tau_hi;
+      cand[nc++] = tau_hi;
+      for (int j = 0; j < nr; ++j) cand[nc++] = roots[j];
+      for (int j = 0; j < nc; ++j) {
+        if (!(EvalPoly4(poly, cand[j]) > 0)) continue;
+        const double s = std::clamp(m + 2 * std::atan(cand[j]), 0.0, a.sweep);
+        Descend(a, s, best);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 LoopWirePieceMin CalcArcCircleMin(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                                   const Eigen::Vector3d& e2, double rho, double rho_sq_minus_one,
-                                  double sweep) {
+                                  double sweep, double local_form_above) {
   Arc a;
   a.o = o;
   a.u = rho * e1;
@@ -117,7 +211,6 @@ LoopWirePieceMin CalcArcCircleMin(const Eigen::Vector3d& o, const Eigen::Vector3
   const double ou = o.dot(a.u), ov = o.dot(a.v);
   const bool has_nearest_to_centre = ou != 0 || ov != 0;
   const double s_centre = has_nearest_to_centre ? AngleOf(-ou, -ov) : 0;
-  SpOptions opt;
   int rounds = 0;
   for (; rounds < kLoopWireMaxArcRounds; ++rounds) {
     const double t_sq = best.dist_sq;
@@ -132,16 +225,10 @@ LoopWirePieceMin CalcArcCircleMin(const Eigen::Vector3d& o, const Eigen::Vector3
         }
       }
     }
-    double size = 0;
-    const CircleConic q = CalcLevelTorusAlongNeedle(o, e1, e2, rho, rho_sq_minus_one, t_sq, &size);
-    double ct[8], st[8];
-    bool constant = false;
-    const int n = FindConicExtremaOnCircle(q, opt, ct, st, &constant);
-    for (int j = 0; j < n; ++j) {
-      if (!(q.Eval(ct[j], st[j]) > 0)) continue;
-      const double s = AngleOf(ct[j], st[j]);
-      if (s > sweep) continue;
-      Descend(a, s, &best);
+    if (std::max(rho, o.norm()) > local_form_above) {
+      CertifyWithLocalForms(a, t_sq, &best);
+    } else {
+      CertifyOnWholeCircle(a, o, e1, e2, rho, rho_sq_minus_one, t_sq, &best);
     }
     if (!(best.dist_sq < before * (1 - kProgressRel))) break;
   }

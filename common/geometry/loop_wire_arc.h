@@ -26,12 +26,18 @@ namespace microdex::geometry {
 
 // Certificate rounds before the arc query gives up (LoopWirePieceMin::converged = false).
 inline constexpr int kLoopWireMaxArcRounds = 12;
+// Above this radius or centre distance (units of R) the certificate uses local forms of the
+// level torus about points of the arc instead of the whole-circle form, whose coefficients
+// (of the size of ρ⁴ and |o|⁴) cancel down to the values near the loop: on arcs of radius
+// ≥ 10 R the whole-circle quartic no longer resolves the level torus's small extrema there
+// (0.57 R off at ρ = 2000 R).
+inline constexpr double kLoopWireLocalFormAbove = 4;
 
 // The arc o + rho (cos s e1 + sin s e2), s ∈ [0, sweep] (loop frame, units of R; e1, e2
 // orthonormal, rho > 0, sweep ∈ (0, 2π]); rho_sq_minus_one = ρ² − 1 formed by the caller as
 // accurately as its inputs allow.
 LoopWirePieceMin CalcArcCircleMin(const Eigen::Vector3d& o, const Eigen::Vector3d& e1,
                                   const Eigen::Vector3d& e2, double rho, double rho_sq_minus_one,
-                                  double sweep);
+                                  double sweep, double local_form_above = kLoopWireLocalFormAbove);
 
 }  // namespace microdex::geometry
