@@ -14,7 +14,9 @@
 // the best point is the minimum. Otherwise the descent restarts there, strictly lower; each
 // round reaches another local minimum, of which there are at most four. Beyond the horn torus
 // (t ≥ R) the lemon where D < t lies inside the ball |x|² < t² − R², whose points are all
-// closer than t: the arc's point nearest the centre is tested first.
+// closer than t: the arc's point nearest the centre is tested first. For arcs of radius or
+// centre distance beyond kLoopWireLocalFormAbove, the level torus is expanded about points of
+// the arc inside the ball |x| ≤ t + R instead (local forms, README.md).
 //
 // No allocation, no exception.
 
