@@ -6,8 +6,9 @@
 #include <numbers>
 #include <vector>
 
-#include "common/geometry/arc_torus_mesh.h"
-#include "fcl/geometry/bvh/BVH_model.h"
+#include "common/mesh/mesh_fcl.h"
+#include "common/mesh/primitives.h"
+#include "common/mesh/triangle_mesh.h"
 #include "fcl/narrowphase/distance.h"
 
 namespace microdex::geometry {
@@ -15,21 +16,7 @@ namespace {
 
 constexpr double kTwoPi = 2 * std::numbers::pi;
 
-using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
-
-std::shared_ptr<Bvh> MakeBvh(const TriangleMesh& mesh, double scale) {
-  std::vector<fcl::Vector3d> points;
-  points.reserve(mesh.vertices.size());
-  for (const Eigen::Vector3d& v : mesh.vertices) points.push_back(scale * v);
-  std::vector<fcl::Triangle> triangles;
-  triangles.reserve(mesh.triangles.size());
-  for (const Eigen::Vector3i& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
-  auto bvh = std::make_shared<Bvh>();
-  bvh->beginModel(static_cast<int>(triangles.size()), static_cast<int>(points.size()));
-  bvh->addSubModel(points, triangles);
-  bvh->endModel();
-  return bvh;
-}
+using mesh::TriangleMesh;
 
 // A ring of n vertices of radius r around p in the plane ⊥ t.
 void AddRing(const Eigen::Vector3d& p, const Eigen::Vector3d& t, const Eigen::Vector3d& a, double r,
@@ -78,7 +65,7 @@ TriangleMesh MakeWireTubeMesh(const LoopWireModel& model, const LoopWireMeshReso
 }  // namespace
 
 struct LoopWireMeshModel::Impl {
-  std::shared_ptr<Bvh> loop, wire;
+  std::shared_ptr<mesh::FclMesh> loop, wire;
   double scale = 1;  // BVH lengths per metre (1/R)
   int num_triangles = 0;
 };
@@ -86,12 +73,16 @@ struct LoopWireMeshModel::Impl {
 LoopWireMeshModel::LoopWireMeshModel(const LoopWireModel& model, const LoopWireMeshResolution& res)
     : impl_(std::make_unique<Impl>()) {
   const LoopDef& loop = model.loop();
-  const TriangleMesh loop_mesh =
-      MakeTorusWallMesh(loop.radius_m, loop.wire_radius_m, kTwoPi, res.n_major, res.n_minor);
+  const TriangleMesh loop_mesh = mesh::MakeTorusTubeMesh({.core_radius_m = loop.radius_m,
+                                                          .tube_radius_m = loop.wire_radius_m,
+                                                          .segment_angle_rad = kTwoPi,
+                                                          .n_major = res.n_major,
+                                                          .n_minor = res.n_minor,
+                                                          .end_caps = false});
   const TriangleMesh wire_mesh = MakeWireTubeMesh(model, res);
   impl_->scale = 1 / loop.radius_m;
-  impl_->loop = MakeBvh(loop_mesh, impl_->scale);
-  impl_->wire = MakeBvh(wire_mesh, impl_->scale);
+  impl_->loop = mesh::MakeFclMesh(loop_mesh, impl_->scale);
+  impl_->wire = mesh::MakeFclMesh(wire_mesh, impl_->scale);
   impl_->num_triangles = static_cast<int>(loop_mesh.triangles.size() + wire_mesh.triangles.size());
 }
 
