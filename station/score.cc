@@ -27,6 +27,11 @@ double CalcTaskPathLength(const scene::SceneModel& scene) {
   const scene::TaskDef& t = scene.task;
   if (t.kind == scene::TaskKind::kTremorHold) return 0;
   if (t.kind == scene::TaskKind::kGrasp) return 2 * (t.line_end_m - t.line_start_m).norm();
+  if (t.kind == scene::TaskKind::kLoopAlongWire && scene.loop) {
+    double length = 0;
+    for (const geometry::WirePieceDef& p : scene.loop->wire.pieces) length += p.Length();
+    return length;
+  }
   const double one_pass = t.path == scene::PathKind::kLine
                               ? (t.line_end_m - t.line_start_m).norm()
                               : scene.needle.radius_m * (t.end_azimuth_rad - t.start_azimuth_rad);
@@ -57,7 +62,8 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   if (metric == "progress_deficit") {
     if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
     const scene::TaskDef& task = scene.task;
-    if (task.kind == scene::TaskKind::kTremorHold || task.kind == scene::TaskKind::kGrasp) {
+    if (task.kind == scene::TaskKind::kTremorHold || task.kind == scene::TaskKind::kGrasp ||
+        task.kind == scene::TaskKind::kLoopAlongWire) {
       return 1.0 - t.progress;
     }
     return 1.0 - (t.passes_done + t.progress) / task.passes;

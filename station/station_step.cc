@@ -188,10 +188,13 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
   state::ScoreState& t = s.score;
   const scene::TaskDef& task = scene.task;
   const Eigen::Vector3d p_device = s.tool.X_WT_device.translation();
-  const double deviation = CalcDeviation(scene, path, p_device);
+  // The loop along a wire: the loop module's offset from the wire's axis (both).
+  const bool on_wire = task.kind == scene::TaskKind::kLoopAlongWire;
+  const double deviation = on_wire ? s.loop->offset_m : CalcDeviation(scene, path, p_device);
   t.deviation_sum_m += deviation;
   t.deviation_max_m = std::max(t.deviation_max_m, deviation);
-  t.drift_sum_m += CalcDeviation(scene, path, p_device - s.cues.tremor_band_m);
+  t.drift_sum_m +=
+      on_wire ? deviation : CalcDeviation(scene, path, p_device - s.cues.tremor_band_m);
   ++t.deviation_samples;
   if (deviation > task.tolerance_m) t.time_outside_s += dt_s;
   if (task.kind == scene::TaskKind::kTremorHold) {
@@ -206,6 +209,12 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     if (g.metrics.held && g.X_WO.p_W.z() >= scene.grasp->lift_height_m) t.goal_time_s += dt_s;
     t.progress = std::min(t.goal_time_s / task.hold_s, 1.0);
     if (t.goal_time_s >= task.hold_s - 0.5 * dt_s) t.outcome = 1;
+  } else if (task.kind == scene::TaskKind::kLoopAlongWire) {
+    // One pass along the course; the deviation is the offset from the wire's axis.
+    double length = 0;
+    for (const geometry::WirePieceDef& p : scene.loop->wire.pieces) length += p.Length();
+    t.progress = std::clamp(s.loop->s_m / length, 0.0, 1.0);
+    if (t.progress >= 0.98) t.outcome = 1;
   } else if (task.kind != scene::TaskKind::kFollowPath) {
     // A pass ends when the device reaches the far end of the path (forward passes) or the
     // start (return passes).

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 #include "common/base/yaml_reader.h"
@@ -72,6 +73,27 @@ grasp::ShapeKind ParseGraspShape(const std::string& text) {
   throw std::invalid_argument("expected box, cylinder or sphere");
 }
 
+// One step of a wire course: "straight LENGTH_M" or "turn RADIUS_M ANGLE_RAD [PLANE_RAD]".
+geometry::WireCourseStepDef ParseCourseStep(const std::string& text) {
+  std::istringstream in(text);
+  std::string kind;
+  in >> kind;
+  double a = 0, b = 0, c = 0;
+  if (kind == "straight" && (in >> a) && (in >> std::ws).eof()) {
+    if (!(a > 0) || !std::isfinite(a)) throw std::invalid_argument("expected a length > 0 m");
+    return geometry::WireCourseStepDef::Straight(a);
+  }
+  if (kind == "turn" && (in >> a >> b)) {
+    if (!(in >> std::ws).eof() && !(in >> c)) throw std::invalid_argument("bad turn plane");
+    if (!(a > 0 && b > 0 && b <= 2 * 3.141592653589793) || !std::isfinite(c)) {
+      throw std::invalid_argument("expected a radius > 0 m and an angle in (0, 2π]");
+    }
+    return geometry::WireCourseStepDef::Turn(a, b, c);
+  }
+  throw std::invalid_argument(
+      "expected 'straight LENGTH_M' or 'turn RADIUS_M ANGLE_RAD [PLANE_RAD]'");
+}
+
 // A parameter file named in the scene: relative names are taken from the scene's folder.
 std::string ResolveBeside(const std::string& origin, const std::string& name) {
   const std::filesystem::path p(name);
@@ -106,7 +128,7 @@ void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
-                           "tissue", "grasp", "scoring", "microscope", "visuals", "cues"});
+                           "tissue", "grasp", "loop", "scoring", "microscope", "visuals", "cues"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -223,6 +245,34 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.lift_height_m = g->FiniteDouble("lift_height_m", d.lift_height_m);
     s.grasp = d;
   }
+  if (const std::optional<YamlSection> l = root.OptionalMap("loop")) {
+    l->CheckNoUnknownKeys({"radius_m", "wire_radius_m", "course", "wall_stiffness_N_per_m"});
+    LoopSceneDef d;
+    d.loop.radius_m = l->FiniteDouble("radius_m", d.loop.radius_m);
+    d.loop.wire_radius_m = l->FiniteDouble("wire_radius_m", d.loop.wire_radius_m);
+    d.wall_stiffness_N_per_m = l->FiniteDouble("wall_stiffness_N_per_m", d.wall_stiffness_N_per_m);
+    const YamlSection c = l->Map("course");
+    c.CheckNoUnknownKeys({"position_m", "rpy_rad", "wire_radius_m", "steps"});
+    Eigen::Isometry3d X_WS = Eigen::Isometry3d::Identity();
+    X_WS.translate(c.Vec3("position_m", Eigen::Vector3d::Zero()));
+    X_WS.rotate(RotationFromRpy(c.Vec3("rpy_rad", Eigen::Vector3d::Zero())));
+    c.Required("steps");
+    std::vector<geometry::WireCourseStepDef> steps;
+    for (const std::string& text : c.StringList("steps")) {
+      try {
+        steps.push_back(ParseCourseStep(text));
+      } catch (const std::invalid_argument& e) {
+        c.Fail("steps", "'" + text + "': " + e.what());
+      }
+    }
+    const double wire_radius_m = c.FiniteDouble("wire_radius_m", d.wire.radius_m);
+    try {
+      d.wire = geometry::MakeWireCourse(X_WS, steps, wire_radius_m);
+    } catch (const std::invalid_argument& e) {
+      c.Fail("steps", e.what());
+    }
+    s.loop = d;
+  }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
     std::vector<std::string_view> known(std::begin(kScoreMetrics), std::end(kScoreMetrics));
     for (const char* metric : kScoreMetrics) {
@@ -299,16 +349,50 @@ const char* TaskKindName(TaskKind kind) {
       return "needle_along_tube";
     case TaskKind::kGrasp:
       return "grasp";
+    case TaskKind::kLoopAlongWire:
+      return "loop_along_wire";
   }
   return "unknown";
 }
 
 TaskKind ParseTaskKind(const std::string& text) {
   for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube,
-                     TaskKind::kGrasp}) {
+                     TaskKind::kGrasp, TaskKind::kLoopAlongWire}) {
     if (text == TaskKindName(k)) return k;
   }
-  throw std::invalid_argument("expected follow_path, tremor_hold, needle_along_tube or grasp");
+  throw std::invalid_argument(
+      "expected follow_path, tremor_hold, needle_along_tube, grasp or loop_along_wire");
+}
+
+Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
+  double total = 0;
+  for (const geometry::WirePieceDef& p : wire.pieces) total += p.Length();
+  double s = std::clamp(fraction, 0.0, 1.0) * total;
+  Eigen::Vector3d p_W = wire.pieces.back().EndPoint(), t_W = Eigen::Vector3d::UnitX();
+  for (const geometry::WirePieceDef& p : wire.pieces) {
+    const double length = p.Length();
+    if (s > length && &p != &wire.pieces.back()) {
+      s -= length;
+      continue;
+    }
+    const double u = std::min(s / length, 1.0);
+    if (p.kind == geometry::WirePieceDef::Kind::kSegment) {
+      p_W = p.p_W0 + u * (p.p_W1 - p.p_W0);
+      t_W = (p.p_W1 - p.p_W0).normalized();
+    } else {
+      const double angle = u * p.sweep_rad;
+      const Eigen::Vector3d v_W = p.axis_W.cross(p.u_W);
+      const Eigen::Vector3d radial = std::cos(angle) * p.u_W + std::sin(angle) * v_W;
+      p_W = p.p_WO + p.radius_m * radial;
+      t_W = p.axis_W.cross(radial).normalized();
+    }
+    break;
+  }
+  // The loop's plane across the wire: z_T along the tangent.
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), t_W).toRotationMatrix();
+  X.translation() = p_W;
+  return X;
 }
 
 bool SceneModel::HasModule(const std::string& module) const {
@@ -342,6 +426,9 @@ double SceneModel::CalcIdealPathFraction(double t_s) const {
 }
 
 Eigen::Isometry3d SceneModel::CalcIdealToolPose(double t_s) const {
+  if (task.kind == TaskKind::kLoopAlongWire && loop) {
+    return CalcWireCoursePose(loop->wire, CalcIdealPathFraction(t_s));
+  }
   if (task.kind == TaskKind::kTremorHold) {
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
     X.linear() = task.R_WT_line;
@@ -370,7 +457,7 @@ void ValidateScene(const SceneModel& s) {
     if (std::find_if(std::begin(kKnownModules), std::end(kKnownModules),
                      [&](const char* k) { return m == k; }) == std::end(kKnownModules)) {
       Invalid("modules",
-              "unknown module '" + m + "' (known: needle, tremor, thread, tissue, grasp)");
+              "unknown module '" + m + "' (known: needle, tremor, thread, tissue, grasp, loop)");
     }
     if (!seen.insert(m).second) Invalid("modules", "module '" + m + "' named twice");
   }
@@ -457,6 +544,28 @@ void ValidateScene(const SceneModel& s) {
     if (!(s.grasp->lift_height_m > s.grasp->p_W_object.z())) {
       Invalid("grasp.lift_height_m", "expected above the object's resting height");
     }
+  }
+  if (s.HasModule("loop") != s.loop.has_value()) {
+    Invalid("loop", s.loop ? "section given but 'loop' is not in modules"
+                           : "section required by the 'loop' module");
+  }
+  if (s.loop) {
+    try {
+      s.loop->loop.Validate();
+    } catch (const std::invalid_argument& e) {
+      Invalid("loop.radius_m", e.what());
+    }
+    try {
+      s.loop->wire.Validate();
+    } catch (const std::invalid_argument& e) {
+      Invalid("loop.course", e.what());
+    }
+    if (!(s.loop->wall_stiffness_N_per_m >= 0 && s.loop->wall_stiffness_N_per_m <= 1e5)) {
+      Invalid("loop.wall_stiffness_N_per_m", "expected 0..1e5 N/m");
+    }
+  }
+  if (t.kind == TaskKind::kLoopAlongWire && !s.HasModule("loop")) {
+    Invalid("task.kind", "loop_along_wire needs the loop module");
   }
   if (t.kind == TaskKind::kGrasp && !s.HasModule("grasp")) {
     Invalid("task.kind", "grasp needs the grasp module");

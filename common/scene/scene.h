@@ -23,6 +23,7 @@
 #include "common/cues/cue_kind.h"
 #include "common/fem/tissue_def.h"
 #include "common/geometry/arc_torus.h"
+#include "common/geometry/loop_wire.h"
 #include "common/grasp/grasp_def.h"
 #include "common/thread/thread_def.h"
 
@@ -36,7 +37,8 @@ class SceneError : public InputError {
 };
 
 // Modules a scene may name; "thread" and "tissue" need their scene sections.
-inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue", "grasp"};
+inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread",
+                                                "tissue", "grasp",  "loop"};
 
 // The tube is a geometry::TorusSegmentDef (scene section `vessel`: core_radius_m,
 // tube_radius_m, segment_angle_rad, position_m, rpy_rad). The needle is a geometry::ArcDef
@@ -56,8 +58,10 @@ enum class TaskKind {
   kTremorHold,       // hold the tool tip on target_m for hold_s under magnification
   kNeedleAlongTube,  // slide the needle along the tube and back, `passes` passes, no touching
   kGrasp,            // close the forceps on the object, lift it to lift_height_m, hold it hold_s
+  kLoopAlongWire,    // pass the held loop along the wire course to its end without touching
 };
-const char* TaskKindName(TaskKind kind);  // follow_path, tremor_hold, needle_along_tube, grasp
+// follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire
+const char* TaskKindName(TaskKind kind);
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
 // The task: passes along the path from start to end and back, each pass lasting
@@ -130,6 +134,16 @@ struct GraspSceneDef {
   double lift_height_m = 3e-3;  // the centre of mass this high above the table counts as lifted
 };
 
+// The loop along a wire (station "loop" module, thesis §2.2, Fig. 2.2b): the tool holds a loop
+// (its frame L is the tool frame T: the loop's circle in T's xy plane, around T's origin) and
+// passes it along a wire course of straight runs and turns (common/geometry/loop_wire.h). The
+// ideal path is the wire's axis, the loop's plane across it.
+struct LoopSceneDef {
+  geometry::LoopDef loop;
+  geometry::WireDef wire;
+  double wall_stiffness_N_per_m = 500;  // penalty force of the wire on contact
+};
+
 // Haptic rendering limits.
 struct HapticDef {
   double rate_hz = 1000;
@@ -182,6 +196,7 @@ struct SceneModel {
   std::optional<ThreadSceneDef> thread;  // present exactly when modules has "thread"
   std::optional<TissueSceneDef> tissue;  // present exactly when modules has "tissue"
   std::optional<GraspSceneDef> grasp;    // present exactly when modules has "grasp"
+  std::optional<LoopSceneDef> loop;      // present exactly when modules has "loop"
   std::vector<ScoreTermDef> scoring;     // empty for kFollowPath (its own formula)
   MicroscopeDef microscope;
   std::vector<VisualDef> visuals;
@@ -196,11 +211,16 @@ struct SceneModel {
   double CalcIdealAzimuth(double t_s) const;
   // The fraction of the path at time t (0 at the start, 1 at the end), same timing.
   double CalcIdealPathFraction(double t_s) const;
-  // The scripted ideal tool pose at time t along the task's path (either kind).
+  // The scripted ideal tool pose at time t along the task's path (a hold: the target; the loop
+  // along a wire: the loop centred on the wire's axis, its plane across the wire).
   Eigen::Isometry3d CalcIdealToolPose(double t_s) const;
   // The needle frame N from the tool frame T (the tail point, s = 0): X_WN = X_WT * X_TN.
   Eigen::Isometry3d X_TN() const;
 };
+
+// The pose on a wire course at a fraction of its length (0 start, 1 end): on the wire's axis,
+// z along its tangent.
+Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction);
 
 // The scene's own checks (and those of its thread and tissue definitions), called by the
 // loaders. Throws std::invalid_argument for the first bad field, whose message starts with the

@@ -22,6 +22,7 @@
 #include "common/cues/tremor_filter.h"
 #include "common/fem/tissue_step.h"
 #include "common/geometry/arc_torus.h"
+#include "common/geometry/loop_wire.h"
 #include "common/grasp/grasp_model.h"
 #include "common/thread/thread_model.h"
 
@@ -143,6 +144,14 @@ struct GraspModuleState {
   grasp::GraspState grasp;
 };
 
+// The loop-along-a-wire module: the loop's clearance to the wire and its progress along it.
+struct LoopModuleState {
+  geometry::LoopWireClearance clearance;
+  double s_m = 0;              // arc length of the wire-axis point nearest the loop's centre
+  double offset_m = 0;         // the loop centre's distance from the wire's axis
+  std::uint32_t warnings = 0;  // failed queries
+};
+
 struct StationState {
   std::uint64_t step = 0;  // steps taken; the next step has this index
   // The station's random numbers (SplitMix64; NextRandom). Seeded from the station's seed;
@@ -158,6 +167,7 @@ struct StationState {
   std::optional<ThreadModuleState> thread;
   std::optional<TissueModuleState> tissue;
   std::optional<GraspModuleState> grasp;
+  std::optional<LoopModuleState> loop;
 };
 
 // Seeds the generator (the sections are filled by the modules).

@@ -249,6 +249,23 @@ void Grasp(S& m, V& v) {
   v("grasp.warnings.contact_overflows", &g.warnings.contact_overflows, 1);
 }
 
+template <typename S, typename V>
+void Loop(S& m, V& v) {
+  auto& c = m.clearance;
+  Enum("loop.clearance.status", c.status, v);
+  v("loop.clearance.clearance_m", &c.clearance_m, 1);
+  v("loop.clearance.distance_m", &c.distance_m, 1);
+  v("loop.clearance.contact", &c.contact, 1);
+  Matrix("loop.clearance.p_WA", c.p_WA, v);
+  Matrix("loop.clearance.p_WC", c.p_WC, v);
+  v("loop.clearance.piece", &c.piece, 1);
+  v("loop.clearance.s_m", &c.s_m, 1);
+  v("loop.clearance.num_solved", &c.num_solved, 1);
+  v("loop.s_m", &m.s_m, 1);
+  v("loop.offset_m", &m.offset_m, 1);
+  v("loop.warnings", &m.warnings, 1);
+}
+
 // An optional section: its presence flag, then its fields when present.
 template <typename O, typename V, typename F>
 void Section(const char* name, O& section, V& v, F fields) {
@@ -274,6 +291,7 @@ void VisitStationState(S& s, V& v) {
   vi::Section("thread", s.thread, v, [](auto& t, V& w) { vi::Thread(t, w); });
   vi::Section("tissue", s.tissue, v, [](auto& t, V& w) { vi::Tissue(t, w); });
   vi::Section("grasp", s.grasp, v, [](auto& g, V& w) { vi::Grasp(g, w); });
+  vi::Section("loop", s.loop, v, [](auto& l, V& w) { vi::Loop(l, w); });
 }
 
 }  // namespace microdex::state

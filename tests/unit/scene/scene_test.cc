@@ -72,7 +72,7 @@ TEST(Scene, BadInputNamesFileLineAndField) {
             "angle");
   EXPECT_EQ(with("[needle, tremor]", "[needle, vortex]"),
             "test.yaml:3: modules: unknown module 'vortex' (known: needle, tremor, thread, "
-            "tissue, grasp)");
+            "tissue, grasp, loop)");
   EXPECT_EQ(with("radius_m: 5.0e-3, sweep", "radius_m: 6.0e-3, sweep"),
             "test.yaml:5: needle.radius_m: expected within the tube: |needle radius − core "
             "radius| < tube radius");
@@ -249,6 +249,25 @@ TEST(Scene, TrainingScenesLoadWithTaskScoringAndMeshes) {
   EXPECT_NEAR(h.visuals[1].X_PM.translation().z(), 0.002, 1e-15);
   // A hold's ideal pose is the target at every time.
   EXPECT_TRUE(h.CalcIdealToolPose(3.7).translation().isApprox(h.task.target_m));
+  // The loop along a wire: the ideal pose starts at the course's start and ends at its end,
+  // with the loop's axis along the wire.
+  const SceneModel w = LoadScene(SceneDir() + "/loop_along_wire.yaml");
+  ASSERT_TRUE(w.loop.has_value());
+  EXPECT_EQ(w.task.kind, TaskKind::kLoopAlongWire);
+  const Eigen::Isometry3d X0 = w.CalcIdealToolPose(0);
+  EXPECT_LT((X0.translation() - w.loop->wire.pieces.front().StartPoint()).norm(), 1e-12);
+  EXPECT_LT((X0.linear().col(2) -
+             (w.loop->wire.pieces.front().p_W1 - w.loop->wire.pieces.front().p_W0).normalized())
+                .norm(),
+            1e-12);
+  const Eigen::Isometry3d X1 = w.CalcIdealToolPose(w.task.pass_duration_s);
+  EXPECT_LT((X1.translation() - w.loop->wire.pieces.back().EndPoint()).norm(), 1e-9);
+  // A bad course step names the step.
+  std::string course = std::string(kGood) + "loop: {course: {steps: [straight 0.01, wiggle 3]}}\n";
+  course.replace(course.find("[needle, tremor]"), 16, "[needle, loop]");
+  EXPECT_EQ(ErrorOf(course),
+            "test.yaml:7: loop.course.steps: 'wiggle 3': expected 'straight LENGTH_M' or "
+            "'turn RADIUS_M ANGLE_RAD [PLANE_RAD]'");
   const SceneModel n = LoadScene(SceneDir() + "/needle_along_tube.yaml");
   EXPECT_EQ(n.task.kind, TaskKind::kNeedleAlongTube);
   EXPECT_EQ(n.task.passes, 2);
@@ -269,8 +288,8 @@ TEST(Scene, BadTrainingFieldsNameFileLineAndField) {
   std::string kind = kGood;
   kind.replace(kind.find("task: {"), 7, "task: {kind: juggling, ");
   EXPECT_EQ(ErrorOf(kind),
-            "test.yaml:6: task.kind: expected follow_path, tremor_hold, needle_along_tube or "
-            "grasp");
+            "test.yaml:6: task.kind: expected follow_path, tremor_hold, needle_along_tube, "
+            "grasp or loop_along_wire");
   kind = kGood;
   kind.replace(kind.find("task: {"), 7, "task: {kind: tremor_hold, ");
   EXPECT_EQ(ErrorOf(kind), "test.yaml:2: scoring: required by task kind tremor_hold");

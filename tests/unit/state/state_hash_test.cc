@@ -81,8 +81,8 @@ struct PerturbSpreadElements {
   void operator()(const char* name, T* p, std::size_t n) {
     // Presence flags and the grasp count are read from the containers, not stored: changing
     // the visited copy changes nothing.
-    static const std::set<std::string> kDerived = {"needle", "tremor", "thread",
-                                                   "tissue", "grasp",  "thread.grasps.size"};
+    static const std::set<std::string> kDerived = {
+        "needle", "tremor", "thread", "tissue", "grasp", "loop", "thread.grasps.size"};
     if (kDerived.count(name)) return;
     names.insert(name);
     const std::size_t count = std::min<std::size_t>(n, 64);

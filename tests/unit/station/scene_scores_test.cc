@@ -50,7 +50,8 @@ TEST_P(SceneScores, RiseWithSkill) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TrainingScenes, SceneScores,
-                         ::testing::Values("tremor_hold", "needle_along_tube", "grasp"),
+                         ::testing::Values("tremor_hold", "loop_along_wire", "needle_along_tube",
+                                           "grasp"),
                          [](const auto& p) { return std::string(p.param); });
 
 }  // namespace
