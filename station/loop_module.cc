@@ -9,6 +9,7 @@ LoopModule::LoopModule(const scene::SceneModel& scene)
 void LoopModule::InitState(state::StationState& s) const {
   state::LoopModuleState l;
   l.clearance = geometry::CalcLoopWireClearance(model_, Eigen::Isometry3d::Identity());
+  l.p_WA_centre = geometry::CalcWireProgress(model_, Eigen::Vector3d::Zero()).p_WA;
   s.loop = l;
 }
 
@@ -23,6 +24,7 @@ void LoopModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector
   }
   l.s_m = progress.s_m;
   l.offset_m = progress.distance_m;
+  l.p_WA_centre = progress.p_WA;
   if (l.clearance.contact) {
     // Push the loop's nearest circle point C away from the wire's axis point A, in proportion to
     // the depth.

@@ -98,10 +98,15 @@ void CalcToolAfterCues(const cues::TremorFilterModel& filter, const DeviceSample
   }
 }
 
-// Reads state.cues and the tool; returns the field's force on the tool.
+// Reads state.cues, the tool (and the loop module's nearest wire point); returns the field's
+// force on the tool.
 Eigen::Vector3d CalcCueForce(const cues::IdealPath& path, double max_force_N,
                              const state::StationState& s) {
   if (s.cues.field_stiffness_N_per_m == 0) return Eigen::Vector3d::Zero();
+  if (s.loop) {  // the wire course: towards the wire-axis point the loop module last found
+    return cues::CalcPointFieldForce(s.tool.X_WT.translation(), s.loop->p_WA_centre,
+                                     s.cues.field_stiffness_N_per_m, max_force_N);
+  }
   return cues::CalcPathFieldForce(path, s.tool.X_WT.translation(), s.cues.field_stiffness_N_per_m,
                                   max_force_N);
 }

@@ -3,17 +3,13 @@
 #include <algorithm>
 
 namespace microdex::cues {
-namespace {
-
-Eigen::Vector3d Spring(const Eigen::Vector3d& p_WT, const Eigen::Vector3d& q_W,
-                       double signed_stiffness_N_per_m, double max_force_N) {
+Eigen::Vector3d CalcPointFieldForce(const Eigen::Vector3d& p_WT, const Eigen::Vector3d& q_W,
+                                    double signed_stiffness_N_per_m, double max_force_N) {
   Eigen::Vector3d f = -signed_stiffness_N_per_m * (p_WT - q_W);
   const double n = f.norm();
   if (n > max_force_N) f *= max_force_N / n;
   return f;
 }
-
-}  // namespace
 
 Eigen::Vector3d CalcNearestOnSegment(const PathSegment& segment, const Eigen::Vector3d& p_W) {
   const Eigen::Vector3d d = segment.b_W - segment.a_W;
@@ -38,7 +34,7 @@ Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector
                                    double signed_stiffness_N_per_m, double max_force_N) {
   Eigen::Vector3d q_W;
   if (!CalcNearestOnCircle(circle, p_WT, &q_W)) return Eigen::Vector3d::Zero();
-  return Spring(p_WT, q_W, signed_stiffness_N_per_m, max_force_N);
+  return CalcPointFieldForce(p_WT, q_W, signed_stiffness_N_per_m, max_force_N);
 }
 
 Eigen::Vector3d CalcPathFieldForce(const IdealPath& path, const Eigen::Vector3d& p_WT,
@@ -46,8 +42,8 @@ Eigen::Vector3d CalcPathFieldForce(const IdealPath& path, const Eigen::Vector3d&
   if (!path.is_segment) {
     return CalcPathFieldForce(path.circle, p_WT, signed_stiffness_N_per_m, max_force_N);
   }
-  return Spring(p_WT, CalcNearestOnSegment(path.segment, p_WT), signed_stiffness_N_per_m,
-                max_force_N);
+  return CalcPointFieldForce(p_WT, CalcNearestOnSegment(path.segment, p_WT),
+                             signed_stiffness_N_per_m, max_force_N);
 }
 
 }  // namespace microdex::cues

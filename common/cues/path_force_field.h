@@ -35,6 +35,11 @@ Eigen::Vector3d CalcNearestOnSegment(const PathSegment& segment, const Eigen::Ve
 bool CalcNearestOnCircle(const PathCircle& circle, const Eigen::Vector3d& p_W,
                          Eigen::Vector3d* q_W);
 
+// The field's spring towards (away from) the path point q_W nearest the tool, saturated: for a
+// path of another shape (the loop's wire course), whose nearest point its module finds.
+Eigen::Vector3d CalcPointFieldForce(const Eigen::Vector3d& p_WT, const Eigen::Vector3d& q_W,
+                                    double signed_stiffness_N_per_m, double max_force_N);
+
 // The spring force of the field; zero on the circle's axis. signed_stiffness_N_per_m > 0
 // converges, < 0 diverges.
 Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector3d& p_WT,

@@ -147,9 +147,10 @@ struct GraspModuleState {
 // The loop-along-a-wire module: the loop's clearance to the wire and its progress along it.
 struct LoopModuleState {
   geometry::LoopWireClearance clearance;
-  double s_m = 0;              // arc length of the wire-axis point nearest the loop's centre
-  double offset_m = 0;         // the loop centre's distance from the wire's axis
-  std::uint32_t warnings = 0;  // failed queries
+  double s_m = 0;       // arc length of the wire-axis point nearest the loop's centre
+  double offset_m = 0;  // the loop centre's distance from the wire's axis
+  Eigen::Vector3d p_WA_centre = Eigen::Vector3d::Zero();  // that nearest wire-axis point
+  std::uint32_t warnings = 0;                             // failed queries
 };
 
 struct StationState {

@@ -263,6 +263,7 @@ void Loop(S& m, V& v) {
   v("loop.clearance.num_solved", &c.num_solved, 1);
   v("loop.s_m", &m.s_m, 1);
   v("loop.offset_m", &m.offset_m, 1);
+  Matrix("loop.p_WA_centre", m.p_WA_centre, v);
   v("loop.warnings", &m.warnings, 1);
 }
 
