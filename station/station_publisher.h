@@ -42,7 +42,7 @@ struct PublisherConfig {
   double mirror_rate_hz = 60;
   double telemetry_rate_hz = 10;
   double score_period_s = 0.5;  // live scores at 2 Hz
-  double knot_rate_hz = 2;  // knot recognition of the mirrored thread (allocates: not per tick)
+  double knot_rate_hz = 2;      // knot recognition of the mirrored thread (allocates: not per tick)
   bool realtime = false;
   // Wake-up this long after each tick start, to pick up its snapshot with little delay.
   std::int64_t wake_offset_ns = 60'000;

@@ -12,7 +12,6 @@ namespace microdex::geometry {
 namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kPi = std::numbers::pi;
 
 // Degree of P (trigonometric) and of its half-angle polynomial Q.
