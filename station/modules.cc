@@ -1,6 +1,7 @@
 #include <stdexcept>
 
 #include "station/grasp_module.h"
+#include "station/knot_quiz_module.h"
 #include "station/loop_module.h"
 #include "station/module.h"
 #include "station/needle_module.h"
@@ -25,6 +26,8 @@ std::vector<std::unique_ptr<Module>> MakeModules(const scene::SceneModel& scene)
       modules.push_back(std::make_unique<GraspModule>(scene));
     } else if (name == "loop") {
       modules.push_back(std::make_unique<LoopModule>(scene));
+    } else if (name == "knots") {
+      modules.push_back(std::make_unique<KnotQuizModule>(scene));
     } else {
       throw std::runtime_error(scene.path + ": modules: '" + name +
                                "' has no station module in this build yet");

@@ -59,11 +59,18 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   if (metric == "object_rotation_rad") return t.object_rotation_rad;
   if (metric == "jaw_alignment_rad") return t.jaw_alignment_rad;
   if (metric == "object_drops") return t.object_drops;
+  // Knot topology: unanswered knots count as wrong.
+  if (metric == "wrong_fraction" && scene.knots) {
+    const auto items = static_cast<double>(scene.knots->items.size());
+    return (t.wrong_answers + (items - t.answers)) / items;
+  }
+  if (metric == "response_time_s") return Ratio(t.response_time_sum_s, t.answers);
   if (metric == "progress_deficit") {
     if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
     const scene::TaskDef& task = scene.task;
     if (task.kind == scene::TaskKind::kTremorHold || task.kind == scene::TaskKind::kGrasp ||
-        task.kind == scene::TaskKind::kLoopAlongWire) {
+        task.kind == scene::TaskKind::kLoopAlongWire ||
+        task.kind == scene::TaskKind::kKnotTopology) {
       return 1.0 - t.progress;
     }
     return 1.0 - (t.passes_done + t.progress) / task.passes;

@@ -21,6 +21,8 @@
 //   object_rotation_rad  grasp: the largest rotation the jaws induced in the object
 //   jaw_alignment_rad    grasp: angle between the closing direction and the object's face
 //   object_drops         grasp: lifted objects that fell out of the jaws
+//   wrong_fraction       knot topology: knots named wrongly or not at all, of those shown
+//   response_time_s      knot topology: mean time from a knot's appearance to its answer
 //
 // follow_path (the module demos) keeps its own formula:
 //   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean

@@ -87,6 +87,45 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
   };
   jaw_yaw_rad_ = either_way(yaw);
   jaw_offset_m_ = either_way(offset);
+  if (scene.task.kind == scene::TaskKind::kKnotTopology && scene.knots) {
+    const std::vector<knot::StitchKnotType>& items = scene.knots->items;
+    const std::size_t n = items.size();
+    const double accuracy = Lerp(def.accuracy_novice, def.accuracy_expert, def.skill);
+    const auto wrong = static_cast<std::size_t>(std::lround((1.0 - accuracy) * n));
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
+    for (std::size_t i = n; i > 1; --i) {  // Fisher–Yates from the seed
+      const auto j = std::min(static_cast<std::size_t>(uniform(0.0, 1.0) * i), i - 1);
+      std::swap(order[i - 1], order[j]);
+    }
+    std::vector<bool> is_wrong(n, false);
+    for (std::size_t i = 0; i < std::min(wrong, n); ++i) is_wrong[order[i]] = true;
+    const double rt = Lerp(def.response_time_novice_s, def.response_time_expert_s, def.skill);
+    double t = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      t += rt * uniform(0.8, 1.2);
+      press_s_.push_back(t);
+      knot::StitchKnotType named = items[i];
+      if (is_wrong[i]) {
+        switch (items[i]) {
+          case knot::StitchKnotType::kSquare:
+            named = knot::StitchKnotType::kGranny;
+            break;
+          case knot::StitchKnotType::kGranny:
+          case knot::StitchKnotType::kSurgeons:
+            named = knot::StitchKnotType::kSquare;
+            break;
+          case knot::StitchKnotType::kSlip:
+            named = knot::StitchKnotType::kHalfHitch;
+            break;
+          default:
+            named = knot::StitchKnotType::kSlip;
+            break;
+        }
+      }
+      answer_.push_back(static_cast<std::uint32_t>(named));
+    }
+  }
 }
 
 Eigen::Vector3d SimTrainee::CalcDrift(double t_s, Eigen::Vector3d* drift_rad) const {
@@ -172,6 +211,12 @@ DeviceSample SimTrainee::Read(std::uint64_t step) {
   }
   DeviceSample sample;
   const Eigen::Isometry3d X_ideal = CalcPlannedPose(t, &sample.gripper);
+  // Knot topology: the button of the answer, held for kPress_s.
+  constexpr double kPress_s = 0.1;
+  while (next_answer_ < press_s_.size() && t >= press_s_[next_answer_] + kPress_s) ++next_answer_;
+  if (next_answer_ < press_s_.size() && t >= press_s_[next_answer_]) {
+    sample.buttons = answer_[next_answer_];
+  }
   sample.X_WT = X_ideal;
   const double angle = drift_rad.norm();
   if (angle > 0) {

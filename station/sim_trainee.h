@@ -25,11 +25,18 @@
 //           about the shaft by a yaw error and shifted across the jaw by an offset, each of the
 //           skill's size (jaw_yaw_rad, jaw_offset_m) within ±20 %, either way, drawn once from
 //           the seed: poorly aligned jaws make the object turn (thesis Fig. 2.2d);
+//   knots:  (task kind knot_topology) names each knot shown after a response time
+//           (response_time_novice_s … expert, ±20 %), pressing the button of its class for
+//           0.1 s; of the N knots it names round((1 − p) N) wrongly (p = accuracy_novice …
+//           expert; which ones drawn from the seed), confusing square with granny, surgeon's
+//           with square, slip with half hitch;
 //   hand:   a spring of stiffness k_hand holding the planned pose, yielding with a time
 //           constant τ_hand: the offset o follows f / k_hand by o' = (f / k_hand − o) / τ_hand
 //           (explicit Euler, f the force of the previous step), so guidance fields and the
 //           wall act on the tool. A quasi-static hand (o = f / k_hand at once) would make the
 //           wall loop diverge whenever k_wall > k_hand.
+
+#include <vector>
 
 #include "common/scene/scene.h"
 #include "station/device.h"
@@ -59,6 +66,10 @@ struct SimTraineeDef {
   double jaw_yaw_expert_rad = 0.02;
   double jaw_offset_novice_m = 0.25e-3;
   double jaw_offset_expert_m = 0.02e-3;
+  double response_time_novice_s = 7.0;
+  double response_time_expert_s = 2.5;
+  double accuracy_novice = 0.4;
+  double accuracy_expert = 0.95;
   double hand_stiffness_N_per_m = 400;
   double hand_time_constant_s = 0.05;
   // Throws std::invalid_argument("field: reason") (the contract of every Def's Validate()).
@@ -91,6 +102,10 @@ class SimTrainee final : public Device {
   double hand_time_constant_s_;
   double pace_, reaction_delay_s_, correction_threshold_m_, correction_duration_s_;
   double close_duration_s_, jaw_yaw_rad_ = 0, jaw_offset_m_ = 0;
+  // Knot topology: when each answer is pressed and which class it names (sized at construction).
+  std::vector<double> press_s_;
+  std::vector<std::uint32_t> answer_;
+  std::size_t next_answer_ = 0;
   // The planned tool pose and gripper at time t (the task's passes, or the grasp's phases).
   Eigen::Isometry3d CalcPlannedPose(double t_s, double* gripper) const;
   // The corrective sub-movement under way (or the last one): from, to, start time.

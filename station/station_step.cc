@@ -214,6 +214,14 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     if (g.metrics.held && g.X_WO.p_W.z() >= scene.grasp->lift_height_m) t.goal_time_s += dt_s;
     t.progress = std::min(t.goal_time_s / task.hold_s, 1.0);
     if (t.goal_time_s >= task.hold_s - 0.5 * dt_s) t.outcome = 1;
+  } else if (task.kind == scene::TaskKind::kKnotTopology) {
+    const state::KnotQuizState& k = *s.knots;
+    const auto items = static_cast<std::int32_t>(scene.knots->items.size());
+    t.answers = k.item;
+    t.wrong_answers = k.item - k.correct;
+    t.response_time_sum_s = k.response_time_sum_s;
+    t.progress = static_cast<double>(k.item) / items;
+    if (k.item >= items) t.outcome = 1;
   } else if (task.kind == scene::TaskKind::kLoopAlongWire) {
     // One pass along the course; the deviation is the offset from the wire's axis.
     double length = 0;

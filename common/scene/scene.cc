@@ -63,7 +63,9 @@ constexpr const char* kScoreMetrics[] = {"time_s",
                                          "progress_deficit",
                                          "object_rotation_rad",
                                          "jaw_alignment_rad",
-                                         "object_drops"};
+                                         "object_drops",
+                                         "wrong_fraction",
+                                         "response_time_s"};
 
 grasp::ShapeKind ParseGraspShape(const std::string& text) {
   for (grasp::ShapeKind k :
@@ -128,7 +130,8 @@ void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
-                           "tissue", "grasp", "loop", "scoring", "microscope", "visuals", "cues"});
+                           "tissue", "grasp", "loop", "knots", "scoring", "microscope", "visuals",
+                           "cues"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -273,6 +276,21 @@ SceneModel ReadScene(const YamlReader& reader) {
     }
     s.loop = d;
   }
+  if (const std::optional<YamlSection> k = root.OptionalMap("knots")) {
+    k->CheckNoUnknownKeys({"items", "thread_diameter_m"});
+    KnotQuizSceneDef d;
+    k->Required("items");
+    for (const std::string& name : k->StringList("items")) {
+      const std::optional<knot::StitchKnotType> type = knot::StitchKnotTypeFromName(name);
+      if (!type || *type == knot::StitchKnotType::kNone ||
+          *type == knot::StitchKnotType::kUnknown) {
+        k->Fail("items", "'" + name + "': expected square, granny, surgeons, slip or half-hitch");
+      }
+      d.items.push_back(*type);
+    }
+    d.thread_diameter_m = k->FiniteDouble("thread_diameter_m", d.thread_diameter_m);
+    s.knots = d;
+  }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
     std::vector<std::string_view> known(std::begin(kScoreMetrics), std::end(kScoreMetrics));
     for (const char* metric : kScoreMetrics) {
@@ -351,17 +369,20 @@ const char* TaskKindName(TaskKind kind) {
       return "grasp";
     case TaskKind::kLoopAlongWire:
       return "loop_along_wire";
+    case TaskKind::kKnotTopology:
+      return "knot_topology";
   }
   return "unknown";
 }
 
 TaskKind ParseTaskKind(const std::string& text) {
   for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube,
-                     TaskKind::kGrasp, TaskKind::kLoopAlongWire}) {
+                     TaskKind::kGrasp, TaskKind::kLoopAlongWire, TaskKind::kKnotTopology}) {
     if (text == TaskKindName(k)) return k;
   }
   throw std::invalid_argument(
-      "expected follow_path, tremor_hold, needle_along_tube, grasp or loop_along_wire");
+      "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire or "
+      "knot_topology");
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
@@ -456,8 +477,8 @@ void ValidateScene(const SceneModel& s) {
   for (const auto& m : s.modules) {
     if (std::find_if(std::begin(kKnownModules), std::end(kKnownModules),
                      [&](const char* k) { return m == k; }) == std::end(kKnownModules)) {
-      Invalid("modules",
-              "unknown module '" + m + "' (known: needle, tremor, thread, tissue, grasp, loop)");
+      Invalid("modules", "unknown module '" + m +
+                             "' (known: needle, tremor, thread, tissue, grasp, loop, knots)");
     }
     if (!seen.insert(m).second) Invalid("modules", "module '" + m + "' named twice");
   }
@@ -563,6 +584,21 @@ void ValidateScene(const SceneModel& s) {
     if (!(s.loop->wall_stiffness_N_per_m >= 0 && s.loop->wall_stiffness_N_per_m <= 1e5)) {
       Invalid("loop.wall_stiffness_N_per_m", "expected 0..1e5 N/m");
     }
+  }
+  if (s.HasModule("knots") != s.knots.has_value()) {
+    Invalid("knots", s.knots ? "section given but 'knots' is not in modules"
+                             : "section required by the 'knots' module");
+  }
+  if (s.knots) {
+    if (s.knots->items.empty() || s.knots->items.size() > 32) {
+      Invalid("knots.items", "expected 1..32 knots");
+    }
+    if (!(s.knots->thread_diameter_m > 0 && s.knots->thread_diameter_m <= 1e-3)) {
+      Invalid("knots.thread_diameter_m", "expected (0, 1e-3] m");
+    }
+  }
+  if (t.kind == TaskKind::kKnotTopology && !s.HasModule("knots")) {
+    Invalid("task.kind", "knot_topology needs the knots module");
   }
   if (t.kind == TaskKind::kLoopAlongWire && !s.HasModule("loop")) {
     Invalid("task.kind", "loop_along_wire needs the loop module");

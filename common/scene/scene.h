@@ -25,6 +25,7 @@
 #include "common/geometry/arc_torus.h"
 #include "common/geometry/loop_wire.h"
 #include "common/grasp/grasp_def.h"
+#include "common/knot/stitch_knot.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::scene {
@@ -37,8 +38,8 @@ class SceneError : public InputError {
 };
 
 // Modules a scene may name; "thread" and "tissue" need their scene sections.
-inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread",
-                                                "tissue", "grasp",  "loop"};
+inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue",
+                                                "grasp",  "loop",   "knots"};
 
 // The tube is a geometry::TorusSegmentDef (scene section `vessel`: core_radius_m,
 // tube_radius_m, segment_angle_rad, position_m, rpy_rad). The needle is a geometry::ArcDef
@@ -59,8 +60,9 @@ enum class TaskKind {
   kNeedleAlongTube,  // slide the needle along the tube and back, `passes` passes, no touching
   kGrasp,            // close the forceps on the object, lift it to lift_height_m, hold it hold_s
   kLoopAlongWire,    // pass the held loop along the wire course to its end without touching
+  kKnotTopology,     // name each knot shown (square, granny, surgeon's, slip, half hitch)
 };
-// follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire
+// follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, knot_topology
 const char* TaskKindName(TaskKind kind);
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
@@ -144,6 +146,15 @@ struct LoopSceneDef {
   double wall_stiffness_N_per_m = 500;  // penalty force of the wire on contact
 };
 
+// Knot topology (station "knots" module, thesis §2.2, Fig. 2.2f): knots tied around a stitch
+// (common/knot/stitch_knot_shapes.h) are shown one by one; the trainee names each with the
+// device's buttons (the button value is the class: 1 square, 2 granny, 3 surgeon's, 4 slip,
+// 5 half hitch). Each shown knot is checked at load by the recogniser.
+struct KnotQuizSceneDef {
+  std::vector<knot::StitchKnotType> items;  // shown in this order
+  double thread_diameter_m = 30e-6;         // 10-0 nylon
+};
+
 // Haptic rendering limits.
 struct HapticDef {
   double rate_hz = 1000;
@@ -193,11 +204,12 @@ struct SceneModel {
                           Eigen::Isometry3d::Identity()};
   TaskDef task;
   HapticDef haptic;
-  std::optional<ThreadSceneDef> thread;  // present exactly when modules has "thread"
-  std::optional<TissueSceneDef> tissue;  // present exactly when modules has "tissue"
-  std::optional<GraspSceneDef> grasp;    // present exactly when modules has "grasp"
-  std::optional<LoopSceneDef> loop;      // present exactly when modules has "loop"
-  std::vector<ScoreTermDef> scoring;     // empty for kFollowPath (its own formula)
+  std::optional<ThreadSceneDef> thread;   // present exactly when modules has "thread"
+  std::optional<TissueSceneDef> tissue;   // present exactly when modules has "tissue"
+  std::optional<GraspSceneDef> grasp;     // present exactly when modules has "grasp"
+  std::optional<LoopSceneDef> loop;       // present exactly when modules has "loop"
+  std::optional<KnotQuizSceneDef> knots;  // present exactly when modules has "knots"
+  std::vector<ScoreTermDef> scoring;      // empty for kFollowPath (its own formula)
   MicroscopeDef microscope;
   std::vector<VisualDef> visuals;
   CueSetDef cues;

@@ -105,6 +105,10 @@ struct ScoreState {
   double object_rotation_rad = 0;  // largest induced rotation
   double jaw_alignment_rad = 0;    // at the first touch
   std::int32_t object_drops = 0;
+  // The knot-topology module's answers, copied for the score.
+  std::int32_t answers = 0;
+  std::int32_t wrong_answers = 0;
+  double response_time_sum_s = 0;
   // This step.
   std::uint8_t fault = 0;
   double fault_value = 0;         // of the first module at fault (clearance, strain, force)
@@ -153,6 +157,16 @@ struct LoopModuleState {
   std::uint32_t warnings = 0;                             // failed queries
 };
 
+// The knot-topology module: which knot is shown, since when, and the answers so far.
+struct KnotQuizState {
+  std::int32_t item = 0;     // the knot shown (index into the scene's items); = items: done
+  double item_start_s = 0;   // when it appeared
+  std::int32_t correct = 0;  // answers that named the knot shown
+  double response_time_sum_s = 0;
+  std::int32_t last_answer = 0;  // the class the last answer named (0: none yet)
+  std::uint32_t prev_buttons = 0;
+};
+
 struct StationState {
   std::uint64_t step = 0;  // steps taken; the next step has this index
   // The station's random numbers (SplitMix64; NextRandom). Seeded from the station's seed;
@@ -169,6 +183,7 @@ struct StationState {
   std::optional<TissueModuleState> tissue;
   std::optional<GraspModuleState> grasp;
   std::optional<LoopModuleState> loop;
+  std::optional<KnotQuizState> knots;
 };
 
 // Seeds the generator (the sections are filled by the modules).

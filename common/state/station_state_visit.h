@@ -112,6 +112,9 @@ void Score(S& s, V& v) {
   v("score.object_rotation_rad", &s.object_rotation_rad, 1);
   v("score.jaw_alignment_rad", &s.jaw_alignment_rad, 1);
   v("score.object_drops", &s.object_drops, 1);
+  v("score.answers", &s.answers, 1);
+  v("score.wrong_answers", &s.wrong_answers, 1);
+  v("score.response_time_sum_s", &s.response_time_sum_s, 1);
   v("score.fault", &s.fault, 1);
   v("score.fault_value", &s.fault_value, 1);
   v("score.contact_event", &s.contact_event, 1);
@@ -267,6 +270,16 @@ void Loop(S& m, V& v) {
   v("loop.warnings", &m.warnings, 1);
 }
 
+template <typename S, typename V>
+void Knots(S& k, V& v) {
+  v("knots.item", &k.item, 1);
+  v("knots.item_start_s", &k.item_start_s, 1);
+  v("knots.correct", &k.correct, 1);
+  v("knots.response_time_sum_s", &k.response_time_sum_s, 1);
+  v("knots.last_answer", &k.last_answer, 1);
+  v("knots.prev_buttons", &k.prev_buttons, 1);
+}
+
 // An optional section: its presence flag, then its fields when present.
 template <typename O, typename V, typename F>
 void Section(const char* name, O& section, V& v, F fields) {
@@ -293,6 +306,7 @@ void VisitStationState(S& s, V& v) {
   vi::Section("tissue", s.tissue, v, [](auto& t, V& w) { vi::Tissue(t, w); });
   vi::Section("grasp", s.grasp, v, [](auto& g, V& w) { vi::Grasp(g, w); });
   vi::Section("loop", s.loop, v, [](auto& l, V& w) { vi::Loop(l, w); });
+  vi::Section("knots", s.knots, v, [](auto& k, V& w) { vi::Knots(k, w); });
 }
 
 }  // namespace microdex::state

@@ -1,0 +1,50 @@
+#include "station/knot_quiz_module.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "common/knot/stitch_knot_shapes.h"
+
+namespace microdex::station {
+
+KnotQuizModule::KnotQuizModule(const scene::SceneModel& scene) : items_(scene.knots->items) {
+  for (std::size_t i = 0; i < items_.size(); ++i) {
+    // Vary the shapes from item to item (mirror image, lean, tails), so the class, not the
+    // picture, is what a trainee learns.
+    knot::StitchKnotShapeDef def;
+    def.kind = items_[i];
+    def.thread_diameter_m = scene.knots->thread_diameter_m;
+    def.mirror = i % 2 == 1;
+    def.axis_tilt_rad = 0.3 * static_cast<double>(i % 3);
+    def.axis_azimuth_rad = 1.1 * static_cast<double>(i);
+    def.tail_first_azimuth_rad = 3.14159 + 0.4 * static_cast<double>(i % 4);
+    shapes_.push_back(knot::MakeStitchKnot(def));
+    const knot::StitchKnotType seen = knot::RecogniseStitchKnot(shapes_.back());
+    if (seen != items_[i]) {
+      throw std::runtime_error(scene.path + ": knots.items[" + std::to_string(i) + "]: the " +
+                               std::string(knot::StitchKnotName(items_[i])) +
+                               " knot shown would be recognised as " +
+                               std::string(knot::StitchKnotName(seen)));
+    }
+  }
+}
+
+void KnotQuizModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& /*f_T_W*/) {
+  state::KnotQuizState& k = *s.knots;
+  const std::uint32_t buttons = s.tool.buttons;
+  const bool pressed = buttons != 0 && k.prev_buttons == 0;
+  k.prev_buttons = buttons;
+  const double now_s = static_cast<double>(in.step) * in.dt_s;
+  if (!pressed || k.item >= static_cast<std::int32_t>(items_.size())) return;
+  k.last_answer = static_cast<std::int32_t>(buttons);
+  if (buttons == static_cast<std::uint32_t>(items_[static_cast<std::size_t>(k.item)])) {
+    ++k.correct;
+  }
+  k.response_time_sum_s += now_s - k.item_start_s;
+  ++k.item;
+  k.item_start_s = now_s;
+}
+
+ModuleStatus KnotQuizModule::Status(const state::StationState& /*s*/) const { return {}; }
+
+}  // namespace microdex::station
