@@ -5,6 +5,7 @@
 #include "station/loop_module.h"
 #include "station/module.h"
 #include "station/needle_module.h"
+#include "station/placement_module.h"
 #include "station/thread_module.h"
 #include "station/tissue_module.h"
 #include "station/tremor_module.h"
@@ -28,6 +29,8 @@ std::vector<std::unique_ptr<Module>> MakeModules(const scene::SceneModel& scene)
       modules.push_back(std::make_unique<LoopModule>(scene));
     } else if (name == "knots") {
       modules.push_back(std::make_unique<KnotQuizModule>(scene));
+    } else if (name == "placement") {
+      modules.push_back(std::make_unique<PlacementModule>(scene));
     } else {
       throw std::runtime_error(scene.path + ": modules: '" + name +
                                "' has no station module in this build yet");

@@ -65,12 +65,15 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
     return (t.wrong_answers + (items - t.answers)) / items;
   }
   if (metric == "response_time_s") return Ratio(t.response_time_sum_s, t.answers);
+  if (metric == "spacing_error_rad") return t.spacing_error_rad;
+  if (metric == "bite_error_m") return t.bite_error_m;
   if (metric == "progress_deficit") {
     if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
     const scene::TaskDef& task = scene.task;
     if (task.kind == scene::TaskKind::kTremorHold || task.kind == scene::TaskKind::kGrasp ||
         task.kind == scene::TaskKind::kLoopAlongWire ||
-        task.kind == scene::TaskKind::kKnotTopology) {
+        task.kind == scene::TaskKind::kKnotTopology ||
+        task.kind == scene::TaskKind::kKnotPlacement) {
       return 1.0 - t.progress;
     }
     return 1.0 - (t.passes_done + t.progress) / task.passes;

@@ -23,6 +23,9 @@
 //   object_drops         grasp: lifted objects that fell out of the jaws
 //   wrong_fraction       knot topology: knots named wrongly or not at all, of those shown
 //   response_time_s      knot topology: mean time from a knot's appearance to its answer
+//   spacing_error_rad    knot placement: RMS of the angular gaps against 2π / n
+//   bite_error_m         knot placement: RMS of the stitches' distance from the edge against the
+//                        scene's bite
 //
 // follow_path (the module demos) keeps its own formula:
 //   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean

@@ -87,6 +87,19 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
   };
   jaw_yaw_rad_ = either_way(yaw);
   jaw_offset_m_ = either_way(offset);
+  if (scene.task.kind == scene::TaskKind::kKnotPlacement && scene.placement) {
+    const scene::PlacementSceneDef& p = *scene.placement;
+    const double angle_sd =
+        Lerp(def.placement_angle_novice_rad, def.placement_angle_expert_rad, def.skill);
+    const double bite_sd =
+        Lerp(def.placement_bite_novice_m, def.placement_bite_expert_m, def.skill);
+    for (int k = 0; k < p.stitches; ++k) {
+      stitch_azimuth_rad_.push_back(kTwoPi * k / p.stitches +
+                                    std::sqrt(3.0) * angle_sd * uniform(-1.0, 1.0));
+      stitch_z_m_.push_back(p.end_height_m - p.bite_m -
+                            std::sqrt(3.0) * bite_sd * uniform(-1.0, 1.0));
+    }
+  }
   if (scene.task.kind == scene::TaskKind::kKnotTopology && scene.knots) {
     const std::vector<knot::StitchKnotType>& items = scene.knots->items;
     const std::size_t n = items.size();
@@ -155,6 +168,22 @@ Eigen::Vector3d SimTrainee::CalcCorrection(double t_s) const {
 
 Eigen::Isometry3d SimTrainee::CalcPlannedPose(double t_s, double* gripper) const {
   *gripper = 0;
+  if (!stitch_azimuth_rad_.empty()) {
+    // Stitch k: at rest over [k T, k T + 0.3 T], then on to stitch k + 1 by (k + 1) T.
+    const double T = scene_.placement->move_s / pace_;
+    const auto n = static_cast<int>(stitch_azimuth_rad_.size());
+    const int k = std::clamp(static_cast<int>(std::floor(t_s / T)), 0, n - 1);
+    const double tau = std::clamp((t_s - k * T - 0.3 * T) / (0.7 * T), 0.0, 1.0);
+    const double shape = tau * tau * tau * (10 + tau * (-15 + 6 * tau));
+    const int next = std::min(k + 1, n - 1);
+    const double azimuth =
+        stitch_azimuth_rad_[k] + shape * (stitch_azimuth_rad_[next] - stitch_azimuth_rad_[k]);
+    const double z = stitch_z_m_[k] + shape * (stitch_z_m_[next] - stitch_z_m_[k]);
+    const double r = scene_.placement->vessel_radius_m;
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Eigen::Vector3d(r * std::cos(azimuth), r * std::sin(azimuth), z);
+    return X;
+  }
   if (scene_.task.kind != scene::TaskKind::kGrasp) return scene_.CalcIdealToolPose(pace_ * t_s);
   // Descend (one pass), close, lift (the return pass), hold at the top.
   const double pass_s = scene_.task.pass_duration_s / pace_;
@@ -211,6 +240,14 @@ DeviceSample SimTrainee::Read(std::uint64_t step) {
   }
   DeviceSample sample;
   const Eigen::Isometry3d X_ideal = CalcPlannedPose(t, &sample.gripper);
+  // Knot placement: a button pressed at each stitch's rest, from 0.1 T to 0.2 T.
+  if (!stitch_azimuth_rad_.empty()) {
+    const double T = scene_.placement->move_s / pace_;
+    const double phase = t / T - std::floor(t / T);
+    if (t < static_cast<double>(stitch_azimuth_rad_.size()) * T && phase >= 0.1 && phase < 0.2) {
+      sample.buttons = 1;
+    }
+  }
   // Knot topology: the button of the answer, held for kPress_s.
   constexpr double kPress_s = 0.1;
   while (next_answer_ < press_s_.size() && t >= press_s_[next_answer_] + kPress_s) ++next_answer_;

@@ -30,6 +30,11 @@
 //           0.1 s; of the N knots it names round((1 − p) N) wrongly (p = accuracy_novice …
 //           expert; which ones drawn from the seed), confusing square with granny, surgeon's
 //           with square, slip with half hitch;
+//   placement: (task kind knot_placement) moves the tip around the vessel wall from stitch to
+//           stitch (minimum jerk in azimuth and height, placement.move_s / pace each), resting
+//           at each and pressing a button there; each stitch misplaced by a uniform error of
+//           standard deviation placement_angle_novice_rad … expert and placement_bite_novice_m
+//           … expert, drawn from the seed;
 //   hand:   a spring of stiffness k_hand holding the planned pose, yielding with a time
 //           constant τ_hand: the offset o follows f / k_hand by o' = (f / k_hand − o) / τ_hand
 //           (explicit Euler, f the force of the previous step), so guidance fields and the
@@ -70,6 +75,10 @@ struct SimTraineeDef {
   double response_time_expert_s = 2.5;
   double accuracy_novice = 0.4;
   double accuracy_expert = 0.95;
+  double placement_angle_novice_rad = 0.25;
+  double placement_angle_expert_rad = 0.03;
+  double placement_bite_novice_m = 0.15e-3;
+  double placement_bite_expert_m = 0.02e-3;
   double hand_stiffness_N_per_m = 400;
   double hand_time_constant_s = 0.05;
   // Throws std::invalid_argument("field: reason") (the contract of every Def's Validate()).
@@ -106,6 +115,8 @@ class SimTrainee final : public Device {
   std::vector<double> press_s_;
   std::vector<std::uint32_t> answer_;
   std::size_t next_answer_ = 0;
+  // Knot placement: each stitch's planned azimuth and height (sized at construction).
+  std::vector<double> stitch_azimuth_rad_, stitch_z_m_;
   // The planned tool pose and gripper at time t (the task's passes, or the grasp's phases).
   Eigen::Isometry3d CalcPlannedPose(double t_s, double* gripper) const;
   // The corrective sub-movement under way (or the last one): from, to, start time.

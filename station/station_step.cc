@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/base/check.h"
+#include "station/placement_module.h"
 
 namespace microdex::station {
 
@@ -214,6 +215,13 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     if (g.metrics.held && g.X_WO.p_W.z() >= scene.grasp->lift_height_m) t.goal_time_s += dt_s;
     t.progress = std::min(t.goal_time_s / task.hold_s, 1.0);
     if (t.goal_time_s >= task.hold_s - 0.5 * dt_s) t.outcome = 1;
+  } else if (task.kind == scene::TaskKind::kKnotPlacement) {
+    const PlacementErrors e = CalcPlacementErrors(*scene.placement, *s.placement);
+    t.stitches = s.placement->count;
+    t.spacing_error_rad = e.spacing_rms_rad;
+    t.bite_error_m = e.bite_rms_m;
+    t.progress = static_cast<double>(t.stitches) / scene.placement->stitches;
+    if (t.stitches >= scene.placement->stitches) t.outcome = 1;
   } else if (task.kind == scene::TaskKind::kKnotTopology) {
     const state::KnotQuizState& k = *s.knots;
     const auto items = static_cast<std::int32_t>(scene.knots->items.size());

@@ -65,7 +65,9 @@ constexpr const char* kScoreMetrics[] = {"time_s",
                                          "jaw_alignment_rad",
                                          "object_drops",
                                          "wrong_fraction",
-                                         "response_time_s"};
+                                         "response_time_s",
+                                         "spacing_error_rad",
+                                         "bite_error_m"};
 
 grasp::ShapeKind ParseGraspShape(const std::string& text) {
   for (grasp::ShapeKind k :
@@ -130,8 +132,8 @@ void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
-                           "tissue", "grasp", "loop", "knots", "scoring", "microscope", "visuals",
-                           "cues"});
+                           "tissue", "grasp", "loop", "knots", "placement", "scoring", "microscope",
+                           "visuals", "cues"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -291,6 +293,16 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.thread_diameter_m = k->FiniteDouble("thread_diameter_m", d.thread_diameter_m);
     s.knots = d;
   }
+  if (const std::optional<YamlSection> pl = root.OptionalMap("placement")) {
+    pl->CheckNoUnknownKeys({"vessel_radius_m", "end_height_m", "stitches", "bite_m", "move_s"});
+    PlacementSceneDef d;
+    d.vessel_radius_m = pl->FiniteDouble("vessel_radius_m", d.vessel_radius_m);
+    d.end_height_m = pl->FiniteDouble("end_height_m", d.end_height_m);
+    d.stitches = pl->Int("stitches", d.stitches);
+    d.bite_m = pl->FiniteDouble("bite_m", d.bite_m);
+    d.move_s = pl->FiniteDouble("move_s", d.move_s);
+    s.placement = d;
+  }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
     std::vector<std::string_view> known(std::begin(kScoreMetrics), std::end(kScoreMetrics));
     for (const char* metric : kScoreMetrics) {
@@ -371,18 +383,21 @@ const char* TaskKindName(TaskKind kind) {
       return "loop_along_wire";
     case TaskKind::kKnotTopology:
       return "knot_topology";
+    case TaskKind::kKnotPlacement:
+      return "knot_placement";
   }
   return "unknown";
 }
 
 TaskKind ParseTaskKind(const std::string& text) {
-  for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube,
-                     TaskKind::kGrasp, TaskKind::kLoopAlongWire, TaskKind::kKnotTopology}) {
+  for (TaskKind k :
+       {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube, TaskKind::kGrasp,
+        TaskKind::kLoopAlongWire, TaskKind::kKnotTopology, TaskKind::kKnotPlacement}) {
     if (text == TaskKindName(k)) return k;
   }
   throw std::invalid_argument(
-      "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire or "
-      "knot_topology");
+      "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, "
+      "knot_topology or knot_placement");
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
@@ -478,7 +493,8 @@ void ValidateScene(const SceneModel& s) {
     if (std::find_if(std::begin(kKnownModules), std::end(kKnownModules),
                      [&](const char* k) { return m == k; }) == std::end(kKnownModules)) {
       Invalid("modules", "unknown module '" + m +
-                             "' (known: needle, tremor, thread, tissue, grasp, loop, knots)");
+                             "' (known: needle, tremor, thread, tissue, grasp, loop, knots, "
+                             "placement)");
     }
     if (!seen.insert(m).second) Invalid("modules", "module '" + m + "' named twice");
   }
@@ -596,6 +612,22 @@ void ValidateScene(const SceneModel& s) {
     if (!(s.knots->thread_diameter_m > 0 && s.knots->thread_diameter_m <= 1e-3)) {
       Invalid("knots.thread_diameter_m", "expected (0, 1e-3] m");
     }
+  }
+  if (s.HasModule("placement") != s.placement.has_value()) {
+    Invalid("placement", s.placement ? "section given but 'placement' is not in modules"
+                                     : "section required by the 'placement' module");
+  }
+  if (s.placement) {
+    const PlacementSceneDef& p = *s.placement;
+    if (!(p.vessel_radius_m > 0)) Invalid("placement.vessel_radius_m", "expected > 0 m");
+    if (!(p.stitches >= 2 && p.stitches <= 16)) Invalid("placement.stitches", "expected 2..16");
+    if (!(p.bite_m > 0 && p.bite_m < p.end_height_m)) {
+      Invalid("placement.bite_m", "expected 0 < bite < end_height_m");
+    }
+    if (!(p.move_s > 0.1 && p.move_s <= 30)) Invalid("placement.move_s", "expected (0.1, 30] s");
+  }
+  if (t.kind == TaskKind::kKnotPlacement && !s.HasModule("placement")) {
+    Invalid("task.kind", "knot_placement needs the placement module");
   }
   if (t.kind == TaskKind::kKnotTopology && !s.HasModule("knots")) {
     Invalid("task.kind", "knot_topology needs the knots module");

@@ -39,7 +39,7 @@ class SceneError : public InputError {
 
 // Modules a scene may name; "thread" and "tissue" need their scene sections.
 inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "tissue",
-                                                "grasp",  "loop",   "knots"};
+                                                "grasp",  "loop",   "knots",  "placement"};
 
 // The tube is a geometry::TorusSegmentDef (scene section `vessel`: core_radius_m,
 // tube_radius_m, segment_angle_rad, position_m, rpy_rad). The needle is a geometry::ArcDef
@@ -61,8 +61,10 @@ enum class TaskKind {
   kGrasp,            // close the forceps on the object, lift it to lift_height_m, hold it hold_s
   kLoopAlongWire,    // pass the held loop along the wire course to its end without touching
   kKnotTopology,     // name each knot shown (square, granny, surgeon's, slip, half hitch)
+  kKnotPlacement,    // place stitches evenly around the vessel's cut end, a bite from the edge
 };
-// follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, knot_topology
+// follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, knot_topology,
+// knot_placement
 const char* TaskKindName(TaskKind kind);
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
@@ -155,6 +157,19 @@ struct KnotQuizSceneDef {
   double thread_diameter_m = 30e-6;         // 10-0 nylon
 };
 
+// Knot placement (station "placement" module, thesis §2.2: "microsurgeons place knots evenly
+// around the whole section, at a constant distance from the end"): a vessel along world z with
+// its cut end at z = end_height_m; the trainee touches the tool tip to the vessel wall where a
+// stitch goes and presses a button. A stitch is recorded at the tip's azimuth about the vessel
+// axis and its distance below the cut edge.
+struct PlacementSceneDef {
+  double vessel_radius_m = 0.5e-3;  // outer radius of the vessel (1 mm across)
+  double end_height_m = 6e-3;       // z of the cut end
+  int stitches = 8;                 // to place, evenly: 2π / stitches apart
+  double bite_m = 0.3e-3;           // the distance from the edge each should have
+  double move_s = 1.5;              // the scripted time from one stitch to the next
+};
+
 // Haptic rendering limits.
 struct HapticDef {
   double rate_hz = 1000;
@@ -204,12 +219,13 @@ struct SceneModel {
                           Eigen::Isometry3d::Identity()};
   TaskDef task;
   HapticDef haptic;
-  std::optional<ThreadSceneDef> thread;   // present exactly when modules has "thread"
-  std::optional<TissueSceneDef> tissue;   // present exactly when modules has "tissue"
-  std::optional<GraspSceneDef> grasp;     // present exactly when modules has "grasp"
-  std::optional<LoopSceneDef> loop;       // present exactly when modules has "loop"
-  std::optional<KnotQuizSceneDef> knots;  // present exactly when modules has "knots"
-  std::vector<ScoreTermDef> scoring;      // empty for kFollowPath (its own formula)
+  std::optional<ThreadSceneDef> thread;        // present exactly when modules has "thread"
+  std::optional<TissueSceneDef> tissue;        // present exactly when modules has "tissue"
+  std::optional<GraspSceneDef> grasp;          // present exactly when modules has "grasp"
+  std::optional<LoopSceneDef> loop;            // present exactly when modules has "loop"
+  std::optional<KnotQuizSceneDef> knots;       // present exactly when modules has "knots"
+  std::optional<PlacementSceneDef> placement;  // present exactly when modules has "placement"
+  std::vector<ScoreTermDef> scoring;           // empty for kFollowPath (its own formula)
   MicroscopeDef microscope;
   std::vector<VisualDef> visuals;
   CueSetDef cues;

@@ -109,6 +109,10 @@ struct ScoreState {
   std::int32_t answers = 0;
   std::int32_t wrong_answers = 0;
   double response_time_sum_s = 0;
+  // The knot-placement module's stitches' errors (station/placement_module.h).
+  std::int32_t stitches = 0;
+  double spacing_error_rad = 0;
+  double bite_error_m = 0;
   // This step.
   std::uint8_t fault = 0;
   double fault_value = 0;         // of the first module at fault (clearance, strain, force)
@@ -167,6 +171,16 @@ struct KnotQuizState {
   std::uint32_t prev_buttons = 0;
 };
 
+inline constexpr int kMaxStitches = 16;
+
+// The knot-placement module: the stitches placed so far.
+struct PlacementState {
+  std::int32_t count = 0;
+  std::array<double, kMaxStitches> azimuth_rad{};  // about the vessel axis, [0, 2π)
+  std::array<double, kMaxStitches> bite_m{};       // below the cut edge
+  std::uint32_t prev_buttons = 0;
+};
+
 struct StationState {
   std::uint64_t step = 0;  // steps taken; the next step has this index
   // The station's random numbers (SplitMix64; NextRandom). Seeded from the station's seed;
@@ -184,6 +198,7 @@ struct StationState {
   std::optional<GraspModuleState> grasp;
   std::optional<LoopModuleState> loop;
   std::optional<KnotQuizState> knots;
+  std::optional<PlacementState> placement;
 };
 
 // Seeds the generator (the sections are filled by the modules).

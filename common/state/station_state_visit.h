@@ -115,6 +115,9 @@ void Score(S& s, V& v) {
   v("score.answers", &s.answers, 1);
   v("score.wrong_answers", &s.wrong_answers, 1);
   v("score.response_time_sum_s", &s.response_time_sum_s, 1);
+  v("score.stitches", &s.stitches, 1);
+  v("score.spacing_error_rad", &s.spacing_error_rad, 1);
+  v("score.bite_error_m", &s.bite_error_m, 1);
   v("score.fault", &s.fault, 1);
   v("score.fault_value", &s.fault_value, 1);
   v("score.contact_event", &s.contact_event, 1);
@@ -280,6 +283,16 @@ void Knots(S& k, V& v) {
   v("knots.prev_buttons", &k.prev_buttons, 1);
 }
 
+template <typename S, typename V>
+void Placement(S& p, V& v) {
+  v("placement.count", &p.count, 1);
+  const std::size_t n =
+      std::min(static_cast<std::size_t>(std::max(p.count, 0)), p.azimuth_rad.size());
+  v("placement.azimuth_rad", p.azimuth_rad.data(), n);
+  v("placement.bite_m", p.bite_m.data(), n);
+  v("placement.prev_buttons", &p.prev_buttons, 1);
+}
+
 // An optional section: its presence flag, then its fields when present.
 template <typename O, typename V, typename F>
 void Section(const char* name, O& section, V& v, F fields) {
@@ -307,6 +320,7 @@ void VisitStationState(S& s, V& v) {
   vi::Section("grasp", s.grasp, v, [](auto& g, V& w) { vi::Grasp(g, w); });
   vi::Section("loop", s.loop, v, [](auto& l, V& w) { vi::Loop(l, w); });
   vi::Section("knots", s.knots, v, [](auto& k, V& w) { vi::Knots(k, w); });
+  vi::Section("placement", s.placement, v, [](auto& p, V& w) { vi::Placement(p, w); });
 }
 
 }  // namespace microdex::state

@@ -72,7 +72,7 @@ TEST(Scene, BadInputNamesFileLineAndField) {
             "angle");
   EXPECT_EQ(with("[needle, tremor]", "[needle, vortex]"),
             "test.yaml:3: modules: unknown module 'vortex' (known: needle, tremor, thread, "
-            "tissue, grasp, loop, knots)");
+            "tissue, grasp, loop, knots, placement)");
   EXPECT_EQ(with("radius_m: 5.0e-3, sweep", "radius_m: 6.0e-3, sweep"),
             "test.yaml:5: needle.radius_m: expected within the tube: |needle radius − core "
             "radius| < tube radius");
@@ -289,7 +289,7 @@ TEST(Scene, BadTrainingFieldsNameFileLineAndField) {
   kind.replace(kind.find("task: {"), 7, "task: {kind: juggling, ");
   EXPECT_EQ(ErrorOf(kind),
             "test.yaml:6: task.kind: expected follow_path, tremor_hold, needle_along_tube, "
-            "grasp, loop_along_wire or knot_topology");
+            "grasp, loop_along_wire, knot_topology or knot_placement");
   kind = kGood;
   kind.replace(kind.find("task: {"), 7, "task: {kind: tremor_hold, ");
   EXPECT_EQ(ErrorOf(kind), "test.yaml:2: scoring: required by task kind tremor_hold");

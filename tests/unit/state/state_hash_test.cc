@@ -29,8 +29,8 @@ std::string SceneFile(const std::string& name) {
 }
 
 // A state with every module section present and busy: the suture-on-tissue scene (thread,
-// tissue, tremor) with the needle, grasp, loop and knots modules added, after 400 steps of a novice
-// with cues pending.
+// tissue, tremor) with the needle, grasp, loop, knots and placement modules added, after 400 steps
+// of a novice with cues pending.
 struct BusyState {
   BusyState() : scene(scene::LoadScene(SceneFile("suture_on_tissue.yaml"))) {
     scene.modules.push_back("needle");
@@ -40,6 +40,8 @@ struct BusyState {
     scene.loop = scene::LoadScene(SceneFile("loop_along_wire.yaml")).loop;
     scene.modules.push_back("knots");
     scene.knots = scene::KnotQuizSceneDef{{knot::StitchKnotType::kSquare}, 30e-6};
+    scene.modules.push_back("placement");
+    scene.placement = scene::PlacementSceneDef{};
     station::Simulation sim(scene);
     s = sim.MakeInitialState(3);
     station::SimTraineeDef def;
@@ -85,8 +87,9 @@ struct PerturbSpreadElements {
   void operator()(const char* name, T* p, std::size_t n) {
     // Presence flags and the grasp count are read from the containers, not stored: changing
     // the visited copy changes nothing.
-    static const std::set<std::string> kDerived = {
-        "needle", "tremor", "thread", "tissue", "grasp", "loop", "knots", "thread.grasps.size"};
+    static const std::set<std::string> kDerived = {"needle", "tremor",    "thread",
+                                                   "tissue", "grasp",     "loop",
+                                                   "knots",  "placement", "thread.grasps.size"};
     if (kDerived.count(name)) return;
     names.insert(name);
     const std::size_t count = std::min<std::size_t>(n, 64);
