@@ -32,9 +32,11 @@ double CalcTaskPathLength(const scene::SceneModel& scene) {
     for (const geometry::WirePieceDef& p : scene.loop->wire.pieces) length += p.Length();
     return length;
   }
+  const double arc_radius_m =
+      t.path == scene::PathKind::kCircle ? t.circle_radius_m : scene.needle.radius_m;
   const double one_pass = t.path == scene::PathKind::kLine
                               ? (t.line_end_m - t.line_start_m).norm()
-                              : scene.needle.radius_m * (t.end_azimuth_rad - t.start_azimuth_rad);
+                              : arc_radius_m * (t.end_azimuth_rad - t.start_azimuth_rad);
   return one_pass * t.passes;
 }
 
@@ -67,6 +69,7 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   if (metric == "response_time_s") return Ratio(t.response_time_sum_s, t.answers);
   if (metric == "spacing_error_rad") return t.spacing_error_rad;
   if (metric == "bite_error_m") return t.bite_error_m;
+  if (metric == "shape_error_m") return t.shape_error_m;
   if (metric == "progress_deficit") {
     if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
     const scene::TaskDef& task = scene.task;

@@ -24,6 +24,8 @@
 //   wrong_fraction       knot topology: knots named wrongly or not at all, of those shown
 //   response_time_s      knot topology: mean time from a knot's appearance to its answer
 //   spacing_error_rad    knot placement: RMS of the angular gaps against 2π / n
+//   shape_error_m        nylon control: RMS distance of the thread's nodes from the target shape
+//                        after the rigid motion that best aligns them (Kabsch)
 //   bite_error_m         knot placement: RMS of the stitches' distance from the edge against the
 //                        scene's bite
 //

@@ -17,6 +17,11 @@ Simulation::Simulation(const scene::SceneModel& scene)
       scene.task.path == scene::PathKind::kLine || scene.task.kind == scene::TaskKind::kTremorHold;
   path_.circle.X_WC = scene.vessel.X_WV;
   path_.circle.radius_m = scene.needle.radius_m;
+  if (scene.task.path == scene::PathKind::kCircle) {
+    path_.circle.X_WC =
+        Eigen::Translation3d(scene.task.circle_center_m) * Eigen::Isometry3d::Identity();
+    path_.circle.radius_m = scene.task.circle_radius_m;
+  }
   path_.segment.a_W = scene.task.line_start_m;
   path_.segment.b_W = scene.task.line_end_m;
   if (scene.task.kind == scene::TaskKind::kTremorHold) {
@@ -181,9 +186,17 @@ double CalcPathProgress(const scene::SceneModel& scene, const Eigen::Vector3d& p
     const Eigen::Vector3d ab = t.line_end_m - t.line_start_m;
     return (p_W - t.line_start_m).dot(ab) / ab.squaredNorm();
   }
-  const Eigen::Vector3d p_V = scene.vessel.X_WV.inverse() * p_W;
-  double theta = std::atan2(p_V.y(), p_V.x());
-  if (theta < 0) theta += 2 * 3.141592653589793;
+  const Eigen::Vector3d p_V = t.path == scene::PathKind::kCircle
+                                  ? Eigen::Vector3d(p_W - t.circle_center_m)
+                                  : Eigen::Vector3d(scene.vessel.X_WV.inverse() * p_W);
+  // The azimuth unwrapped to the turn centred on the path: the part of the circle the path does
+  // not cover is split evenly before its start and after its end.
+  constexpr double kTwoPi = 2 * 3.141592653589793;
+  const double lo =
+      t.start_azimuth_rad - 0.5 * (kTwoPi - (t.end_azimuth_rad - t.start_azimuth_rad));
+  double theta = std::fmod(std::atan2(p_V.y(), p_V.x()) - lo, kTwoPi);
+  if (theta < 0) theta += kTwoPi;
+  theta += lo;
   return (theta - t.start_azimuth_rad) / (t.end_azimuth_rad - t.start_azimuth_rad);
 }
 
@@ -247,6 +260,7 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
       ++t.passes_done;
       t.progress = 0;
     }
+    if (task.kind == scene::TaskKind::kNylonLoop) t.shape_error_m = s.thread->shape_error_m;
     if (t.passes_done >= task.passes) t.outcome = 1;
   }
   if (t.outcome == 0 && t.time_s >= task.time_limit_s - 0.5 * dt_s) t.outcome = 2;

@@ -1,5 +1,6 @@
 #include "station/thread_module.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <span>
@@ -55,6 +56,24 @@ Eigen::Matrix3Xd CalcSlackThreadNodes(const Eigen::Vector3d& p_W_a, const Eigen:
   return x;
 }
 
+double CalcAlignedRmsDistance(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& target) {
+  MICRODEX_CHECK(x.cols() == target.cols() && x.cols() > 0);
+  const Eigen::Vector3d cx = x.rowwise().mean();
+  const Eigen::Vector3d ct = target.rowwise().mean();
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (Eigen::Index i = 0; i < x.cols(); ++i)
+    H += (x.col(i) - cx) * (target.col(i) - ct).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();  // x → target
+  double sq = 0;
+  for (Eigen::Index i = 0; i < x.cols(); ++i) {
+    sq += (R * (x.col(i) - cx) - (target.col(i) - ct)).squaredNorm();
+  }
+  return std::sqrt(sq / static_cast<double>(x.cols()));
+}
+
 ThreadModule::ThreadModule(const scene::SceneModel& scene)
     : max_force_N_(scene.haptic.max_force_N), max_strain_(scene.thread->max_strain) {
   const scene::ThreadSceneDef& d = *scene.thread;
@@ -77,6 +96,19 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
   tool_node_ = model_.num_nodes - 1;
   tool_slot_ = thread::GraspNode(model_, tool_node_, initial_);
   MICRODEX_CHECK(anchor_slot >= 0 && tool_slot_ >= 0);  // max_grasps >= 2 (scene validation)
+  if (scene.task.kind == scene::TaskKind::kNylonLoop) {
+    thread::ThreadState t = initial_;
+    const double dt_s = 1.0 / scene.haptic.rate_hz;
+    const auto steps = static_cast<long>(
+        std::lround(scene.task.passes * scene.task.pass_duration_s * scene.haptic.rate_hz));
+    const std::span<const thread::Collider> colliders(colliders_.data(), num_colliders_);
+    for (long k = 0; k < steps; ++k) {
+      const Eigen::Isometry3d X_WT = scene.CalcIdealToolPose(static_cast<double>(k) * dt_s);
+      thread::SetGraspTarget(t, tool_slot_, X_WT.translation(), 0.0);
+      thread::StepThread(model_, colliders, ws_, t);
+    }
+    target_W_ = t.x_W;
+  }
 }
 
 void ThreadModule::InitState(state::StationState& s) const {
@@ -93,6 +125,7 @@ void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
                      ws_, t.thread);
   t.f_T_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
   f_T_W += t.f_T_W;
+  if (target_W_.cols() > 0) t.shape_error_m = CalcAlignedRmsDistance(t.thread.x_W, target_W_);
 }
 
 ModuleStatus ThreadModule::Status(const state::StationState& s) const {

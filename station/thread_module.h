@@ -26,6 +26,11 @@ Eigen::Matrix3Xd CalcSlackThreadNodes(const Eigen::Vector3d& p_W_a, const Eigen:
                                       const Eigen::Vector3d& side_W, double length_m,
                                       int num_nodes);
 
+// The RMS distance between corresponding columns of x and target after the rigid motion of x
+// that best aligns them (Kabsch: centroids, then the rotation from the SVD of the 3 × 3
+// covariance, reflections excluded). No allocation.
+double CalcAlignedRmsDistance(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& target);
+
 class ThreadModule final : public Module {
  public:
   // Throws std::runtime_error naming the scene field when the thread does not fit the
@@ -40,6 +45,8 @@ class ThreadModule final : public Module {
                   LargeFrames& frames) override;
 
   const thread::ThreadModel& model() const { return model_; }
+  // Nylon control: the thread's shape at the end of the ideal motion (empty for other tasks).
+  const Eigen::Matrix3Xd& target_shape() const { return target_W_; }
   int tool_slot() const { return tool_slot_; }
 
  private:
@@ -52,6 +59,9 @@ class ThreadModule final : public Module {
   int tool_node_ = -1;
   double max_force_N_;
   double max_strain_;
+  // Nylon control: the target, computed at construction by running the task's ideal tool
+  // motion (no tremor, no drift) through this thread from the initial state.
+  Eigen::Matrix3Xd target_W_;
 };
 
 }  // namespace microdex::station

@@ -31,7 +31,8 @@ Eigen::Matrix3d RotationFromRpy(const Eigen::Vector3d& rpy) {
 PathKind ParsePathKind(const std::string& text) {
   if (text == "arc") return PathKind::kArc;
   if (text == "line") return PathKind::kLine;
-  throw std::invalid_argument("expected arc or line");
+  if (text == "circle") return PathKind::kCircle;
+  throw std::invalid_argument("expected arc, line or circle");
 }
 
 TissueToolKind ParseToolKind(const std::string& text) {
@@ -67,7 +68,8 @@ constexpr const char* kScoreMetrics[] = {"time_s",
                                          "wrong_fraction",
                                          "response_time_s",
                                          "spacing_error_rad",
-                                         "bite_error_m"};
+                                         "bite_error_m",
+                                         "shape_error_m"};
 
 grasp::ShapeKind ParseGraspShape(const std::string& text) {
   for (grasp::ShapeKind k :
@@ -159,7 +161,8 @@ SceneModel ReadScene(const YamlReader& reader) {
   if (const std::optional<YamlSection> t = root.OptionalMap("task")) {
     t->CheckNoUnknownKeys({"kind", "passes", "time_limit_s", "tolerance_m", "target_m", "hold_s",
                            "pass_duration_s", "start_azimuth_rad", "end_azimuth_rad", "path",
-                           "line_start_m", "line_end_m", "tool_rpy_rad"});
+                           "circle_center_m", "circle_radius_m", "line_start_m", "line_end_m",
+                           "tool_rpy_rad"});
     s.task.kind = t->Enum("kind", &ParseTaskKind, TaskKind::kFollowPath);
     s.task.passes = t->Int("passes", s.task.passes);
     s.task.time_limit_s = t->FiniteDouble("time_limit_s", s.task.time_limit_s);
@@ -167,6 +170,8 @@ SceneModel ReadScene(const YamlReader& reader) {
     s.task.target_m = t->Vec3("target_m", s.task.target_m);
     s.task.hold_s = t->FiniteDouble("hold_s", s.task.hold_s);
     s.task.path = t->Enum("path", &ParsePathKind, PathKind::kArc);
+    s.task.circle_center_m = t->Vec3("circle_center_m", s.task.circle_center_m);
+    s.task.circle_radius_m = t->FiniteDouble("circle_radius_m", s.task.circle_radius_m);
     s.task.line_start_m = t->Vec3("line_start_m", s.task.line_start_m);
     s.task.line_end_m = t->Vec3("line_end_m", s.task.line_end_m);
     s.task.R_WT_line = RotationFromRpy(t->Vec3("tool_rpy_rad", Eigen::Vector3d::Zero()));
@@ -385,19 +390,21 @@ const char* TaskKindName(TaskKind kind) {
       return "knot_topology";
     case TaskKind::kKnotPlacement:
       return "knot_placement";
+    case TaskKind::kNylonLoop:
+      return "nylon_loop";
   }
   return "unknown";
 }
 
 TaskKind ParseTaskKind(const std::string& text) {
-  for (TaskKind k :
-       {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube, TaskKind::kGrasp,
-        TaskKind::kLoopAlongWire, TaskKind::kKnotTopology, TaskKind::kKnotPlacement}) {
+  for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube,
+                     TaskKind::kGrasp, TaskKind::kLoopAlongWire, TaskKind::kKnotTopology,
+                     TaskKind::kKnotPlacement, TaskKind::kNylonLoop}) {
     if (text == TaskKindName(k)) return k;
   }
   throw std::invalid_argument(
       "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, "
-      "knot_topology or knot_placement");
+      "knot_topology, knot_placement or nylon_loop");
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
@@ -472,6 +479,14 @@ Eigen::Isometry3d SceneModel::CalcIdealToolPose(double t_s) const {
     return X;
   }
   if (task.path == PathKind::kArc) return CalcIdealX_WT(CalcIdealAzimuth(t_s));
+  if (task.path == PathKind::kCircle) {
+    const double theta = CalcIdealAzimuth(t_s);
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = task.R_WT_line;
+    X.translation() = task.circle_center_m +
+                      task.circle_radius_m * Eigen::Vector3d(std::cos(theta), std::sin(theta), 0);
+    return X;
+  }
   const double u = CalcIdealPathFraction(t_s);
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.linear() = task.R_WT_line;
@@ -625,6 +640,16 @@ void ValidateScene(const SceneModel& s) {
       Invalid("placement.bite_m", "expected 0 < bite < end_height_m");
     }
     if (!(p.move_s > 0.1 && p.move_s <= 30)) Invalid("placement.move_s", "expected (0.1, 30] s");
+  }
+  if (t.path == PathKind::kCircle) {
+    if (!(t.circle_radius_m > 0)) Invalid("task.circle_radius_m", "expected > 0 m");
+    if (!(t.start_azimuth_rad < t.end_azimuth_rad)) {
+      Invalid("task.end_azimuth_rad", "expected start < end");
+    }
+    if (s.HasModule("needle")) Invalid("task.path", "the needle module needs path: arc");
+  }
+  if (t.kind == TaskKind::kNylonLoop && !(s.HasModule("thread") && t.path == PathKind::kCircle)) {
+    Invalid("task.kind", "nylon_loop needs the thread module and path: circle");
   }
   if (t.kind == TaskKind::kKnotPlacement && !s.HasModule("placement")) {
     Invalid("task.kind", "knot_placement needs the placement module");

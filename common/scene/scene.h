@@ -48,8 +48,10 @@ inline constexpr const char* kKnownModules[] = {"needle", "tremor", "thread", "t
 
 // The ideal tool path the simulated trainee follows and the guidance fields pull towards.
 enum class PathKind {
-  kArc,   // the needle tail on its path circle around the vessel axis (start/end azimuth)
-  kLine,  // a straight segment from line_start_m to line_end_m, fixed tool orientation
+  kArc,     // the needle tail on its path circle around the vessel axis (start/end azimuth)
+  kLine,    // a straight segment from line_start_m to line_end_m, fixed tool orientation
+  kCircle,  // the tool tip on a horizontal circle (circle_center_m, circle_radius_m) from the
+            // start to the end azimuth, fixed tool orientation
 };
 
 // What the trainee is asked to do (assets/scenes/README.md, "Tasks"): the dexterity primitives
@@ -62,9 +64,10 @@ enum class TaskKind {
   kLoopAlongWire,    // pass the held loop along the wire course to its end without touching
   kKnotTopology,     // name each knot shown (square, granny, surgeon's, slip, half hitch)
   kKnotPlacement,    // place stitches evenly around the vessel's cut end, a bite from the edge
+  kNylonLoop,        // lay the grasped nylon in a loop matching the target shape
 };
 // follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, knot_topology,
-// knot_placement
+// knot_placement, nylon_loop
 const char* TaskKindName(TaskKind kind);
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
@@ -83,7 +86,9 @@ struct TaskDef {
   PathKind path = PathKind::kArc;
   double start_azimuth_rad = 0.2;  // kArc
   double end_azimuth_rad = 3.3;
-  Eigen::Vector3d line_start_m = Eigen::Vector3d::Zero();  // kLine, world
+  Eigen::Vector3d circle_center_m = Eigen::Vector3d::Zero();  // kCircle, world
+  double circle_radius_m = 5e-3;                              // kCircle
+  Eigen::Vector3d line_start_m = Eigen::Vector3d::Zero();     // kLine, world
   Eigen::Vector3d line_end_m = Eigen::Vector3d(0.01, 0, 0);
   Eigen::Matrix3d R_WT_line = Eigen::Matrix3d::Identity();  // kLine tool orientation
 };

@@ -113,6 +113,7 @@ struct ScoreState {
   std::int32_t stitches = 0;
   double spacing_error_rad = 0;
   double bite_error_m = 0;
+  double shape_error_m = 0;  // nylon control (ThreadModuleState)
   // This step.
   std::uint8_t fault = 0;
   double fault_value = 0;         // of the first module at fault (clearance, strain, force)
@@ -139,6 +140,8 @@ struct TremorState {
 struct ThreadModuleState {
   thread::ThreadState thread;
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // thread on the tool, saturated, N
+  // Nylon control: the RMS distance of the nodes from the target shape after rigid alignment.
+  double shape_error_m = 0;
 };
 
 // The tissue module.

@@ -118,6 +118,7 @@ void Score(S& s, V& v) {
   v("score.stitches", &s.stitches, 1);
   v("score.spacing_error_rad", &s.spacing_error_rad, 1);
   v("score.bite_error_m", &s.bite_error_m, 1);
+  v("score.shape_error_m", &s.shape_error_m, 1);
   v("score.fault", &s.fault, 1);
   v("score.fault_value", &s.fault_value, 1);
   v("score.contact_event", &s.contact_event, 1);
@@ -174,6 +175,7 @@ void Thread(S& m, V& v) {
   v("thread.status.num_sliding_contacts", &s.num_sliding_contacts, 1);
   v("thread.status.max_strain", &s.max_strain, 1);
   Matrix("thread.f_T_W", m.f_T_W, v);
+  v("thread.shape_error_m", &m.shape_error_m, 1);
 }
 
 template <typename S, typename V>

@@ -175,4 +175,32 @@ TEST(ThreadModule, ThreadBeyondThePublishedBoundIsRefused) {
 }
 
 }  // namespace
+// The nylon-control shape error: zero for a rigidly moved copy (any rotation, translation), the
+// offset's RMS for a deformed one, and no reflection (a mirror image is not the same shape).
+TEST(ThreadModule, AlignedRmsDistanceIsRigidMotionInvariant) {
+  Eigen::Matrix3Xd target(3, 40);
+  for (int i = 0; i < 40; ++i) {
+    const double s = 0.2 * i;
+    target.col(i) = Eigen::Vector3d(std::cos(s), std::sin(2 * s), 0.3 * s) * 1e-3;
+  }
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3Xd moved = (R * target).colwise() + Eigen::Vector3d(5e-3, -2e-3, 1e-3);
+  EXPECT_NEAR(CalcAlignedRmsDistance(moved, target), 0, 1e-15);
+  // Stretch one axis by 10 %: the best alignment leaves a positive error, below the RMS of the
+  // stretch itself (the alignment can only help).
+  Eigen::Matrix3Xd stretched = target;
+  stretched.row(2) *= 1.1;
+  const double e = CalcAlignedRmsDistance(stretched, target);
+  const Eigen::Vector3d c = target.rowwise().mean();
+  double sq = 0;
+  for (int i = 0; i < 40; ++i) sq += std::pow(0.1 * (target(2, i) - c.z()), 2);
+  EXPECT_GT(e, 0);
+  EXPECT_LE(e, std::sqrt(sq / 40) + 1e-15);
+  // A mirror image is not reached by a rotation.
+  Eigen::Matrix3Xd mirrored = target;
+  mirrored.row(1) *= -1;
+  EXPECT_GT(CalcAlignedRmsDistance(mirrored, target), 1e-4);
+}
+
 }  // namespace microdex::station
