@@ -11,6 +11,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/knot/stitch_knot_shapes.h"
+
 namespace microdex::knot {
 namespace {
 
@@ -27,25 +29,8 @@ using Curve = std::vector<Eigen::Vector3d>;
 
 // Equal arc-length samples of an open polyline at about `spacing` (both ends kept).
 Curve Resample(std::span<const Eigen::Vector3d> open, double spacing) {
-  double total = 0.0;
-  for (std::size_t i = 0; i + 1 < open.size(); ++i) total += (open[i + 1] - open[i]).norm();
-  const int segments = std::max(1, static_cast<int>(std::ceil(total / spacing)));
-  const double h = total / segments;
-  Curve out;
-  out.reserve(segments + 1);
-  std::size_t i = 0;
-  double s_i = 0.0;
-  for (int k = 0; k <= segments; ++k) {
-    const double s = std::min(k * h, total);
-    while (i + 2 < open.size() && s_i + (open[i + 1] - open[i]).norm() < s) {
-      s_i += (open[i + 1] - open[i]).norm();
-      ++i;
-    }
-    const double len = (open[i + 1] - open[i]).norm();
-    const double t = len > 0 ? std::clamp((s - s_i) / len, 0.0, 1.0) : 0.0;
-    out.push_back(open[i] + t * (open[i + 1] - open[i]));
-  }
-  return out;
+  return ResampleByArcLength(
+      open, std::max(1, static_cast<int>(std::ceil(PolylineLength(open) / spacing))));
 }
 
 // Point where the segment [below, above] crosses z = 0.

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/base/check.h"
 #include "common/geometry/segment_distance.h"
 
 namespace microdex::knot {
@@ -31,24 +32,8 @@ void AppendBezier(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Ei
 }
 
 Curve ResampleOpen(const Curve& open, double spacing) {
-  double total = 0.0;
-  for (std::size_t i = 0; i + 1 < open.size(); ++i) total += (open[i + 1] - open[i]).norm();
-  const int segments = std::max(1, static_cast<int>(std::round(total / spacing)));
-  const double h = total / segments;
-  Curve out;
-  std::size_t i = 0;
-  double s_i = 0.0;
-  for (int k = 0; k <= segments; ++k) {
-    const double s = std::min(k * h, total);
-    while (i + 2 < open.size() && s_i + (open[i + 1] - open[i]).norm() < s) {
-      s_i += (open[i + 1] - open[i]).norm();
-      ++i;
-    }
-    const double len = (open[i + 1] - open[i]).norm();
-    const double t = len > 0 ? std::clamp((s - s_i) / len, 0.0, 1.0) : 0.0;
-    out.push_back(open[i] + t * (open[i + 1] - open[i]));
-  }
-  return out;
+  const int segments = std::max(1, static_cast<int>(std::round(PolylineLength(open) / spacing)));
+  return ResampleByArcLength(open, segments);
 }
 
 Eigen::Vector3d Direction(double azimuth, double elevation) {
@@ -284,6 +269,34 @@ double MinSelfDistance(std::span<const Eigen::Vector3d> polyline, double skip_ar
     }
   }
   return best;
+}
+
+double PolylineLength(std::span<const Eigen::Vector3d> open) {
+  double total = 0.0;
+  for (std::size_t i = 0; i + 1 < open.size(); ++i) total += (open[i + 1] - open[i]).norm();
+  return total;
+}
+
+std::vector<Eigen::Vector3d> ResampleByArcLength(std::span<const Eigen::Vector3d> open,
+                                                 int segments) {
+  MICRODEX_CHECK(open.size() >= 2 && segments >= 1);
+  const double total = PolylineLength(open);
+  const double h = total / segments;
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(static_cast<std::size_t>(segments) + 1);
+  std::size_t i = 0;
+  double s_i = 0.0;  // arc length at open[i]
+  for (int k = 0; k <= segments; ++k) {
+    const double s = std::min(k * h, total);
+    while (i + 2 < open.size() && s_i + (open[i + 1] - open[i]).norm() < s) {
+      s_i += (open[i + 1] - open[i]).norm();
+      ++i;
+    }
+    const double len = (open[i + 1] - open[i]).norm();
+    const double t = len > 0 ? std::clamp((s - s_i) / len, 0.0, 1.0) : 0.0;
+    out.push_back(open[i] + t * (open[i + 1] - open[i]));
+  }
+  return out;
 }
 
 }  // namespace microdex::knot

@@ -63,6 +63,13 @@ struct StitchKnotShapeDef {
 // aimed through the knot or at each other).
 std::vector<Eigen::Vector3d> MakeStitchKnot(const StitchKnotShapeDef& def);
 
+// `segments` equal arc-length pieces of an open polyline (segments + 1 points, both ends kept);
+// at least two points in, segments >= 1.
+std::vector<Eigen::Vector3d> ResampleByArcLength(std::span<const Eigen::Vector3d> open,
+                                                 int segments);
+// The length of an open polyline.
+double PolylineLength(std::span<const Eigen::Vector3d> open);
+
 // Smallest distance between two segments of the polyline that are more than `skip_arc_m`
 // apart along it (for a thread of diameter d with nodes about d apart, `skip_arc_m` = 2 d
 // excludes neighbouring links): the thread does not pass through itself if it is >= d.

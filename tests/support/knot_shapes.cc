@@ -7,6 +7,7 @@
 #include <random>
 
 #include "common/base/check.h"
+#include "common/knot/stitch_knot_shapes.h"
 
 namespace microdex::knot::shapes {
 namespace {
@@ -178,32 +179,12 @@ Curve Splice(std::span<const Eigen::Vector3d> a, std::span<const Eigen::Vector3d
   return c;
 }
 
-double Length(std::span<const Eigen::Vector3d> open) {
-  double s = 0.0;
-  for (std::size_t i = 0; i + 1 < open.size(); ++i) s += (open[i + 1] - open[i]).norm();
-  return s;
-}
+double Length(std::span<const Eigen::Vector3d> open) { return knot::PolylineLength(open); }
 
 Curve ResampleOpen(std::span<const Eigen::Vector3d> open, double spacing) {
   MICRODEX_CHECK(open.size() >= 2 && spacing > 0);
-  const double total = Length(open);
-  const int segments = std::max(1, static_cast<int>(std::round(total / spacing)));
-  const double h = total / segments;
-  Curve c;
-  c.reserve(segments + 1);
-  std::size_t i = 0;
-  double s_i = 0.0;  // arc length at open[i]
-  for (int k = 0; k <= segments; ++k) {
-    const double s = std::min(k * h, total);
-    while (i + 2 < open.size() && s_i + (open[i + 1] - open[i]).norm() < s) {
-      s_i += (open[i + 1] - open[i]).norm();
-      ++i;
-    }
-    const double len = (open[i + 1] - open[i]).norm();
-    const double t = len > 0 ? std::clamp((s - s_i) / len, 0.0, 1.0) : 0.0;
-    c.push_back(open[i] + t * (open[i + 1] - open[i]));
-  }
-  return c;
+  return knot::ResampleByArcLength(
+      open, std::max(1, static_cast<int>(std::round(Length(open) / spacing))));
 }
 
 Curve ResampleClosed(std::span<const Eigen::Vector3d> closed, double spacing) {
