@@ -247,6 +247,26 @@ const char* ToString(LoopWireStatus status) {
 
 // ---- Clearance ----------------------------------------------------------------------------
 
+LoopFrameInR::LoopFrameInR(const LoopWireModel& model, const Eigen::Isometry3d& X_WL)
+    : R(model.loop().radius_m),
+      inv_R(1 / model.loop().radius_m),
+      R_LW(X_WL.linear().transpose()),
+      p_WLo(X_WL.translation()) {}
+
+double LoopFrameInR::CentreDistance(const LoopWireModel::Piece& piece) const {
+  return CircleDist(ToL(piece.p_WBall));
+}
+
+double LoopFrameInR::LowerBound(const LoopWireModel::Piece& piece) const {
+  return CentreDistance(piece) - piece.ball_radius_m * inv_R;
+}
+
+double LoopFrameInR::UpperBound(const LoopWireModel& model) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (const LoopWireModel::Piece& p : model.pieces()) best = std::min(best, CentreDistance(p));
+  return best;
+}
+
 LoopWireClearance CalcLoopWireClearance(const LoopWireModel& model, const Eigen::Isometry3d& X_WL) {
   LoopWireClearance out;
   if (!X_WL.matrix().allFinite() || !IsRotation(X_WL.linear())) {
@@ -254,19 +274,13 @@ LoopWireClearance CalcLoopWireClearance(const LoopWireModel& model, const Eigen:
     out.clearance_m = out.distance_m = kNaN;
     return out;
   }
-  const double R = model.loop().radius_m;
-  const double inv_R = 1 / R;
-  // World to the loop frame in units of R: translation subtracted first, then rotated.
-  const Eigen::Matrix3d R_LW = X_WL.linear().transpose();
-  const Eigen::Vector3d p_WLo = X_WL.translation();
-  const auto to_L = [&](const Eigen::Vector3d& p_W) -> Eigen::Vector3d {
-    return inv_R * (R_LW * (p_W - p_WLo));
-  };
+  const LoopFrameInR frame(model, X_WL);
+  const double R = frame.R, inv_R = frame.inv_R;
+  const Eigen::Matrix3d& R_LW = frame.R_LW;
+  const auto to_L = [&frame](const Eigen::Vector3d& p_W) { return frame.ToL(p_W); };
   const std::vector<LoopWireModel::Piece>& pieces = model.pieces();
   // Pass 1: an upper bound of the distance (units of R), from each piece's midpoint.
-  double best_ub = std::numeric_limits<double>::infinity();
-  for (const LoopWireModel::Piece& p : pieces)
-    best_ub = std::min(best_ub, CircleDist(to_L(p.p_WBall)));
+  const double best_ub = frame.UpperBound(model);
   // Pass 2: the exact distance of every piece whose sphere may come closer.
   double best_sq = std::numeric_limits<double>::infinity();
   LoopWirePieceMin best_min;
@@ -274,8 +288,7 @@ LoopWireClearance CalcLoopWireClearance(const LoopWireModel& model, const Eigen:
   bool converged = true;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const LoopWireModel::Piece& p = pieces[i];
-    const Eigen::Vector3d c_L = to_L(p.p_WBall);
-    const double lower = CircleDist(c_L) - p.ball_radius_m * inv_R;
+    const double lower = frame.LowerBound(p);
     const double bound = std::min(best_ub, std::sqrt(best_sq));
     if (lower > bound) continue;
     ++out.num_solved;

@@ -148,6 +148,23 @@ struct LoopWireClearance {
 // The clearance for the loop at pose X_WL. No allocation, no exception.
 LoopWireClearance CalcLoopWireClearance(const LoopWireModel& model, const Eigen::Isometry3d& X_WL);
 
+// The queries' working frame: world points in the loop frame L in units of the loop radius R
+// (the translation subtracted first, then rotated), and the cheap bounds of the pieces.
+struct LoopFrameInR {
+  LoopFrameInR(const LoopWireModel& model, const Eigen::Isometry3d& X_WL);
+  Eigen::Vector3d ToL(const Eigen::Vector3d& p_W) const { return inv_R * (R_LW * (p_W - p_WLo)); }
+  // A piece's sphere centre's distance to the loop circle (units of R).
+  double CentreDistance(const LoopWireModel::Piece& piece) const;
+  // Its sphere's lower bound of the piece's distance: CentreDistance − ball radius.
+  double LowerBound(const LoopWireModel::Piece& piece) const;
+  // The least CentreDistance of the pieces: an upper bound of the wire's distance.
+  double UpperBound(const LoopWireModel& model) const;
+
+  double R = 1, inv_R = 1;
+  Eigen::Matrix3d R_LW = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p_WLo = Eigen::Vector3d::Zero();
+};
+
 struct WireProgress {
   LoopWireStatus status = LoopWireStatus::kInvalidPose;
   double s_m = 0;         // arc length of the wire-axis point nearest to p (0 … length)

@@ -17,22 +17,16 @@ LoopWireClearance CalcLoopWireClearanceSampled(const LoopWireModel& model,
     return out;
   }
   samples = std::max(2, samples);
-  const double R = model.loop().radius_m, inv_R = 1 / R;
-  const Eigen::Matrix3d R_LW = X_WL.linear().transpose();
-  const Eigen::Vector3d p_WLo = X_WL.translation();
-  const auto to_L = [&](const Eigen::Vector3d& p_W) -> Eigen::Vector3d {
-    return inv_R * (R_LW * (p_W - p_WLo));
-  };
+  const LoopFrameInR frame(model, X_WL);
+  const double R = frame.R;
+  const auto to_L = [&frame](const Eigen::Vector3d& p_W) { return frame.ToL(p_W); };
   const std::vector<LoopWireModel::Piece>& pieces = model.pieces();
-  double best_ub = std::numeric_limits<double>::infinity();
-  for (const LoopWireModel::Piece& p : pieces) {
-    best_ub = std::min(best_ub, std::sqrt(CircleDistSq(to_L(p.p_WBall))));
-  }
+  const double best_ub = frame.UpperBound(model);
   double best_sq = std::numeric_limits<double>::infinity();
   Eigen::Vector3d best_p = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const LoopWireModel::Piece& p = pieces[i];
-    const double lower = std::sqrt(CircleDistSq(to_L(p.p_WBall))) - p.ball_radius_m * inv_R;
+    const double lower = frame.LowerBound(p);
     if (lower > std::min(best_ub, std::sqrt(best_sq))) continue;
     ++out.num_solved;
     for (int j = 0; j < samples; ++j) {
