@@ -250,6 +250,26 @@ struct SceneRig {
 // malloc itself is counted, so allocations inside C libraries and Eigen's heap temporaries
 // (which use malloc, not operator new) show too.
 
+// The training scenes' modules and task tracking inside the tick (grasp contacts, the loop–wire
+// query, the knot answers, the stitches, the nylon's shape error): no allocation after warm-up.
+// A run ends early when its task does.
+TEST(HapticLoop, TrainingSceneTicksNeverAllocate) {
+  for (const char* file :
+       {"tremor_hold.yaml", "loop_along_wire.yaml", "needle_along_tube.yaml", "grasp.yaml",
+        "nylon_loop.yaml", "knot_topology.yaml", "knot_placement.yaml"}) {
+    SCOPED_TRACE(file);
+    SceneRig rig(scene::LoadScene(SceneFile(file)));
+    rig.Steps(500);
+    ASSERT_EQ(rig.loop.state().score.outcome, 0) << "the task ended during the warm-up";
+    std::atomic<bool> stop{false};
+    testing::StartCountingAllocations();
+    rig.loop.Run(stop, rig.loop.step() + 2500);
+    const std::uint64_t allocations = testing::StopCountingAllocations();
+    EXPECT_EQ(allocations, 0u);
+    EXPECT_GT(rig.loop.step(), 2000u);
+  }
+}
+
 TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
   for (const char* file : {"suture_on_tissue.yaml", "tissue_press.yaml", "thread_pull.yaml"}) {
     SCOPED_TRACE(file);
