@@ -28,9 +28,7 @@ double CalcTaskPathLength(const scene::SceneModel& scene) {
   if (t.kind == scene::TaskKind::kTremorHold) return 0;
   if (t.kind == scene::TaskKind::kGrasp) return 2 * (t.line_end_m - t.line_start_m).norm();
   if (t.kind == scene::TaskKind::kLoopAlongWire && scene.loop) {
-    double length = 0;
-    for (const geometry::WirePieceDef& p : scene.loop->wire.pieces) length += p.Length();
-    return length;
+    return scene.loop->wire.Length();
   }
   const double arc_radius_m =
       t.path == scene::PathKind::kCircle ? t.circle_radius_m : scene.needle.radius_m;

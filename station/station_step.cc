@@ -245,8 +245,7 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     if (k.item >= items) t.outcome = 1;
   } else if (task.kind == scene::TaskKind::kLoopAlongWire) {
     // One pass along the course; the deviation is the offset from the wire's axis.
-    double length = 0;
-    for (const geometry::WirePieceDef& p : scene.loop->wire.pieces) length += p.Length();
+    const double length = scene.loop->wire.Length();
     t.progress = std::clamp(s.loop->s_m / length, 0.0, 1.0);
     if (t.progress >= 0.98) t.outcome = 1;
   } else if (task.kind != scene::TaskKind::kFollowPath) {

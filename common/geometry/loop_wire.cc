@@ -74,6 +74,12 @@ WirePieceDef WirePieceDef::Segment(const Eigen::Vector3d& p_W0, const Eigen::Vec
   return d;
 }
 
+double WireDef::Length() const {
+  double total = 0;
+  for (const WirePieceDef& p : pieces) total += p.Length();
+  return total;
+}
+
 WirePieceDef WirePieceDef::Arc(const Eigen::Vector3d& p_WO, const Eigen::Vector3d& axis_W,
                                const Eigen::Vector3d& u_W, double radius_m, double sweep_rad) {
   WirePieceDef d;

@@ -51,6 +51,8 @@ struct WireDef {
   std::vector<WirePieceDef> pieces;  // joined end to end, in order
   double radius_m = 0.25e-3;         // r_w > 0
 
+  double Length() const;  // of the axis, m: the pieces' lengths summed
+
   // Throws std::invalid_argument("WireDef.<field>: reason"): no pieces; a non-finite value; a
   // piece shorter than 1e-12 of the course's extent (zero length); an arc radius ≤ 0, sweep
   // outside (0, 2π], axis or u not unit or not orthogonal (1e-9); a gap between one piece's

@@ -408,8 +408,7 @@ TaskKind ParseTaskKind(const std::string& text) {
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
-  double total = 0;
-  for (const geometry::WirePieceDef& p : wire.pieces) total += p.Length();
+  const double total = wire.Length();
   double s = std::clamp(fraction, 0.0, 1.0) * total;
   Eigen::Vector3d p_W = wire.pieces.back().EndPoint(), t_W = Eigen::Vector3d::UnitX();
   for (const geometry::WirePieceDef& p : wire.pieces) {
