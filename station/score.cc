@@ -68,6 +68,13 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   if (metric == "spacing_error_rad") return t.spacing_error_rad;
   if (metric == "bite_error_m") return t.bite_error_m;
   if (metric == "shape_error_m") return t.shape_error_m;
+  if (metric == "entry_error_m") return t.entry_error_m;
+  if (metric == "exit_error_m") return t.exit_error_m;
+  if (metric == "peak_strain") return t.peak_strain;
+  if (metric == "torn_m") return t.torn_m;
+  if (metric == "off_circle_m") return t.off_circle_m;
+  // Beyond the two the task needs (in and out).
+  if (metric == "extra_punctures") return std::max(t.punctures - 2, 0);
   if (metric == "progress_deficit") {
     if (t.outcome == static_cast<std::uint8_t>(state::TaskOutcome::kCompleted)) return 0;
     const scene::TaskDef& task = scene.task;

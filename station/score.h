@@ -28,6 +28,13 @@
 //                        after the rigid motion that best aligns them (Kabsch)
 //   bite_error_m         knot placement: RMS of the stitches' distance from the edge against the
 //                        scene's bite
+//   entry_error_m        needle through tissue: distance of the first hole made from above
+//                        from puncture.entry_target_m (1 m until it is made)
+//   exit_error_m         ... of the first hole made from below from exit_target_m (likewise)
+//   peak_strain          ... the largest hole strain, |lateral offset| / wire radius
+//   torn_m               ... the length the holes tore (common/puncture/README.md)
+//   off_circle_m         ... the needle's motion across its holes, summed
+//   extra_punctures      ... punctures beyond the two the task needs
 //
 // follow_path (the module demos) keeps its own formula:
 //   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean

@@ -260,7 +260,24 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
       t.progress = 0;
     }
     if (task.kind == scene::TaskKind::kNylonLoop) t.shape_error_m = s.thread->shape_error_m;
-    if (t.passes_done >= task.passes) t.outcome = 1;
+    if (task.kind == scene::TaskKind::kNeedleThroughTissue) {
+      const puncture::PunctureState& p = s.tissue->puncture;
+      const Eigen::Isometry3d& X_WS = scene.tissue->X_WS;
+      if (p.have_entry != 0) {
+        t.entry_error_m = (X_WS * p.p_S_entry - scene.puncture->p_W_entry_target).norm();
+      }
+      if (p.have_exit != 0) {
+        t.exit_error_m = (X_WS * p.p_S_exit - scene.puncture->p_W_exit_target).norm();
+      }
+      t.peak_strain = p.peak_strain;
+      t.torn_m = p.torn_m;
+      t.off_circle_m = p.off_circle_m;
+      t.punctures = p.punctures;
+    }
+    // The needle through tissue is done only once it has come out.
+    const bool out =
+        task.kind != scene::TaskKind::kNeedleThroughTissue || s.tissue->puncture.have_exit != 0;
+    if (t.passes_done >= task.passes && out) t.outcome = 1;
   }
   if (t.outcome == 0 && t.time_s >= task.time_limit_s - 0.5 * dt_s) t.outcome = 2;
   if (t.outcome != 0) t.end_step = s.step;

@@ -12,6 +12,10 @@ TissueModule::TissueModule(const scene::SceneModel& scene)
       X_SW_(scene.tissue->X_WS.inverse()),
       R_WS_(scene.tissue->X_WS.linear()),
       tool_kind_(scene.tissue->tool),
+      puncture_(scene.puncture),
+      X_TN_(scene.X_TN()),
+      needle_radius_m_(scene.needle.radius_m),
+      needle_sweep_rad_(scene.needle.sweep_rad),
       contact_radius_m_(scene.tissue->contact_radius_m),
       half_bar_m_(0.5 * scene.tissue->bar_length_m),
       display_level_(scene.tissue->display_level),
@@ -28,6 +32,22 @@ void TissueModule::InitState(state::StationState& s) const {
 
 void TissueModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& f_T_W) {
   state::TissueModuleState& t = *s.tissue;
+  if (tool_kind_ == scene::TissueToolKind::kNeedle) {
+    const Eigen::Isometry3d X_SN = X_SW_ * in.X_WT * X_TN_;
+    puncture::NeedleArc arc;
+    arc.c_S = X_SN.translation();
+    arc.e1_S = X_SN.linear().col(0);
+    arc.e2_S = X_SN.linear().col(1);
+    arc.radius_m = needle_radius_m_;
+    arc.sweep_rad = needle_sweep_rad_;
+    const std::uint32_t step_before = t.tissue.step;
+    puncture::StepPuncture(puncture_->def, model_, arc, ws_, t.tissue, t.puncture);
+    if (t.tissue.step != step_before && !ws_.stats.pattern_reused) ++mesh_revision_;
+    t.f_T_W = R_WS_ * t.puncture.f_S;
+    if (!t.f_T_W.allFinite()) t.f_T_W.setZero();
+    f_T_W += t.f_T_W;
+    return;
+  }
   const Eigen::Vector3d p_ST = X_SW_ * in.X_WT.translation();
   if (tool_kind_ == scene::TissueToolKind::kPoint) {
     tool_ = fem::MakePointTool(p_ST, contact_radius_m_);
@@ -48,6 +68,14 @@ ModuleStatus TissueModule::Status(const state::StationState& s) const {
   const state::TissueModuleState& t = *s.tissue;
   ModuleStatus out;
   out.fault = t.f_T_W.norm() > max_force_N_;
+  if (puncture_) {
+    // A hole at its tear strain is tearing.
+    const double tearing = puncture_->def.tear_strain * (1 - 1e-9);
+    for (int i = 0; i < t.puncture.num_holes; ++i) {
+      const puncture::Hole& h = t.puncture.holes[i];
+      out.fault = out.fault || (h.status == puncture::HoleStatus::kOpen && h.strain >= tearing);
+    }
+  }
   out.fault_value = t.f_T_W.norm();
   out.error_estimate = ws_.stats.relative_residual;
   out.warnings = t.tissue.num_failed_steps;

@@ -2,15 +2,18 @@
 // The tissue module (thesis chapter 3, common/fem): the tool tip presses the tissue patch as a
 // point (with a contact radius) or as a short bar along the tool's x axis; each tick runs one
 // StepTissue on the multi-scale mesh around the tool and renders the reaction force (3.12) to
-// the device.
+// the device. With tool: needle the tool holds the scene's curved needle at its tail and the
+// needle pierces the patch (common/puncture: the tip presses the membrane until it gives way,
+// the holes hold the needle with friction and tear when it moves across them).
 //
 // Telemetry: the relative residual ‖b − K u‖ / ‖b‖ of the step's solve is the error estimate
 // and failed steps (which keep the last good field and force) are the warnings. A reaction
-// above the scene's max_force_N is a fault (pressing too hard). Every mirror period the field
-// is sampled on the display grid (uniform, level display_level) into the tissue frame.
-// State: state::TissueModuleState (the displacement field, the last mesh and contacts, the
-// force on the tool).
+// above the scene's max_force_N is a fault (pressing too hard); so is a needle tearing a hole.
+// Every mirror period the field is sampled on the display grid (uniform, level display_level) into
+// the tissue frame. State: state::TissueModuleState (the displacement field, the last mesh and
+// contacts, the force on the tool).
 
+#include <optional>
 #include <vector>
 
 #include "common/fem/tissue_model.h"
@@ -46,6 +49,9 @@ class TissueModule final : public Module {
   Eigen::Isometry3d X_SW_;
   Eigen::Matrix3d R_WS_;
   scene::TissueToolKind tool_kind_;
+  std::optional<scene::PunctureSceneDef> puncture_;  // tool: needle
+  Eigen::Isometry3d X_TN_;                           // the needle's frame on the tool
+  double needle_radius_m_, needle_sweep_rad_;
   double contact_radius_m_;
   double half_bar_m_;
   int display_level_;

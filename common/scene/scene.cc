@@ -38,7 +38,8 @@ PathKind ParsePathKind(const std::string& text) {
 TissueToolKind ParseToolKind(const std::string& text) {
   if (text == "point") return TissueToolKind::kPoint;
   if (text == "bar") return TissueToolKind::kBar;
-  throw std::invalid_argument("expected point or bar");
+  if (text == "needle") return TissueToolKind::kNeedle;
+  throw std::invalid_argument("expected point, bar or needle");
 }
 
 cues::CueKind ParseCueName(const std::string& text) {
@@ -69,7 +70,13 @@ constexpr const char* kScoreMetrics[] = {"time_s",
                                          "response_time_s",
                                          "spacing_error_rad",
                                          "bite_error_m",
-                                         "shape_error_m"};
+                                         "shape_error_m",
+                                         "entry_error_m",
+                                         "exit_error_m",
+                                         "peak_strain",
+                                         "torn_m",
+                                         "off_circle_m",
+                                         "extra_punctures"};
 
 grasp::ShapeKind ParseGraspShape(const std::string& text) {
   for (grasp::ShapeKind k :
@@ -134,8 +141,8 @@ void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
-                           "tissue", "grasp", "loop", "knots", "placement", "scoring", "microscope",
-                           "visuals", "cues"});
+                           "tissue", "puncture", "grasp", "loop", "knots", "placement", "scoring",
+                           "microscope", "visuals", "cues"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -234,6 +241,27 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.display_level = ti->Int("display_level", d.display_level);
     d.max_force_N = ti->FiniteDouble("max_force_N", d.max_force_N);
     s.tissue = d;
+  }
+  if (const std::optional<YamlSection> pu = root.OptionalMap("puncture")) {
+    pu->CheckNoUnknownKeys({"puncture_force_N", "wire_radius_m", "lateral_stiffness_N_per_m",
+                            "tear_strain", "grip_force_N", "friction_coefficient",
+                            "bristle_stiffness_N_per_m", "entry_target_m", "exit_target_m"});
+    PunctureSceneDef d;
+    puncture::PunctureDef& p = d.def;
+    p.puncture_force_N = pu->FiniteDouble("puncture_force_N", p.puncture_force_N);
+    p.wire_radius_m = pu->FiniteDouble("wire_radius_m", p.wire_radius_m);
+    p.lateral_stiffness_N_per_m =
+        pu->FiniteDouble("lateral_stiffness_N_per_m", p.lateral_stiffness_N_per_m);
+    p.tear_strain = pu->FiniteDouble("tear_strain", p.tear_strain);
+    p.grip_force_N = pu->FiniteDouble("grip_force_N", p.grip_force_N);
+    p.friction_coefficient = pu->FiniteDouble("friction_coefficient", p.friction_coefficient);
+    p.bristle_stiffness_N_per_m =
+        pu->FiniteDouble("bristle_stiffness_N_per_m", p.bristle_stiffness_N_per_m);
+    pu->Required("entry_target_m");
+    pu->Required("exit_target_m");
+    d.p_W_entry_target = pu->Vec3("entry_target_m", d.p_W_entry_target);
+    d.p_W_exit_target = pu->Vec3("exit_target_m", d.p_W_exit_target);
+    s.puncture = d;
   }
   if (const std::optional<YamlSection> g = root.OptionalMap("grasp")) {
     g->CheckNoUnknownKeys({"shape", "size_m", "radius_m", "length_m", "density_kg_per_m3",
@@ -392,19 +420,22 @@ const char* TaskKindName(TaskKind kind) {
       return "knot_placement";
     case TaskKind::kNylonLoop:
       return "nylon_loop";
+    case TaskKind::kNeedleThroughTissue:
+      return "needle_through_tissue";
   }
   return "unknown";
 }
 
 TaskKind ParseTaskKind(const std::string& text) {
-  for (TaskKind k : {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube,
-                     TaskKind::kGrasp, TaskKind::kLoopAlongWire, TaskKind::kKnotTopology,
-                     TaskKind::kKnotPlacement, TaskKind::kNylonLoop}) {
+  for (TaskKind k :
+       {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube, TaskKind::kGrasp,
+        TaskKind::kLoopAlongWire, TaskKind::kKnotTopology, TaskKind::kKnotPlacement,
+        TaskKind::kNylonLoop, TaskKind::kNeedleThroughTissue}) {
     if (text == TaskKindName(k)) return k;
   }
   throw std::invalid_argument(
       "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, "
-      "knot_topology, knot_placement or nylon_loop");
+      "knot_topology, knot_placement, nylon_loop or needle_through_tissue");
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
@@ -522,7 +553,7 @@ void ValidateScene(const SceneModel& s) {
   }
   const geometry::ArcDef& n = s.needle;
   if (!(n.radius_m > 0)) Invalid("needle.radius_m", "expected > 0");
-  if (!(std::abs(n.radius_m - v.core_radius_m) < v.tube_radius_m)) {
+  if (s.HasModule("needle") && !(std::abs(n.radius_m - v.core_radius_m) < v.tube_radius_m)) {
     Invalid("needle.radius_m",
             "expected within the tube: |needle radius − core radius| < tube radius");
   }
@@ -534,7 +565,7 @@ void ValidateScene(const SceneModel& s) {
     if (!(t.start_azimuth_rad >= 0 && t.start_azimuth_rad < t.end_azimuth_rad)) {
       Invalid("task.start_azimuth_rad", "expected 0 <= start < end");
     }
-    if (!(t.end_azimuth_rad + n.sweep_rad <= v.segment_angle_rad)) {
+    if (s.HasModule("needle") && !(t.end_azimuth_rad + n.sweep_rad <= v.segment_angle_rad)) {
       Invalid("task.end_azimuth_rad", "expected end + needle sweep <= vessel segment angle");
     }
   }
@@ -701,6 +732,21 @@ void ValidateScene(const SceneModel& s) {
   }
   if (t.kind == TaskKind::kNeedleAlongTube && !s.HasModule("needle")) {
     Invalid("task.kind", "needle_along_tube needs the needle module");
+  }
+  const bool needle_tool = s.tissue && s.tissue->tool == TissueToolKind::kNeedle;
+  if (needle_tool != s.puncture.has_value()) {
+    Invalid("puncture", s.puncture ? "section given but tissue.tool is not needle"
+                                   : "section required by tissue.tool: needle");
+  }
+  if (s.puncture) {
+    try {
+      s.puncture->def.Validate();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("puncture." + std::string(e.what()));
+    }
+  }
+  if (t.kind == TaskKind::kNeedleThroughTissue && !(needle_tool && t.path == PathKind::kArc)) {
+    Invalid("task.kind", "needle_through_tissue needs tissue.tool: needle and path: arc");
   }
   if (t.kind == TaskKind::kNeedleAlongTube && t.path != PathKind::kArc) {
     Invalid("task.path", "needle_along_tube needs path: arc");

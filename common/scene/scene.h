@@ -26,6 +26,7 @@
 #include "common/geometry/loop_wire.h"
 #include "common/grasp/grasp_def.h"
 #include "common/knot/stitch_knot.h"
+#include "common/puncture/puncture.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::scene {
@@ -65,9 +66,10 @@ enum class TaskKind {
   kKnotTopology,     // name each knot shown (square, granny, surgeon's, slip, half hitch)
   kKnotPlacement,    // place stitches evenly around the vessel's cut end, a bite from the edge
   kNylonLoop,        // lay the grasped nylon in a loop matching the target shape
+  kNeedleThroughTissue,  // drive the needle through the tissue along its circle, in and out
 };
 // follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, knot_topology,
-// knot_placement, nylon_loop
+// knot_placement, nylon_loop, needle_through_tissue
 const char* TaskKindName(TaskKind kind);
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
@@ -112,8 +114,9 @@ struct ThreadSceneDef {
 };
 
 // The tool tip pressing the tissue: a point (with a contact radius) or a short bar along the
-// tool's x axis centred at the tip.
-enum class TissueToolKind { kPoint, kBar };
+// tool's x axis centred at the tip; or the curved needle (the scene's `needle`, held at its
+// tail), which pierces the tissue (common/puncture, scene section `puncture`).
+enum class TissueToolKind { kPoint, kBar, kNeedle };
 
 // The tissue patch (station "tissue" module): a TissueDef from a parameter file, with the
 // scene's overrides of the mesh level and solver, placed at X_WS (the patch corner; the
@@ -130,6 +133,14 @@ struct TissueSceneDef {
   int display_level = 6;
   // A step whose reaction force exceeds this is a fault (pressing too hard).
   double max_force_N = 0.5;
+};
+
+// The needle through tissue (tissue.tool: needle): the puncture model's parameters and where
+// the needle should go in and come out, in world.
+struct PunctureSceneDef {
+  puncture::PunctureDef def;
+  Eigen::Vector3d p_W_entry_target = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p_W_exit_target = Eigen::Vector3d::Zero();
 };
 
 // The grasping primitive (station "grasp" module, thesis §2.2, Fig. 2.2d): a small object on
@@ -226,6 +237,7 @@ struct SceneModel {
   HapticDef haptic;
   std::optional<ThreadSceneDef> thread;        // present exactly when modules has "thread"
   std::optional<TissueSceneDef> tissue;        // present exactly when modules has "tissue"
+  std::optional<PunctureSceneDef> puncture;    // present exactly when tissue.tool is needle
   std::optional<GraspSceneDef> grasp;          // present exactly when modules has "grasp"
   std::optional<LoopSceneDef> loop;            // present exactly when modules has "loop"
   std::optional<KnotQuizSceneDef> knots;       // present exactly when modules has "knots"

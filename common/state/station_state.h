@@ -24,6 +24,7 @@
 #include "common/geometry/arc_torus.h"
 #include "common/geometry/loop_wire.h"
 #include "common/grasp/grasp_model.h"
+#include "common/puncture/puncture.h"
 #include "common/thread/thread_model.h"
 
 namespace microdex::state {
@@ -114,6 +115,14 @@ struct ScoreState {
   double spacing_error_rad = 0;
   double bite_error_m = 0;
   double shape_error_m = 0;  // nylon control (ThreadModuleState)
+  // The needle through tissue (common/puncture), copied for the score; 1 m while the entry
+  // (exit) has not been made.
+  double entry_error_m = 1;
+  double exit_error_m = 1;
+  double peak_strain = 0;
+  double torn_m = 0;
+  double off_circle_m = 0;
+  std::int32_t punctures = 0;
   // This step.
   std::uint8_t fault = 0;
   double fault_value = 0;         // of the first module at fault (clearance, strain, force)
@@ -148,6 +157,7 @@ struct ThreadModuleState {
 struct TissueModuleState {
   fem::TissueState tissue;
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // tissue on the tool, N (unsaturated)
+  puncture::PunctureState puncture;                 // tool: needle (the needle through it)
 };
 
 // The grasping module: the object, the jaws' contacts and the grasp's metrics.

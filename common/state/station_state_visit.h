@@ -119,6 +119,12 @@ void Score(S& s, V& v) {
   v("score.spacing_error_rad", &s.spacing_error_rad, 1);
   v("score.bite_error_m", &s.bite_error_m, 1);
   v("score.shape_error_m", &s.shape_error_m, 1);
+  v("score.entry_error_m", &s.entry_error_m, 1);
+  v("score.exit_error_m", &s.exit_error_m, 1);
+  v("score.peak_strain", &s.peak_strain, 1);
+  v("score.torn_m", &s.torn_m, 1);
+  v("score.off_circle_m", &s.off_circle_m, 1);
+  v("score.punctures", &s.punctures, 1);
   v("score.fault", &s.fault, 1);
   v("score.fault_value", &s.fault_value, 1);
   v("score.contact_event", &s.contact_event, 1);
@@ -205,6 +211,39 @@ void Tissue(S& m, V& v) {
   Enum("tissue.status", t.status, v);
   v("tissue.num_failed_steps", &t.num_failed_steps, 1);
   Matrix("tissue.f_T_W", m.f_T_W, v);
+  // The needle through the tissue (tissue.tool: needle; untouched otherwise).
+  auto& p = m.puncture;
+  v("puncture.num_holes", &p.num_holes, 1);
+  Counted(p.holes, p.num_holes, [&](auto& h) {
+    Enum("puncture.holes[].status", h.status, v);
+    v("puncture.holes[].from_below", &h.from_below, 1);
+    Matrix("puncture.holes[].p_SH", h.p_SH, v);
+    v("puncture.holes[].s_rad", &h.s_rad, 1);
+    v("puncture.holes[].s_anchor_rad", &h.s_anchor_rad, 1);
+    v("puncture.holes[].normal_stiffness_N_per_m", &h.normal_stiffness_N_per_m, 1);
+    v("puncture.holes[].strain", &h.strain, 1);
+    v("puncture.holes[].friction_N", &h.friction_N, 1);
+    Matrix("puncture.holes[].f_S", h.f_S, v);
+  });
+  v("puncture.punctures", &p.punctures, 1);
+  v("puncture.pressing", &p.pressing, 1);
+  v("puncture.press_N", &p.press_N, 1);
+  v("puncture.have_entry", &p.have_entry, 1);
+  v("puncture.have_exit", &p.have_exit, 1);
+  Matrix("puncture.p_S_entry", p.p_S_entry, v);
+  Matrix("puncture.p_S_exit", p.p_S_exit, v);
+  v("puncture.peak_strain", &p.peak_strain, 1);
+  v("puncture.torn_m", &p.torn_m, 1);
+  v("puncture.off_circle_m", &p.off_circle_m, 1);
+  v("puncture.peak_press_N", &p.peak_press_N, 1);
+  Matrix("puncture.prev_arc.c_S", p.prev_arc.c_S, v);
+  Matrix("puncture.prev_arc.e1_S", p.prev_arc.e1_S, v);
+  Matrix("puncture.prev_arc.e2_S", p.prev_arc.e2_S, v);
+  v("puncture.prev_arc.radius_m", &p.prev_arc.radius_m, 1);
+  v("puncture.prev_arc.sweep_rad", &p.prev_arc.sweep_rad, 1);
+  v("puncture.have_prev", &p.have_prev, 1);
+  v("puncture.warnings", &p.warnings, 1);
+  Matrix("puncture.f_S", p.f_S, v);
 }
 
 template <typename P, typename V>

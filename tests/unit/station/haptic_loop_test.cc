@@ -254,9 +254,9 @@ struct SceneRig {
 // query, the knot answers, the stitches, the nylon's shape error): no allocation after warm-up.
 // A run ends early when its task does.
 TEST(HapticLoop, TrainingSceneTicksNeverAllocate) {
-  for (const char* file :
-       {"tremor_hold.yaml", "loop_along_wire.yaml", "needle_along_tube.yaml", "grasp.yaml",
-        "nylon_loop.yaml", "knot_topology.yaml", "knot_placement.yaml"}) {
+  for (const char* file : {"tremor_hold.yaml", "loop_along_wire.yaml", "needle_along_tube.yaml",
+                           "grasp.yaml", "nylon_loop.yaml", "knot_topology.yaml",
+                           "knot_placement.yaml", "needle_through_tissue.yaml"}) {
     SCOPED_TRACE(file);
     SceneRig rig(scene::LoadScene(SceneFile(file)));
     rig.Steps(500);

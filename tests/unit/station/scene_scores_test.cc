@@ -51,7 +51,7 @@ TEST_P(SceneScores, RiseWithSkill) {
 
 INSTANTIATE_TEST_SUITE_P(TrainingScenes, SceneScores,
                          ::testing::Values("tremor_hold", "loop_along_wire", "needle_along_tube",
-                                           "grasp"),
+                                           "grasp", "needle_through_tissue"),
                          [](const auto& p) { return std::string(p.param); });
 
 }  // namespace

@@ -24,9 +24,10 @@ std::string SceneFile(const std::string& name) {
 // The scenes of the station's modules: needle + tremor, thread, tissue, thread + tissue, grasp,
 // and the training scenes' task tracking (a hold, the needle's passes).
 const char* const kScenes[] = {
-    "needle_tube.yaml",   "thread_pull.yaml",    "tissue_press.yaml",      "suture_on_tissue.yaml",
-    "grasp.yaml",         "tremor_hold.yaml",    "needle_along_tube.yaml", "loop_along_wire.yaml",
-    "knot_topology.yaml", "knot_placement.yaml", "nylon_loop.yaml"};
+    "needle_tube.yaml",       "thread_pull.yaml",     "tissue_press.yaml",
+    "suture_on_tissue.yaml",  "grasp.yaml",           "tremor_hold.yaml",
+    "needle_along_tube.yaml", "loop_along_wire.yaml", "knot_topology.yaml",
+    "knot_placement.yaml",    "nylon_loop.yaml",      "needle_through_tissue.yaml"};
 
 // One step's input as recorded: the device sample and the cues that arrived with it.
 struct RecordedStep {
