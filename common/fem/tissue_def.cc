@@ -34,6 +34,17 @@ const char* ToString(Ordering ordering) {
   return ordering == Ordering::kAmd ? "amd" : "nested_dissection";
 }
 
+const char* ToString(ToolConstraint constraint) {
+  return constraint == ToolConstraint::kNearestNodes ? "nearest_nodes" : "penalty_points";
+}
+
+ToolConstraint ParseToolConstraint(const std::string& text) {
+  if (text == "penalty_points") return ToolConstraint::kPenaltyPoints;
+  if (text == "nearest_nodes") return ToolConstraint::kNearestNodes;
+  throw std::invalid_argument("tool constraint '" + text +
+                              "': expected penalty_points or nearest_nodes");
+}
+
 MeshKind ParseMeshKind(const std::string& text) {
   if (text == "fine") return MeshKind::kFine;
   if (text == "multiscale") return MeshKind::kMultiscale;
@@ -67,6 +78,11 @@ void TissueDef::Validate() const {
   Require(std::isfinite(end_resolution) && end_resolution >= 0 && end_resolution <= 1e4,
           "end_resolution", "0 (off) or end-zone cells per tool length in (0, 1e4]");
   Require(end_levels >= 0 && end_levels <= 6, "end_levels", "an integer in [0, 6]");
+  Require(std::isfinite(tool_penalty) && tool_penalty >= 1 && tool_penalty <= 1e8, "tool_penalty",
+          "a spring in units of G·t in [1, 1e8]");
+  Require(std::isfinite(tool_point_spacing) && tool_point_spacing >= 0.1 &&
+              tool_point_spacing <= 4,
+          "tool_point_spacing", "a spacing in cells in [0.1, 4]");
   Require(std::isfinite(cg_relative_tolerance) && cg_relative_tolerance > 0 &&
               cg_relative_tolerance < 1,
           "cg_relative_tolerance", "a value in (0, 1)");
@@ -91,7 +107,8 @@ TissueDef LoadTissueDef(const std::string& path) {
   const YamlSection tissue = YamlReader(path).Root().Map("tissue");
   tissue.CheckNoUnknownKeys({"name", "length_x_m", "length_y_m", "shear_modulus_Pa", "thickness_m",
                              "max_level", "level", "mesh", "grading", "end_resolution",
-                             "end_levels", "solver", "ordering", "cg_relative_tolerance",
+                             "end_levels", "tool_constraint", "tool_penalty",
+                             "tool_point_spacing", "solver", "ordering", "cg_relative_tolerance",
                              "cg_max_iterations", "max_contact_nodes", "pattern_cache_entries"});
   TissueDef def;
   (void)tissue.String("name", "");  // documentation only
@@ -105,6 +122,10 @@ TissueDef LoadTissueDef(const std::string& path) {
   def.grading = tissue.FiniteDouble("grading", def.grading);
   def.end_resolution = tissue.FiniteDouble("end_resolution", def.end_resolution);
   def.end_levels = tissue.Int("end_levels", def.end_levels);
+  def.tool_constraint =
+      ReadEnum(tissue, "tool_constraint", &ParseToolConstraint, def.tool_constraint);
+  def.tool_penalty = tissue.FiniteDouble("tool_penalty", def.tool_penalty);
+  def.tool_point_spacing = tissue.FiniteDouble("tool_point_spacing", def.tool_point_spacing);
   def.solver = ReadEnum(tissue, "solver", &ParseSolverKind, def.solver);
   def.ordering = ReadEnum(tissue, "ordering", &ParseOrdering, def.ordering);
   def.cg_relative_tolerance =

@@ -32,14 +32,27 @@ enum class Ordering : std::uint8_t {
   kAmd,  // CHOLMOD's AMD on every new pattern (the reference)
 };
 
+// How the tool's prescribed displacement enters the system.
+enum class ToolConstraint : std::uint8_t {
+  // Penalty springs at points attached to the tool, through the shape functions of the
+  // triangles that hold them (tool_points.h): the force is a continuous function of the pose.
+  kPenaltyPoints,
+  // The thesis's (3.7): the nearest grid nodes of the tool are prescribed (the tool snaps to
+  // the grid; the reaction moves in steps as it slides). Kept as the reference of the study.
+  kNearestNodes,
+};
+
 const char* ToString(MeshKind kind);
 const char* ToString(SolverKind kind);
 const char* ToString(Ordering ordering);
+const char* ToString(ToolConstraint constraint);
 // Parses "fine"/"multiscale", "cg"/"pcg_jacobi"/"pcg_ic"/"cholmod" and
 // "nested_dissection"/"amd"; throws std::invalid_argument naming the text otherwise.
 MeshKind ParseMeshKind(const std::string& text);
 SolverKind ParseSolverKind(const std::string& text);
 Ordering ParseOrdering(const std::string& text);
+// "penalty_points" / "nearest_nodes".
+ToolConstraint ParseToolConstraint(const std::string& text);
 
 struct TissueDef {
   double length_x_m = 0.20;  // domain [0, Lx] × [0, Ly] in the tissue frame S
@@ -67,6 +80,16 @@ struct TissueDef {
   // ends are rounded). 0 disables.
   double end_resolution = 64;
   int end_levels = 2;
+  // Bars and polylines of zero contact radius; a point tool and a tool with a contact radius
+  // are always held at their nodes (kNearestNodes).
+  ToolConstraint tool_constraint = ToolConstraint::kPenaltyPoints;
+  // Spring of each tool point, in units of G·t (N/m): the point lags the tool by about
+  // q·spacing/(tool_penalty·G·t), a relative force error of ~1e-4 at 1e3 (README).
+  double tool_penalty = 1e3;
+  // Tool points per cell along the tool: spacing in units of the local cell size (nominal
+  // level; end level in the end zones). 1 constrains about one value per cell column, as
+  // many as the mesh has beside the line; denser points lock the mesh (README).
+  double tool_point_spacing = 1.0;
   // The default is the one a station can run: CHOLMOD's analysis and factorisation allocate
   // whenever the mesh selection changes (almost every tick under a moving tool), IC(0) CG
   // allocates nothing. Benches and reference studies choose cholmod explicitly.

@@ -1,6 +1,7 @@
 #include "common/fem/tissue_step.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 
@@ -301,6 +302,84 @@ double NodeValue(const TissueWorkspace& ws, int dof_code) {
   return ws.contact_w_m[-2 - dof_code];
 }
 
+// Spring of a tool point, N/m.
+double ToolPenalty_N_per_m(const TissueModel& model) {
+  return model.def.tool_penalty * model.def.shear_modulus_Pa * model.def.thickness_m;
+}
+
+// The tool's points on this step's mesh (ToolConstraint::kPenaltyPoints). False on overflow.
+bool FindToolPoints(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws) {
+  ws.num_contacts = 0;
+  ws.num_tool_points = 0;
+  const int count = PlaceToolPoints(model, ws.mesh.zones, ws.mesh.level, tool,
+                                    model.def.tool_point_spacing, ws.tool_points);
+  if (count < 0) return false;
+  const TissueDef& def = model.def;
+  for (int k = 0; k < count; ++k) {
+    ToolPoint& point = ws.tool_points[k];
+    LocateToolPoint(model, ws.mesh, point);
+    point.spring_N_per_m = ToolPointSpring(point, def.shear_modulus_Pa, def.thickness_m,
+                                           ToolPenalty_N_per_m(model));
+  }
+  ws.num_tool_points = count;
+  return true;
+}
+
+// Identifies the penalty matrix of the tool points (same nodes, same coordinates ⇒ same
+// values), so a tool held still keeps its factor.
+std::uint64_t HashToolPoints(const TissueWorkspace& ws) {
+  std::uint64_t h = MixKey(0x7f4a7c15u, static_cast<std::uint64_t>(ws.num_tool_points));
+  for (int k = 0; k < ws.num_tool_points; ++k) {
+    const ToolPoint& p = ws.tool_points[k];
+    for (int a = 0; a < 3; ++a) {
+      h = MixKey(h, static_cast<std::uint64_t>(p.node[a]));
+      h = MixKey(h, std::bit_cast<std::uint64_t>(p.lambda[a]));
+    }
+    h = MixKey(h, std::bit_cast<std::uint64_t>(p.spring_N_per_m));
+  }
+  return h;
+}
+
+// entry.tool_vals = K_ff + Σ_points β λ λᵀ (the penalty couples the three nodes of the point's
+// triangle: entries of the mesh's own pattern).
+void AssembleToolPenalty(TissueWorkspace& ws, PatternEntry& entry) {
+  const int nnz = entry.row_ptr[entry.num_dofs];
+  std::copy_n(entry.vals.begin(), nnz, entry.tool_vals.begin());
+  for (int k = 0; k < ws.num_tool_points; ++k) {
+    const ToolPoint& p = ws.tool_points[k];
+    const double beta = p.spring_N_per_m;
+    int d[3];
+    for (int a = 0; a < 3; ++a) d[a] = ws.node_dof[p.node[a]];
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] < 0) continue;
+      for (int b = 0; b < 3; ++b) {
+        if (d[b] < 0) continue;
+        int slot = entry.diag[d[a]];
+        if (b != a) {
+          slot = entry.row_ptr[d[a]];
+          while (entry.cols[slot] != d[b]) ++slot;  // a row has at most kMaxRowEntries
+          MICRODEX_CHECK(slot < entry.row_ptr[d[a] + 1]);
+        }
+        entry.tool_vals[slot] += beta * p.lambda[a] * p.lambda[b];
+      }
+    }
+  }
+  entry.tool_vals_valid = true;
+  entry.factor_valid = false;
+}
+
+// b_f = Σ_points β U λ: the springs pull the mesh towards the tool.
+void AssembleToolRhs(TissueWorkspace& ws, int n) {
+  std::fill_n(ws.rhs.begin(), n, 0.0);
+  for (int k = 0; k < ws.num_tool_points; ++k) {
+    const ToolPoint& p = ws.tool_points[k];
+    for (int a = 0; a < 3; ++a) {
+      const int d = ws.node_dof[p.node[a]];
+      if (d >= 0) ws.rhs[d] += p.spring_N_per_m * p.u_m * p.lambda[a];
+    }
+  }
+}
+
 void Fail(TissueState& state, TissueStatus status) {
   state.status = status;
   ++state.num_failed_steps;
@@ -352,6 +431,8 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   contact_nodes.resize(model.def.max_contact_nodes);
   contact_w_m.resize(model.def.max_contact_nodes);
   contact_f_N.resize(model.def.max_contact_nodes);
+  tool_points.resize(std::max(1, model.def.max_contact_nodes / 3));
+  contact_index.assign(num_nodes, 0);
   row_fill.resize(static_cast<size_t>(kMaxRowEntries) * n);
   row_rank.resize(static_cast<size_t>(kMaxRowEntries) * n);
   slot_twin.resize(static_cast<size_t>(kMaxRowEntries) * n);
@@ -364,6 +445,7 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
     entry.row_ptr.resize(n + 1);
     entry.cols.resize(static_cast<size_t>(kMaxRowEntries) * n);
     entry.vals.resize(static_cast<size_t>(kMaxRowEntries) * n);
+    entry.tool_vals.resize(static_cast<size_t>(kMaxRowEntries) * n);
     entry.diag.resize(n);
     entry.dof_order.resize(n);
     entry.scatter.resize(static_cast<size_t>(9) * model.max_triangles);
@@ -505,7 +587,8 @@ TissueStatus SolveReduced(const TissueModel& model, const TissueState& state, Ti
                           const CsrView& a, std::uint64_t key, int slot, bool new_pattern,
                           PatternEntry& entry, TissueStepStats& stats) {
   const int n = a.n;
-  TissueStatus status = ws.num_contacts == 0 ? TissueStatus::kNoContact : TissueStatus::kOk;
+  const bool in_contact = ws.use_tool_points ? ws.num_tool_points > 0 : ws.num_contacts > 0;
+  TissueStatus status = in_contact ? TissueStatus::kOk : TissueStatus::kNoContact;
   double b_norm2 = 0;
   for (int i = 0; i < n; ++i) b_norm2 += ws.rhs[i] * ws.rhs[i];
   if (n == 0) return status;
@@ -553,6 +636,44 @@ void CalcReactions(const TissueModel& model, const ToolContact& tool, TissueWork
   }
 }
 
+// The springs' forces (ToolConstraint::kPenaltyPoints): β (U − w_h) at each point on the
+// tissue, shared among its triangle's nodes by the shape functions (the nodal reactions
+// reported in contact_nodes, edge nodes left out: the clamp takes their share); their sum and
+// torque act on the tool at the points themselves.
+void CalcToolPointReactions(const ToolContact& tool, TissueWorkspace& ws,
+                            Eigen::Vector3d* f_T_S, Eigen::Vector3d* tau_T_S) {
+  const std::uint32_t mark = ws.mesh.mark;
+  ws.num_contacts = 0;
+  *f_T_S = Eigen::Vector3d::Zero();
+  *tau_T_S = Eigen::Vector3d::Zero();
+  for (int k = 0; k < ws.num_tool_points; ++k) {
+    const ToolPoint& p = ws.tool_points[k];
+    int d[3];
+    double w = 0;
+    for (int a = 0; a < 3; ++a) {
+      d[a] = ws.node_dof[p.node[a]];
+      w += p.lambda[a] * NodeValue(ws, d[a]);
+    }
+    const double f_on_tissue_N = p.spring_N_per_m * (p.u_m - w);
+    const double fz_on_tool_N = -f_on_tissue_N;
+    f_T_S->z() += fz_on_tool_N;
+    tau_T_S->x() += (p.y_m - tool.p_ST.y()) * fz_on_tool_N;  // r × (0, 0, f)
+    tau_T_S->y() -= (p.x_m - tool.p_ST.x()) * fz_on_tool_N;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] < 0 || p.lambda[a] == 0) continue;
+      const int node = p.node[a];
+      if (ws.contact_stamp[node] != mark) {
+        ws.contact_stamp[node] = mark;
+        ws.contact_index[node] = ws.num_contacts;
+        ws.contact_nodes[ws.num_contacts] = node;
+        ws.contact_f_N[ws.num_contacts] = 0;
+        ++ws.num_contacts;
+      }
+      ws.contact_f_N[ws.contact_index[node]] += p.lambda[a] * f_on_tissue_N;
+    }
+  }
+}
+
 // This step is now the last good state.
 void Commit(const TissueWorkspace& ws, const Eigen::Vector3d& f_T_S, const Eigen::Vector3d& tau_T_S,
             TissueStatus status, TissueState& state) {
@@ -591,12 +712,15 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   // 1. Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
   SelectMesh(model, model.def.level, model.def.mesh, tool, ws.mesh);
   const MeshSelection& mesh = ws.mesh;
+  ws.use_tool_points = model.def.tool_constraint == ToolConstraint::kPenaltyPoints &&
+                       tool.num_points >= 2 && tool.contact_radius_m == 0;
+  ws.num_tool_points = 0;
   ContactFinder finder(model, tool, ws);
-  const bool contacts_fit = finder.Run();
+  const bool contacts_fit = ws.use_tool_points ? FindToolPoints(model, tool, ws) : finder.Run();
   std::uint64_t key = 0;
   const int n = NumberFreeNodes(model, ws, &key);
   stats.unknowns = n;
-  stats.contact_nodes = ws.num_contacts;
+  stats.contact_nodes = ws.use_tool_points ? ws.num_tool_points : ws.num_contacts;
   stats.active_nodes = mesh.num_active_nodes;
   stats.triangles = mesh.num_triangles;
   stats.leaves = mesh.num_leaves;
@@ -614,12 +738,29 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   PatternEntry& entry = ws.patterns[slot];
   entry.last_used = ++ws.use_clock;
   stats.pattern_reused = !new_pattern;
-  if (!entry.values_valid || !ws.reuse_values) {
-    AssembleValues(model, mesh, entry);
-    if (ws.ic_key == key) ws.ic_valid = false;
+  const bool assembled = !entry.values_valid || !ws.reuse_values;
+  if (assembled) AssembleValues(model, mesh, entry);
+  const double* vals = entry.vals.data();
+  bool values_changed = assembled;
+  if (ws.use_tool_points) {
+    const std::uint64_t tool_hash = HashToolPoints(ws);
+    if (assembled || !entry.tool_vals_valid || entry.tool_hash != tool_hash) {
+      AssembleToolPenalty(ws, entry);
+      entry.tool_hash = tool_hash;
+      values_changed = true;
+    }
+    vals = entry.tool_vals.data();
+    AssembleToolRhs(ws, n);
+  } else {
+    if (entry.tool_vals_valid) {  // the factor was of the penalised values
+      entry.tool_vals_valid = false;
+      entry.factor_valid = false;
+      values_changed = true;
+    }
+    AssembleRhs(model, ws, n);
   }
-  AssembleRhs(model, ws, n);
-  const CsrView a{n, entry.row_ptr.data(), entry.cols.data(), entry.vals.data(), entry.diag.data()};
+  if (values_changed && ws.ic_key == key) ws.ic_valid = false;
+  const CsrView a{n, entry.row_ptr.data(), entry.cols.data(), vals, entry.diag.data()};
   const Clock::time_point t_assembled = Clock::now();
   stats.assemble_us = Microseconds(t_selected, t_assembled);
 
@@ -632,7 +773,11 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
 
   // 4. Forces, 5. commit.
   Eigen::Vector3d f_T_S, tau_T_S;
-  CalcReactions(model, tool, ws, &f_T_S, &tau_T_S);
+  if (ws.use_tool_points) {
+    CalcToolPointReactions(tool, ws, &f_T_S, &tau_T_S);
+  } else {
+    CalcReactions(model, tool, ws, &f_T_S, &tau_T_S);
+  }
   if (!f_T_S.allFinite() || !tau_T_S.allFinite()) return fail(TissueStatus::kNonFinite);
   Commit(ws, f_T_S, tau_T_S, status, state);
   const Clock::time_point t_end = Clock::now();

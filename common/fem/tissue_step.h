@@ -13,6 +13,7 @@
 #include "common/fem/multiscale_mesh.h"
 #include "common/fem/tissue_model.h"
 #include "common/fem/tool_contact.h"
+#include "common/fem/tool_points.h"
 
 namespace microdex::fem {
 
@@ -80,7 +81,12 @@ struct PatternEntry {
   std::vector<int> row_ptr;  // [max_mesh_nodes + 1]
   std::vector<int> cols;     // [kMaxRowEntries · max_mesh_nodes]
   std::vector<int> diag;     // [max_mesh_nodes]
-  std::vector<double> vals;  // [kMaxRowEntries · max_mesh_nodes]
+  std::vector<double> vals;  // [kMaxRowEntries · max_mesh_nodes] K_ff of the mesh
+  // K_ff plus the tool points' penalty (ToolConstraint::kPenaltyPoints), valid for the points
+  // whose hash is tool_hash; the factor then belongs to these values.
+  std::vector<double> tool_vals;  // [kMaxRowEntries · max_mesh_nodes]
+  std::uint64_t tool_hash = 0;
+  bool tool_vals_valid = false;
   std::vector<int> scatter;  // [9 · max_triangles] CSR slot of element entry (a, b), or −1
   std::vector<std::int32_t> dof_order;  // [max_mesh_nodes] grid node of each unknown
 };
@@ -101,6 +107,12 @@ struct TissueWorkspace {
   std::vector<double> contact_w_m;           // [max_contact_nodes] prescribed displacement U
   std::vector<double> contact_f_N;           // [max_contact_nodes]
   int num_contacts = 0;
+  // Penalty points of the tool (ToolConstraint::kPenaltyPoints), [max_contact_nodes / 3]: each
+  // reaches three nodes, whose reactions fill contact_nodes / contact_f_N after the solve.
+  std::vector<ToolPoint> tool_points;
+  int num_tool_points = 0;
+  bool use_tool_points = false;              // this step's tool is held by its points
+  std::vector<std::int32_t> contact_index;   // [num_grid_nodes] slot in contact_nodes
   std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
   std::vector<std::int32_t> row_rank;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
   std::vector<std::int32_t> slot_twin;   // [kMaxRowEntries · max_mesh_nodes] slot of (v, u)
