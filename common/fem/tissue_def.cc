@@ -78,6 +78,8 @@ void TissueDef::Validate() const {
   Require(std::isfinite(end_resolution) && end_resolution >= 0 && end_resolution <= 1e4,
           "end_resolution", "0 (off) or end-zone cells per tool length in (0, 1e4]");
   Require(end_levels >= 0 && end_levels <= 6, "end_levels", "an integer in [0, 6]");
+  Require(std::isfinite(tool_kink_factor) && tool_kink_factor >= 0.25 && tool_kink_factor <= 4,
+          "tool_kink_factor", "a factor in [0.25, 4]");
   Require(std::isfinite(tool_penalty) && tool_penalty >= 1 && tool_penalty <= 1e8, "tool_penalty",
           "a spring in units of G·t in [1, 1e8]");
   Require(std::isfinite(tool_point_spacing) && tool_point_spacing >= 0.1 &&
@@ -107,7 +109,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   const YamlSection tissue = YamlReader(path).Root().Map("tissue");
   tissue.CheckNoUnknownKeys({"name", "length_x_m", "length_y_m", "shear_modulus_Pa", "thickness_m",
                              "max_level", "level", "mesh", "grading", "end_resolution",
-                             "end_levels", "tool_constraint", "tool_penalty",
+                             "end_levels", "tool_constraint", "tool_kink_factor", "tool_penalty",
                              "tool_point_spacing", "solver", "ordering", "cg_relative_tolerance",
                              "cg_max_iterations", "max_contact_nodes", "pattern_cache_entries"});
   TissueDef def;
@@ -124,6 +126,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   def.end_levels = tissue.Int("end_levels", def.end_levels);
   def.tool_constraint =
       ReadEnum(tissue, "tool_constraint", &ParseToolConstraint, def.tool_constraint);
+  def.tool_kink_factor = tissue.FiniteDouble("tool_kink_factor", def.tool_kink_factor);
   def.tool_penalty = tissue.FiniteDouble("tool_penalty", def.tool_penalty);
   def.tool_point_spacing = tissue.FiniteDouble("tool_point_spacing", def.tool_point_spacing);
   def.solver = ReadEnum(tissue, "solver", &ParseSolverKind, def.solver);

@@ -317,9 +317,9 @@ bool FindToolPoints(const TissueModel& model, const ToolContact& tool, TissueWor
   const TissueDef& def = model.def;
   for (int k = 0; k < count; ++k) {
     ToolPoint& point = ws.tool_points[k];
-    LocateToolPoint(model, ws.mesh, point);
+    LocateToolPoint(model, ws.mesh, tool, point);
     point.spring_N_per_m = ToolPointSpring(point, def.shear_modulus_Pa, def.thickness_m,
-                                           ToolPenalty_N_per_m(model));
+                                           def.tool_kink_factor, ToolPenalty_N_per_m(model));
   }
   ws.num_tool_points = count;
   return true;
@@ -636,31 +636,23 @@ void CalcReactions(const TissueModel& model, const ToolContact& tool, TissueWork
   }
 }
 
-// The springs' forces (ToolConstraint::kPenaltyPoints): β (U − w_h) at each point on the
-// tissue, shared among its triangle's nodes by the shape functions (the nodal reactions
-// reported in contact_nodes, edge nodes left out: the clamp takes their share); their sum and
-// torque act on the tool at the points themselves.
-void CalcToolPointReactions(const ToolContact& tool, TissueWorkspace& ws,
+// Reactions of the tool points (ToolConstraint::kPenaltyPoints) at the nodes of their
+// triangles, as (3.12): at a free node the elastic reaction Σ_e K_e w, which at equilibrium
+// equals the springs' share Σ_p λ k (U − w_h) but does not amplify the solver's residual by
+// the spring stiffness; at an edge node (clamped) the springs' share. Their resultant on the
+// tool and its torque about tool.p_ST.
+void CalcToolPointReactions(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
                             Eigen::Vector3d* f_T_S, Eigen::Vector3d* tau_T_S) {
-  const std::uint32_t mark = ws.mesh.mark;
+  const MeshSelection& mesh = ws.mesh;
+  const std::uint32_t mark = mesh.mark;
   ws.num_contacts = 0;
-  *f_T_S = Eigen::Vector3d::Zero();
-  *tau_T_S = Eigen::Vector3d::Zero();
   for (int k = 0; k < ws.num_tool_points; ++k) {
     const ToolPoint& p = ws.tool_points[k];
-    int d[3];
     double w = 0;
-    for (int a = 0; a < 3; ++a) {
-      d[a] = ws.node_dof[p.node[a]];
-      w += p.lambda[a] * NodeValue(ws, d[a]);
-    }
+    for (int a = 0; a < 3; ++a) w += p.lambda[a] * NodeValue(ws, ws.node_dof[p.node[a]]);
     const double f_on_tissue_N = p.spring_N_per_m * (p.u_m - w);
-    const double fz_on_tool_N = -f_on_tissue_N;
-    f_T_S->z() += fz_on_tool_N;
-    tau_T_S->x() += (p.y_m - tool.p_ST.y()) * fz_on_tool_N;  // r × (0, 0, f)
-    tau_T_S->y() -= (p.x_m - tool.p_ST.x()) * fz_on_tool_N;
     for (int a = 0; a < 3; ++a) {
-      if (d[a] < 0 || p.lambda[a] == 0) continue;
+      if (p.lambda[a] == 0) continue;
       const int node = p.node[a];
       if (ws.contact_stamp[node] != mark) {
         ws.contact_stamp[node] = mark;
@@ -669,8 +661,29 @@ void CalcToolPointReactions(const ToolContact& tool, TissueWorkspace& ws,
         ws.contact_f_N[ws.num_contacts] = 0;
         ++ws.num_contacts;
       }
-      ws.contact_f_N[ws.contact_index[node]] += p.lambda[a] * f_on_tissue_N;
+      if (ws.node_dof[node] < 0) ws.contact_f_N[ws.contact_index[node]] += p.lambda[a] * f_on_tissue_N;
     }
+  }
+  for (int e = 0; e < mesh.num_triangles; ++e) {
+    const Triangle& t = mesh.triangles[e];
+    const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
+    const ElementMatrix* k = nullptr;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] < 0 || ws.contact_stamp[t.node[a]] != mark) continue;
+      if (k == nullptr) k = &model.element_matrices[t.level][t.shape];
+      double f = 0;
+      for (int b = 0; b < 3; ++b) f += (*k)[3 * a + b] * NodeValue(ws, d[b]);
+      ws.contact_f_N[ws.contact_index[t.node[a]]] += f;
+    }
+  }
+  *f_T_S = Eigen::Vector3d::Zero();
+  *tau_T_S = Eigen::Vector3d::Zero();
+  for (int c = 0; c < ws.num_contacts; ++c) {
+    const int node = ws.contact_nodes[c];
+    const double fz_on_tool_N = -ws.contact_f_N[c];
+    f_T_S->z() += fz_on_tool_N;
+    tau_T_S->x() += (model.NodeY_m(node) - tool.p_ST.y()) * fz_on_tool_N;  // r × (0, 0, f)
+    tau_T_S->y() -= (model.NodeX_m(node) - tool.p_ST.x()) * fz_on_tool_N;
   }
 }
 
@@ -774,7 +787,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   // 4. Forces, 5. commit.
   Eigen::Vector3d f_T_S, tau_T_S;
   if (ws.use_tool_points) {
-    CalcToolPointReactions(tool, ws, &f_T_S, &tau_T_S);
+    CalcToolPointReactions(model, tool, ws, &f_T_S, &tau_T_S);
   } else {
     CalcReactions(model, tool, ws, &f_T_S, &tau_T_S);
   }

@@ -97,7 +97,8 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
   return writer.count;
 }
 
-void LocateToolPoint(const TissueModel& model, const MeshSelection& mesh, ToolPoint& point) {
+void LocateToolPoint(const TissueModel& model, const MeshSelection& mesh, const ToolContact& tool,
+                     ToolPoint& point) {
   const int l = LeafLevelOnTool(model, mesh.zones, point.x_m, point.y_m);
   const int n = 1 << l;
   const double hx = model.CellSizeX_m(l), hy = model.CellSizeY_m(l);
@@ -139,15 +140,15 @@ void LocateToolPoint(const TissueModel& model, const MeshSelection& mesh, ToolPo
   MICRODEX_CHECK(best >= kInsideTol);
   point.kink_m = 0;
   for (int a = 0; a < 3; ++a) {
-    const double dx = model.NodeX_m(point.node[a]) - point.x_m;
-    const double dy = model.NodeY_m(point.node[a]) - point.y_m;
-    point.kink_m += point.lambda[a] * std::abs(dx * point.dir_y - dy * point.dir_x);
+    double z_m = 0;
+    point.kink_m += point.lambda[a] * ToolClosestPoint_m(tool, model.NodeX_m(point.node[a]),
+                                                         model.NodeY_m(point.node[a]), &z_m);
   }
 }
 
 double ToolPointSpring(const ToolPoint& point, double shear_modulus_Pa, double thickness_m,
-                       double cap_N_per_m) {
-  const double consistent = 2 * shear_modulus_Pa * thickness_m * point.length_m;
+                       double kink_factor, double cap_N_per_m) {
+  const double consistent = kink_factor * 2 * shear_modulus_Pa * thickness_m * point.length_m;
   return consistent < cap_N_per_m * point.kink_m ? consistent / point.kink_m : cap_N_per_m;
 }
 

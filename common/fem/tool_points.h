@@ -38,10 +38,11 @@ struct ToolPoint {
 // The spring that makes a point consistent with the kink of the field across the tool line:
 // the line load q = 2 G t s holds w = U + s|d| on both sides, whose P1 interpolant is
 // U + s·kink at the point, so a spring k = 2 G t · length / kink carries the point's share of
-// the load q·length exactly when the mesh lags the tool by the interpolation error. Capped at
-// cap_N_per_m (a point on the mesh's edges: kink → 0, w = U is then exact).
+// the load q·length exactly when the mesh lags the tool by the interpolation error; times
+// kink_factor (TissueDef::tool_kink_factor). Capped at cap_N_per_m (a point on the mesh's
+// edges: kink → 0, where w = U is exact).
 double ToolPointSpring(const ToolPoint& point, double shear_modulus_Pa, double thickness_m,
-                       double cap_N_per_m);
+                       double kink_factor, double cap_N_per_m);
 
 // The points of the tool's pressed parts (z < 0) strictly inside the domain, along each
 // segment: both ends, spacing `spacing · h` (h the cell size of `level`) along the segment and
@@ -53,6 +54,7 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
 
 // Finds the triangle of the mesh that contains (x, y) (a point on the tool: its leaf is at
 // the level LeafLevelOnTool gives) and writes its nodes and the barycentric coordinates.
-void LocateToolPoint(const TissueModel& model, const MeshSelection& mesh, ToolPoint& point);
+void LocateToolPoint(const TissueModel& model, const MeshSelection& mesh, const ToolContact& tool,
+                     ToolPoint& point);
 
 }  // namespace microdex::fem

@@ -16,8 +16,10 @@ constexpr double kSolverAgreementTol = 1e-6;  // relative, set by cg_relative_to
 
 // The multi-scale mesh gets room for the default end grading (up to two levels beyond
 // `level`; the 10 cm bars here end at level 7).
-TissueModel Model(int level, MeshKind mesh, SolverKind solver, double g_Pa = 1e4) {
+TissueModel Model(int level, MeshKind mesh, SolverKind solver, double g_Pa = 1e4,
+                  ToolConstraint constraint = ToolConstraint::kPenaltyPoints) {
   TissueDef def;
+  def.tool_constraint = constraint;
   def.max_level = mesh == MeshKind::kMultiscale ? level + 2 : level;
   def.level = level;
   def.mesh = mesh;
@@ -191,8 +193,10 @@ TEST(TissueStep, AssembledStiffnessMatchesTripletAssembly) {
 // With end grading the chain of contact nodes follows the leaves: every mesh vertex on a
 // bar that lies on a grid line is a contact node (none is left free under the tool), the
 // finer vertices near the ends included.
+// The nearest-node constraint (the thesis's): every mesh vertex under the bar is prescribed.
 TEST(TissueStep, ContactChainCoversEveryVertexUnderTheBar) {
-  const TissueModel model = Model(5, MeshKind::kMultiscale, SolverKind::kCholmod);
+  const TissueModel model =
+      Model(5, MeshKind::kMultiscale, SolverKind::kCholmod, 1e4, ToolConstraint::kNearestNodes);
   TissueWorkspace ws(model);
   TissueState state = MakeTissueState(model);
   StepTissue(model, G1Bar(kPress_m), ws, state);
@@ -318,8 +322,10 @@ TEST(TissueStep, FailuresKeepTheLastGoodState) {
   EXPECT_TRUE(s2.f_T_S.allFinite());
 }
 
+// With the nearest-node constraint the nodes under the bar hold U exactly.
 TEST(TissueStep, DisplayFieldInterpolatesTheSolution) {
-  const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kCholmod);
+  const TissueModel model =
+      Model(6, MeshKind::kMultiscale, SolverKind::kCholmod, 1e4, ToolConstraint::kNearestNodes);
   TissueWorkspace ws(model);
   TissueState state = MakeTissueState(model);
   StepTissue(model, G1Bar(kPress_m), ws, state);
