@@ -82,8 +82,7 @@ void TissueDef::Validate() const {
           "tool_kink_factor", "a factor in [0.25, 4]");
   Require(std::isfinite(tool_penalty) && tool_penalty >= 1 && tool_penalty <= 1e8, "tool_penalty",
           "a spring in units of G·t in [1, 1e8]");
-  Require(std::isfinite(tool_point_spacing) && tool_point_spacing >= 0.1 &&
-              tool_point_spacing <= 4,
+  Require(std::isfinite(tool_point_spacing) && tool_point_spacing >= 0.1 && tool_point_spacing <= 4,
           "tool_point_spacing", "a spacing in cells in [0.1, 4]");
   Require(std::isfinite(cg_relative_tolerance) && cg_relative_tolerance > 0 &&
               cg_relative_tolerance < 1,
@@ -107,11 +106,27 @@ E ReadEnum(const YamlSection& tissue, const char* key, E (*parse)(const std::str
 
 TissueDef LoadTissueDef(const std::string& path) {
   const YamlSection tissue = YamlReader(path).Root().Map("tissue");
-  tissue.CheckNoUnknownKeys({"name", "length_x_m", "length_y_m", "shear_modulus_Pa", "thickness_m",
-                             "max_level", "level", "mesh", "grading", "end_resolution",
-                             "end_levels", "tool_constraint", "tool_kink_factor", "tool_penalty",
-                             "tool_point_spacing", "solver", "ordering", "cg_relative_tolerance",
-                             "cg_max_iterations", "max_contact_nodes", "pattern_cache_entries"});
+  tissue.CheckNoUnknownKeys({"name",
+                             "length_x_m",
+                             "length_y_m",
+                             "shear_modulus_Pa",
+                             "thickness_m",
+                             "max_level",
+                             "level",
+                             "mesh",
+                             "grading",
+                             "end_resolution",
+                             "end_levels",
+                             "tool_constraint",
+                             "tool_kink_factor",
+                             "tool_penalty",
+                             "tool_point_spacing",
+                             "solver",
+                             "ordering",
+                             "cg_relative_tolerance",
+                             "cg_max_iterations",
+                             "max_contact_nodes",
+                             "pattern_cache_entries"});
   TissueDef def;
   (void)tissue.String("name", "");  // documentation only
   def.length_x_m = tissue.FiniteDouble("length_x_m", def.length_x_m);

@@ -661,7 +661,8 @@ void CalcToolPointReactions(const TissueModel& model, const ToolContact& tool, T
         ws.contact_f_N[ws.num_contacts] = 0;
         ++ws.num_contacts;
       }
-      if (ws.node_dof[node] < 0) ws.contact_f_N[ws.contact_index[node]] += p.lambda[a] * f_on_tissue_N;
+      if (ws.node_dof[node] < 0)
+        ws.contact_f_N[ws.contact_index[node]] += p.lambda[a] * f_on_tissue_N;
     }
   }
   for (int e = 0; e < mesh.num_triangles; ++e) {

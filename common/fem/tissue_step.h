@@ -111,13 +111,13 @@ struct TissueWorkspace {
   // reaches three nodes, whose reactions fill contact_nodes / contact_f_N after the solve.
   std::vector<ToolPoint> tool_points;
   int num_tool_points = 0;
-  bool use_tool_points = false;              // this step's tool is held by its points
-  std::vector<std::int32_t> contact_index;   // [num_grid_nodes] slot in contact_nodes
-  std::vector<std::int32_t> row_fill;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
-  std::vector<std::int32_t> row_rank;    // [kMaxRowEntries · max_mesh_nodes] pattern scratch
-  std::vector<std::int32_t> slot_twin;   // [kMaxRowEntries · max_mesh_nodes] slot of (v, u)
-  std::vector<int> row_count;            // [max_mesh_nodes]
-  std::vector<double> rhs, x, residual;  // [max_mesh_nodes]
+  bool use_tool_points = false;             // this step's tool is held by its points
+  std::vector<std::int32_t> contact_index;  // [num_grid_nodes] slot in contact_nodes
+  std::vector<std::int32_t> row_fill;       // [kMaxRowEntries · max_mesh_nodes] pattern scratch
+  std::vector<std::int32_t> row_rank;       // [kMaxRowEntries · max_mesh_nodes] pattern scratch
+  std::vector<std::int32_t> slot_twin;      // [kMaxRowEntries · max_mesh_nodes] slot of (v, u)
+  std::vector<int> row_count;               // [max_mesh_nodes]
+  std::vector<double> rhs, x, residual;     // [max_mesh_nodes]
   std::vector<PatternEntry> patterns;
   std::uint64_t use_clock = 0;
   std::uint64_t ic_key = 0;  // key whose IC(0)/Jacobi factor is in cg

@@ -48,8 +48,8 @@ struct PointWriter {
 
   // The points of (s0, s1] on a–b (arc lengths of a segment of planar length len), evenly
   // spaced at most `step` apart.
-  bool Stretch(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double len, double s0,
-               double s1, double step) {
+  bool Stretch(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double len, double s0, double s1,
+               double step) {
     if (!(s1 > s0)) return true;
     // The relative slack keeps the count of a stretch that is a whole number of steps stable
     // against rounding of the tool's coordinates.
@@ -69,8 +69,7 @@ struct PointWriter {
 int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
                     const ToolContact& tool, double spacing, std::span<ToolPoint> out) {
   const double h_m = std::max(model.CellSizeX_m(level), model.CellSizeY_m(level));
-  const double h_end_m =
-      std::max(model.CellSizeX_m(zones.finest), model.CellSizeY_m(zones.finest));
+  const double h_end_m = std::max(model.CellSizeX_m(zones.finest), model.CellSizeY_m(zones.finest));
   const double reach_m = model.def.grading * h_m;  // the end rule's reach at the nominal level
   PointWriter writer{model, out};
   if (tool.num_points < 2) return 0;
@@ -78,8 +77,8 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
     const Eigen::Vector3d& a = tool.p_SP[0];
     const Eigen::Vector3d& b = tool.p_SP[1];
     const double len = std::hypot(b.x() - a.x(), b.y() - a.y());
-    if (!writer.Emit(a, len > 0 ? (b.x() - a.x()) / len : 1.0, len > 0 ? (b.y() - a.y()) / len : 0.0,
-                     0.0))
+    if (!writer.Emit(a, len > 0 ? (b.x() - a.x()) / len : 1.0,
+                     len > 0 ? (b.y() - a.y()) / len : 0.0, 0.0))
       return -1;
   }
   for (int k = 0; k + 1 < tool.num_points; ++k) {
@@ -110,8 +109,8 @@ void LocateToolPoint(const TissueModel& model, const MeshSelection& mesh, const 
   // across it is finer; a centre never lies on another leaf's side).
   if (l < model.def.max_level) {
     for (int side = 0; side < 4; ++side) {
-      const int mid = CellVertex(model, l, leaf.ci, leaf.cj, kSideMidpoints[side].u,
-                                 kSideMidpoints[side].v);
+      const int mid =
+          CellVertex(model, l, leaf.ci, leaf.cj, kSideMidpoints[side].u, kSideMidpoints[side].v);
       if (mesh.IsActive(mid)) leaf.hanging_mask |= static_cast<std::uint8_t>(1u << side);
     }
   }

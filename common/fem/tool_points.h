@@ -23,12 +23,12 @@ namespace microdex::fem {
 struct ToolPoint {
   double x_m = 0;
   double y_m = 0;
-  double u_m = 0;                       // prescribed displacement (the tool's height), m
-  double dir_x = 0;                     // unit direction of the tool's segment in the plane
+  double u_m = 0;    // prescribed displacement (the tool's height), m
+  double dir_x = 0;  // unit direction of the tool's segment in the plane
   double dir_y = 0;
-  double length_m = 0;                  // the share of the tool this point stands for
-  std::array<std::int32_t, 3> node{};   // grid nodes of the containing triangle
-  std::array<double, 3> lambda{};       // barycentric coordinates of the point in it
+  double length_m = 0;                 // the share of the tool this point stands for
+  std::array<std::int32_t, 3> node{};  // grid nodes of the containing triangle
+  std::array<double, 3> lambda{};      // barycentric coordinates of the point in it
   // Σ λ_a |d_a|, d_a the distance of node a to the tool's line: how far the P1 interpolant of
   // the kinked field w = U + s|d| sits from U at the point (LocateToolPoint).
   double kink_m = 0;

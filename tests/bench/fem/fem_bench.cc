@@ -355,8 +355,7 @@ int RunFem(int argc, char** argv) {
         unknowns += ws.stats.unknowns;
       }
       moving.push_back({level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
-                        Median(us),
-                        Percentile(us, 0.99), *std::max_element(us.begin(), us.end()),
+                        Median(us), Percentile(us, 0.99), *std::max_element(us.begin(), us.end()),
                         static_cast<double>(reused) / us.size(), failed,
                         static_cast<int>(us.size()), unknowns / us.size(), Median(select),
                         Median(assemble), Median(solve), Median(us_static)});
@@ -364,9 +363,8 @@ int RunFem(int argc, char** argv) {
                    "moving L%d %-10s %-17s %-14s median %7.1f us (select %6.1f assemble %6.1f "
                    "solve %6.1f) p99 %7.1f  static %7.1f us  n=%.0f\n",
                    level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
-                   moving.back().median_us,
-                   moving.back().select_us, moving.back().assemble_us, moving.back().solve_us,
-                   moving.back().p99_us, moving.back().static_median_us,
+                   moving.back().median_us, moving.back().select_us, moving.back().assemble_us,
+                   moving.back().solve_us, moving.back().p99_us, moving.back().static_median_us,
                    moving.back().mean_unknowns);
     }
   }
@@ -471,8 +469,8 @@ int RunFem(int argc, char** argv) {
              ", \"goal_station_moving_l8_1ms_met\": " + (station_l8 ? "true" : "false");
     goals += std::string(", \"goal_off_grid_within_2pct_met\": ") +
              (contact.off_grid_within_2pct ? "true" : "false");
-    goals += std::string(", \"goal_continuity_met\": ") +
-             (contact.continuity_met ? "true" : "false");
+    goals +=
+        std::string(", \"goal_continuity_met\": ") + (contact.continuity_met ? "true" : "false");
   }
   goals += "}";
 
@@ -535,7 +533,8 @@ int RunFem(int argc, char** argv) {
                  Num(-navier_force[i].second).c_str());
   std::fprintf(out, "},\n  \"goals\": %s,\n  \"fair_comparisons\": %s,\n", goals.c_str(),
                fair.c_str());
-  std::fprintf(out, "  \"continuity\": %s,\n  \"off_grid\": %s,\n  \"tilted\": %s,\n  \"runs\": [\n",
+  std::fprintf(out,
+               "  \"continuity\": %s,\n  \"off_grid\": %s,\n  \"tilted\": %s,\n  \"runs\": [\n",
                contact.continuity.c_str(), contact.off_grid.c_str(), contact.tilted.c_str());
   for (size_t i = 0; i < runs.size(); ++i) {
     const Run& r = runs[i];
@@ -559,13 +558,14 @@ int RunFem(int argc, char** argv) {
     const Moving& m = moving[i];
     std::fprintf(out,
                  "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", "
-                 "\"ordering\": \"%s\", \"tool_constraint\": \"%s\", \"steps\": %d, \"median_us\": %s, \"p99_us\": %s, "
+                 "\"ordering\": \"%s\", \"tool_constraint\": \"%s\", \"steps\": %d, \"median_us\": "
+                 "%s, \"p99_us\": %s, "
                  "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
                  "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
                  "\"failed_steps\": %d, \"mean_unknowns\": %s}%s\n",
-                 m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(), m.steps, Num(m.median_us).c_str(),
-                 Num(m.p99_us).c_str(), Num(m.max_us).c_str(), Num(m.select_us).c_str(),
-                 Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
+                 m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(), m.steps,
+                 Num(m.median_us).c_str(), Num(m.p99_us).c_str(), Num(m.max_us).c_str(),
+                 Num(m.select_us).c_str(), Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
                  Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(), m.failed,
                  Num(m.mean_unknowns).c_str(), i + 1 < moving.size() ? "," : "");
   }

@@ -212,20 +212,18 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
     for (const Shape& s : shapes) {
       const Richardson ref = FineReference(s.tool, kFinestReference);
       for (int level = 5; level <= top; ++level) {
-        const double f = PressForce_N(ContactDef(level, MeshKind::kMultiscale,
-                                                 ToolConstraint::kPenaltyPoints,
-                                                 SolverKind::kCholmod),
-                                      s.tool);
+        const double f =
+            PressForce_N(ContactDef(level, MeshKind::kMultiscale, ToolConstraint::kPenaltyPoints,
+                                    SolverKind::kCholmod),
+                         s.tool);
         if (report.tilted.size() > 1) report.tilted += ", ";
-        report.tilted += std::string("{\"case\": \"") + s.name +
-                         "\", \"level\": " + std::to_string(level) +
-                         ", \"resultant_force_error\": " +
-                         Num(std::abs(f - ref.value_N) / ref.value_N) +
-                         ", \"reference_N\": " + Num(ref.value_N) +
-                         ", \"reference_error_estimate\": " +
-                         Num(ref.error_estimate_N / ref.value_N) +
-                         ", \"reference_error_vs_navier\": " +
-                         Num(std::abs(ref.value_N - s.navier_N) / s.navier_N) + "}";
+        report.tilted +=
+            std::string("{\"case\": \"") + s.name + "\", \"level\": " + std::to_string(level) +
+            ", \"resultant_force_error\": " + Num(std::abs(f - ref.value_N) / ref.value_N) +
+            ", \"reference_N\": " + Num(ref.value_N) +
+            ", \"reference_error_estimate\": " + Num(ref.error_estimate_N / ref.value_N) +
+            ", \"reference_error_vs_navier\": " +
+            Num(std::abs(ref.value_N - s.navier_N) / s.navier_N) + "}";
       }
       progress.Done(std::string("Richardson reference ") + s.name);
     }
@@ -284,8 +282,8 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
                  m.reference_max_step_rel, m.max_jump_over_reference[0],
                  m.max_jump_over_reference[1]);
   }
-  const double worst = std::max(motions[0].max_jump_over_reference[0],
-                                motions[1].max_jump_over_reference[0]);
+  const double worst =
+      std::max(motions[0].max_jump_over_reference[0], motions[1].max_jump_over_reference[0]);
   report.continuity_met = worst <= 1;
   report.continuity = "{\"level\": " + std::to_string(level) + ", \"solver\": \"" +
                       ToString(solver) + "\", \"max_jump_over_reference\": " + Num(worst) +
@@ -295,14 +293,13 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
   for (int motion = 0; motion < 2; ++motion) {
     const Motion& m = motions[motion];
     for (int c = 0; c < 2; ++c) {
-      report.continuity += std::string(motion + c > 0 ? ", " : "") + "{\"motion\": \"" + m.name +
-                           "\", \"tool_constraint\": \"" +
-                           (c == 0 ? "penalty_points" : "nearest_nodes") +
-                           "\", \"steps\": " + std::to_string(steps) +
-                           ", \"max_jump_over_reference\": " + Num(m.max_jump_over_reference[c]) +
-                           ", \"max_step_change_rel\": " + Num(m.max_jump_rel[c]) +
-                           ", \"reference_max_step_change_rel\": " +
-                           Num(m.reference_max_step_rel) + "}";
+      report.continuity +=
+          std::string(motion + c > 0 ? ", " : "") + "{\"motion\": \"" + m.name +
+          "\", \"tool_constraint\": \"" + (c == 0 ? "penalty_points" : "nearest_nodes") +
+          "\", \"steps\": " + std::to_string(steps) +
+          ", \"max_jump_over_reference\": " + Num(m.max_jump_over_reference[c]) +
+          ", \"max_step_change_rel\": " + Num(m.max_jump_rel[c]) +
+          ", \"reference_max_step_change_rel\": " + Num(m.reference_max_step_rel) + "}";
     }
   }
   report.continuity += "]}";

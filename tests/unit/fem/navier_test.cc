@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "common/fem/tissue_step.h"
 
@@ -120,6 +121,68 @@ TEST(Navier, EndGradedMultiscaleForceWithinTwoPercent) {
           EXPECT_GT(error, 0.03) << "y " << y_bar;
         }
       }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace microdex::fem
+
+namespace microdex::fem {
+namespace {
+
+double MultiscaleForce_N(int level, ToolConstraint constraint, const ToolContact& tool) {
+  TissueDef def;
+  def.max_level = level + 2;
+  def.level = level;
+  def.solver = SolverKind::kCholmod;
+  def.tool_constraint = constraint;
+  const TissueModel model = BuildTissueModel(def);
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  StepTissue(model, tool, ws, state);
+  EXPECT_EQ(state.status, TissueStatus::kOk);
+  return state.f_T_S.z();
+}
+
+// Bars at seeded random positions (2–14 cm long, ends and line anywhere at least 2 mm from the
+// edges, so neither on grid lines nor grid nodes): the penalty-point resultant is within 2 % of
+// Navier at levels 5–7; the nearest-node constraint (the tool snapped to the grid) is not.
+TEST(Navier, OffGridBarsWithinTwoPercentAtEveryLevelFromFive) {
+  constexpr double kMargin_m = 0.002;
+  constexpr int kBars = 6;
+  std::mt19937_64 rng(20261125);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double worst_nodes = 0;
+  for (int c = 0; c < kBars; ++c) {
+    const double length = 0.02 + 0.12 * unit(rng);
+    const double x1 = kMargin_m + (0.20 - 2 * kMargin_m - length) * unit(rng);
+    const double y1 = kMargin_m + (0.20 - 2 * kMargin_m) * unit(rng);
+    const double x2 = x1 + length;
+    const double reference = -NavierBar(StudyDomain(), x1, x2, y1, -kPress_m, 40).TotalForce_N();
+    const ToolContact bar = MakeBarTool({x1, y1, -kPress_m}, {x2, y1, -kPress_m});
+    for (int level = 5; level <= 7; ++level) {
+      const double f = MultiscaleForce_N(level, ToolConstraint::kPenaltyPoints, bar);
+      EXPECT_NEAR(f, reference, 0.02 * reference)
+          << "bar " << x1 << "–" << x2 << " at y " << y1 << ", level " << level;
+      const double nodes = MultiscaleForce_N(level, ToolConstraint::kNearestNodes, bar);
+      worst_nodes = std::max(worst_nodes, std::abs(nodes - reference) / reference);
+    }
+  }
+  EXPECT_GT(worst_nodes, 0.02);  // the positions do test what snapping gets wrong
+}
+
+// On grid lines, with ends on nodes (the study's bars), the penalty points give the answer of
+// the nearest-node constraint.
+TEST(Navier, GridAlignedBarsAgreeWithTheNearestNodeConstraint) {
+  for (const double y : {0.10, 0.025}) {
+    const ToolContact bar = MakeBarTool({0.05, y, -kPress_m}, {0.15, y, -kPress_m});
+    const double reference = -NavierBar(StudyDomain(), 0.05, 0.15, y, -kPress_m, 40).TotalForce_N();
+    for (int level = 5; level <= 6; ++level) {
+      const double points = MultiscaleForce_N(level, ToolConstraint::kPenaltyPoints, bar);
+      const double nodes = MultiscaleForce_N(level, ToolConstraint::kNearestNodes, bar);
+      EXPECT_NEAR(points, nodes, 0.005 * nodes) << "y " << y << " level " << level;
+      EXPECT_NEAR(points, reference, 0.02 * reference) << "y " << y << " level " << level;
     }
   }
 }

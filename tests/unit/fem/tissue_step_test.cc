@@ -5,6 +5,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -365,6 +366,73 @@ TEST(TissueDef, ValidateNamesTheField) {
   def = TissueDef{};
   def.shear_modulus_Pa = -1;
   EXPECT_THROW(BuildTissueModel(def), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace microdex::fem
+
+namespace microdex::fem {
+namespace {
+
+// The bar slid across one level-6 cell (off the grid lines at both ends of the slide) in 20
+// and in 40 steps: the penalty-point force is continuous, so its largest change between
+// steps halves with the step; the nearest nodes hold the force and then jump when the
+// contact row changes, by the same amount however fine the steps.
+double LargestStepChange(ToolConstraint constraint, int steps) {
+  const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kPcgIc, 1e4, constraint);
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  const double h = model.CellSizeY_m(6);
+  double previous = 0, largest = 0;
+  for (int k = 0; k <= steps; ++k) {
+    const double y = 0.1 + 0.013 * h + h * k / steps;
+    StepTissue(model, MakeBarTool({0.0501, y, -kPress_m}, {0.1503, y, -kPress_m}), ws, state);
+    EXPECT_EQ(state.status, TissueStatus::kOk);
+    if (k > 0) largest = std::max(largest, std::abs(state.f_T_S.z() - previous));
+    previous = state.f_T_S.z();
+  }
+  return largest / previous;
+}
+
+TEST(TissueStep, ForceIsContinuousUnderASubCellSlide) {
+  const double points_20 = LargestStepChange(ToolConstraint::kPenaltyPoints, 20);
+  const double points_40 = LargestStepChange(ToolConstraint::kPenaltyPoints, 40);
+  const double nodes_20 = LargestStepChange(ToolConstraint::kNearestNodes, 20);
+  const double nodes_40 = LargestStepChange(ToolConstraint::kNearestNodes, 40);
+  EXPECT_LT(points_40, 0.6 * points_20);
+  EXPECT_GT(nodes_40, 0.9 * nodes_20);
+  EXPECT_LT(points_40, 2e-3);  // 2.5 % of a cell per step
+}
+
+// A tiny move of the tool changes the force by a tiny amount (same mesh): no snapping.
+TEST(TissueStep, TinyMoveTinyForceChange) {
+  const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kCholmod);
+  const ToolContact a = MakeBarTool({0.0511, 0.1037, -kPress_m}, {0.1489, 0.1037, -kPress_m});
+  ToolContact b = a;
+  for (int k = 0; k < 2; ++k) b.p_SP[k] += Eigen::Vector3d(1e-7, 1e-7, 0);
+  const double fa = Step(model, a).force_N, fb = Step(model, b).force_N;
+  EXPECT_NE(fa, fb);                        // the force sees the move...
+  EXPECT_LT(std::abs(fa - fb), 1e-5 * fa);  // ...in proportion
+}
+
+// A bar lifted out of the tissue at one end: the force falls to zero as it rises, without
+// failures, and the step reports no contact once it is above the surface.
+TEST(TissueStep, BarLiftedOutOfTheTissue) {
+  const TissueModel model = Model(6, MeshKind::kMultiscale, SolverKind::kPcgIc);
+  TissueWorkspace ws(model);
+  TissueState state = MakeTissueState(model);
+  double previous = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= 20; ++k) {
+    const double z_left = -kPress_m + 0.1 * kPress_m * k;  // rises to +1 cm
+    StepTissue(model, MakeBarTool({0.05, 0.1031, z_left}, {0.15, 0.1031, -kPress_m + 0.0005 * k}),
+               ws, state);
+    ASSERT_TRUE(IsGood(state.status)) << k;
+    ASSERT_TRUE(state.f_T_S.allFinite());
+    EXPECT_LT(state.f_T_S.z(), previous) << k;
+    previous = state.f_T_S.z();
+  }
+  EXPECT_EQ(state.status, TissueStatus::kNoContact);
+  EXPECT_EQ(state.f_T_S.z(), 0.0);
 }
 
 }  // namespace
