@@ -541,9 +541,40 @@ void StartFromLastField(const TissueModel& model, const TissueState& state, Tiss
       ws.grid_stamp[node] = ws.field_stamp;
     }
   }
+  int missing = 0;
   for (int i = 0; i < n; ++i) {
     const int node = ws.dof_node[i];
-    ws.x[i] = warm && ws.grid_stamp[node] == ws.field_stamp ? ws.grid_w_m[node] : 0.0;
+    const bool known = warm && ws.grid_stamp[node] == ws.field_stamp;
+    ws.x[i] = known ? ws.grid_w_m[node] : 0.0;
+    ws.row_count[i] = known ? 1 : 0;  // 1: value known (row_count is free scratch here)
+    missing += known ? 0 : 1;
+  }
+  if (!warm || missing == 0) return;
+  // Nodes new to this mesh (the tool moved into finer cells, a fan gained a centre): the mean
+  // of their known neighbours, over two sweeps of the triangles, instead of 0. Edge nodes and
+  // the tool's prescribed nodes count as known.
+  const MeshSelection& mesh = ws.mesh;
+  for (int sweep = 0; sweep < 2; ++sweep) {
+    std::fill_n(ws.residual.begin(), n, 0.0);
+    std::fill_n(ws.order_keys.begin(), n, 0);  // neighbour counts
+    for (int e = 0; e < mesh.num_triangles; ++e) {
+      const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
+      for (int a = 0; a < 3; ++a) {
+        if (d[a] < 0 || ws.row_count[d[a]] != 0) continue;
+        for (int b = 0; b < 3; ++b) {
+          if (b == a || (d[b] >= 0 && ws.row_count[d[b]] != 1)) continue;
+          ws.residual[d[a]] += NodeValue(ws, d[b]);
+          ++ws.order_keys[d[a]];
+        }
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      if (ws.row_count[i] == 0 && ws.order_keys[i] > 0) {
+        ws.x[i] = ws.residual[i] / static_cast<double>(ws.order_keys[i]);
+        ws.row_count[i] = 2;  // filled this sweep: known from the next sweep on
+      }
+    }
+    for (int i = 0; i < n; ++i) ws.row_count[i] = ws.row_count[i] == 2 ? 1 : ws.row_count[i];
   }
 }
 
