@@ -29,6 +29,7 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
   // for; the rest stay in the ring for the next step).
   StationInput in;
   in.device = device_.Read(step);
+  const Eigen::Quaterniond q_device = CanonicalizeDeviceSample(in.device);
   int n = 0;
   const int room = state::kMaxPendingCues - state_.cues.pending_count;
   while (n < room && rings_.cues.TryPop(arrived_[n])) ++n;
@@ -44,13 +45,16 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
   }
   TickSnapshot& s = snap_;
   ProjectSnapshot(sim_, state_, s);
+  s.q_WT_device = {q_device.w(), q_device.x(), q_device.y(), q_device.z()};  // as stepped
   s.tick_start_ns = tick_start_ns;
   s.stamp_ns = stamp_ns;
   s.period_ns = period_ns;
   s.overrun = overrun ? 1 : 0;
   s.has_state_hash = config_.hash_period_steps > 0 &&
                      step % static_cast<std::uint64_t>(config_.hash_period_steps) == 0;
-  s.state_hash = s.has_state_hash ? state::CalcStateHash(state_) : 0;
+  // Every step (a few µs for the largest state): the recording checks each one.
+  s.step_hash = state::CalcStateHash(state_);
+  s.state_hash = s.has_state_hash ? s.step_hash : 0;
   while (!rings_.snapshots.TryPush(s)) {
     if (!config_.wait_for_ring) {
       ring_dropped_.fetch_add(1, std::memory_order_relaxed);

@@ -32,6 +32,7 @@ SceneRunResult RunSceneWithTrainee(const scene::SceneModel& scene, const SimTrai
   while (state.step < max_steps && state.score.outcome == 0) {
     StationInput in;
     in.device = device.Read(state.step);
+    CanonicalizeDeviceSample(in.device);
     StepStation(sim, in, state);
     device.WriteForce(state.tool.f_T_W);
     for (std::size_t i = 0; i < sim.module_count(); ++i)

@@ -104,6 +104,7 @@ struct TickSnapshot {
   std::uint32_t force_warnings = 0;  // running count of non-finite forces replaced by zero
   std::uint64_t state_hash = 0;      // CalcStateHash after this step, when has_state_hash
   std::uint8_t has_state_hash = 0;
+  std::uint64_t step_hash = 0;  // CalcStateHash after this step, every step (DeviceInput)
   state::ScoreState score;
 };
 

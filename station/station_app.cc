@@ -186,6 +186,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   pc.trainee = o.trainee;
   pc.device = o.device;
   pc.skill = o.skill;
+  pc.seed = o.seed;
   pc.mirror_rate_hz = o.mirror_rate_hz;
   StationPublisher publisher(pc, o.dds, scene, rings, loop);
 

@@ -158,6 +158,7 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   info.mirror_rate_hz = config_.mirror_rate_hz;
   info.skill = config_.skill;
   info.device = config_.device;
+  info.seed = config_.seed;
   net::ToMsg(info, w_->info_msg);
   w_->info_handle = w_->info->register_instance(&w_->info_msg);
   w_->info->write(&w_->info_msg, w_->info_handle);
@@ -257,6 +258,7 @@ void StationPublisher::Drain() {
     w_->input_plain.q_WT = Q(s.q_WT_device);
     w_->input_plain.gripper = s.gripper;
     w_->input_plain.buttons = s.buttons;
+    w_->input_plain.state_hash = s.step_hash;
     net::ToMsg(w_->input_plain, w_->input_msg);
     if (w_->input->write(&w_->input_msg)) {
       ++totals_.input_published;

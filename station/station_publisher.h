@@ -39,6 +39,7 @@ struct PublisherConfig {
   std::string trainee = "simulated";
   std::string device = "sim";
   double skill = -1;
+  std::uint64_t seed = 1;  // the simulation's seed (StationInfo)
   double mirror_rate_hz = 60;
   double telemetry_rate_hz = 10;
   double score_period_s = 0.5;  // live scores at 2 Hz

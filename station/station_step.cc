@@ -325,6 +325,22 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
   ++s.step;
 }
 
+Eigen::Quaterniond CanonicalizeDeviceSample(DeviceSample& d) {
+  const Eigen::Quaterniond q(d.X_WT.linear());
+  d.X_WT.linear() = q.toRotationMatrix();
+  return q;
+}
+
+DeviceSample DeviceSampleFromRecord(const Eigen::Vector3d& p_WT, const Eigen::Quaterniond& q_WT,
+                                    double gripper, std::uint32_t buttons) {
+  DeviceSample d;
+  d.X_WT.linear() = q_WT.toRotationMatrix();
+  d.X_WT.translation() = p_WT;
+  d.gripper = gripper;
+  d.buttons = buttons;
+  return d;
+}
+
 namespace {
 
 Vec3 ToVec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }

@@ -73,6 +73,15 @@ class Simulation {
   std::vector<double> step_time_s_;
 };
 
+// The device sample as a recording keeps it: the rotation rebuilt from its quaternion
+// (w, x, y, z), which is returned. A replay that rebuilds the rotation from the recorded
+// quaternion (DeviceSampleFromRecord) then steps bit for bit alike. Called on every sample
+// before StepStation (HapticLoop::Tick, RunSceneWithTrainee).
+Eigen::Quaterniond CanonicalizeDeviceSample(DeviceSample& d);
+// The sample a recorded (p, q, gripper, buttons) stands for.
+DeviceSample DeviceSampleFromRecord(const Eigen::Vector3d& p_WT, const Eigen::Quaterniond& q_WT,
+                                    double gripper, std::uint32_t buttons);
+
 // Advances the state by one step. Never allocates, locks, logs or throws.
 void StepStation(Simulation& sim, const StationInput& in, state::StationState& state);
 

@@ -197,6 +197,7 @@ void ToMsg(const StationInfo& in, msg::StationInfo& out) {
   out.mirror_rate_hz(in.mirror_rate_hz);
   out.skill(in.skill);
   out.device(in.device);
+  out.seed(in.seed);
 }
 
 bool FromMsg(const msg::StationInfo& in, StationInfo& out, std::string* why) {
@@ -220,6 +221,7 @@ bool FromMsg(const msg::StationInfo& in, StationInfo& out, std::string* why) {
   out.mirror_rate_hz = in.mirror_rate_hz();
   out.skill = in.skill();
   out.device = S(in.device());
+  out.seed = in.seed();
   return c.ok();
 }
 
@@ -230,6 +232,7 @@ void ToMsg(const DeviceInput& in, msg::DeviceInput& out) {
   out.q_WT(Q(in.q_WT));
   out.gripper(in.gripper);
   out.buttons(in.buttons);
+  out.state_hash(in.state_hash);
 }
 
 bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
@@ -242,6 +245,7 @@ bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
   out.q_WT = Q(in.q_WT());
   out.gripper = in.gripper();
   out.buttons = in.buttons();
+  out.state_hash = in.state_hash();
   return c.ok();
 }
 

@@ -38,6 +38,7 @@ struct StationInfo {
   double mirror_rate_hz = 0;
   double skill = -1;  // simulated trainee skill 0..1; -1: a real device
   std::string device;
+  std::uint64_t seed = 0;  // the simulation's seed
 };
 
 struct DeviceInput {
@@ -46,6 +47,7 @@ struct DeviceInput {
   Eigen::Quaterniond q_WT = Eigen::Quaterniond::Identity();
   double gripper = 0;
   std::uint32_t buttons = 0;
+  std::uint64_t state_hash = 0;  // of the station's state after this step
 };
 
 struct ToolState {
