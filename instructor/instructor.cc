@@ -14,7 +14,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/base/check.h"
 #include "common/net/convert.h"
+#include "common/record/recorded_topics.h"
 #include "cue_commandPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
@@ -79,6 +81,11 @@ struct Instructor::Dds {
   dds::WaitSet waitset;
   dds::GuardCondition guard;
   std::map<std::string, std::string> instance_to_station;  // StationInfo instance → id
+  // Recording: one type support per recorded topic (record::TopicIndex order) to serialize
+  // the samples again, and one payload buffer reused for every sample.
+  std::vector<std::unique_ptr<dds::TopicDataType>> types;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload;
+  std::uint64_t record_failed = 0;
 };
 
 Instructor::Instructor(const InstructorOptions& options)
@@ -87,6 +94,29 @@ Instructor::Instructor(const InstructorOptions& options)
                  std::to_string(getpid()))
                     .substr(0, 64);
   Dds& d = *dds_;
+  if (!options_.record_file.empty()) {
+    recorder_ = std::make_unique<record::Recorder>(
+        options_.record_file,
+        std::map<std::string, std::string>{{"recorder_session", session_id_},
+                                           {"issuer", options_.issuer},
+                                           {"dds_domain", std::to_string(options_.dds.domain_id)},
+                                           {"dds_partition", options_.dds.partition}},
+        options_.recorder);
+    d.types.emplace_back(new msg::StationInfoPubSubType());
+    d.types.emplace_back(new msg::DeviceInputPubSubType());
+    d.types.emplace_back(new msg::ToolStatePubSubType());
+    d.types.emplace_back(new msg::NeedleStatePubSubType());
+    d.types.emplace_back(new msg::ThreadStatePubSubType());
+    d.types.emplace_back(new msg::TissueStatePubSubType());
+    d.types.emplace_back(new msg::TelemetryPubSubType());
+    d.types.emplace_back(new msg::CueCommandPubSubType());
+    d.types.emplace_back(new msg::TaskEventPubSubType());
+    d.types.emplace_back(new msg::ScorePubSubType());
+    for (int i = 0; i < record::kTopicCount; ++i) {
+      MICRODEX_CHECK(d.types[static_cast<std::size_t>(i)]->getName() ==
+                     record::KnownTopics()[static_cast<std::size_t>(i)].type);
+    }
+  }
   d.context = std::make_unique<net::DdsContext>(options_.dds);
   d.info = d.context->CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic);
   d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
@@ -189,6 +219,7 @@ void Instructor::HandleStationInfo() {
   msg::StationInfo m;
   dds::SampleInfo si;
   while (dds_->info->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (si.valid_data) Record(static_cast<int>(record::TopicIndex::kStationInfo), m, &si);
     const std::int64_t now = MonotonicNowNs();
     std::lock_guard<std::mutex> lock(mutex_);
     if (si.valid_data) {
@@ -232,6 +263,32 @@ void Instructor::HandleLiveliness() {
   MarkLost(ViewFor(it->second), LossSignal::kLiveliness, MonotonicNowNs());
 }
 
+template <class Msg>
+void Instructor::Record(int topic, Msg& m, const void* sample_info) {
+  if (!recorder_) return;
+  const auto& si = *static_cast<const dds::SampleInfo*>(sample_info);
+  Dds& d = *dds_;
+  dds::TopicDataType& type = *d.types[static_cast<std::size_t>(topic)];
+  const std::uint32_t size = type.getSerializedSizeProvider(&m)();
+  if (d.payload.max_size < size) d.payload.reserve(size);
+  d.payload.length = 0;
+  d.payload.pos = 0;
+  if (!type.serialize(&m, &d.payload)) {
+    ++d.record_failed;
+    return;
+  }
+  record::RecordedMessage r;
+  r.topic = topic;
+  r.station = m.station_id();
+  r.session = m.session_id();
+  r.receive_ns = RealtimeNowNs();
+  r.source_ns = si.source_timestamp.to_ns();
+  r.sequence = si.sample_identity.sequence_number().to64long();
+  r.step = m.step();
+  r.cdr.assign(d.payload.data, d.payload.data + d.payload.length);
+  recorder_->Push(std::move(r));
+}
+
 template <class Msg, class Plain>
 void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, const char* topic) {
   auto* reader = static_cast<dds::DataReader*>(reader_ptr);
@@ -239,6 +296,7 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
   dds::SampleInfo si;
   while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
     if (!si.valid_data) continue;
+    Record(record::FindTopic(reader->get_topicdescription()->get_name()), m, &si);
     Plain p;
     if (!net::FromMsg(m, p)) continue;
     const std::int64_t now = MonotonicNowNs();
@@ -265,6 +323,7 @@ void Instructor::HandleInputs() {
   dds::SampleInfo si;
   net::DeviceInput p;
   while (dds_->input->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (si.valid_data) Record(static_cast<int>(record::TopicIndex::kDeviceInput), m, &si);
     if (!si.valid_data || !net::FromMsg(m, p)) continue;
     std::lock_guard<std::mutex> lock(mutex_);
     StationView& v = ViewFor(p.header.station_id);
@@ -283,6 +342,7 @@ void Instructor::HandleEvents() {
   msg::TaskEvent m;
   dds::SampleInfo si;
   while (dds_->events->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (si.valid_data) Record(static_cast<int>(record::TopicIndex::kTaskEvent), m, &si);
     net::TaskEvent e;
     if (!si.valid_data || !net::FromMsg(m, e)) continue;
     std::lock_guard<std::mutex> lock(mutex_);
@@ -307,6 +367,14 @@ void Instructor::SendQueuedCues() {
   for (const auto& c : cues) {
     net::ToMsg(c, m);
     dds_->cue->write(&m);
+    // The cue as sent (receive and source time: when it was written; sequence: its cue id).
+    dds::SampleInfo si;
+    si.source_timestamp =
+        eprosima::fastrtps::Time_t(static_cast<std::int32_t>(c.header.stamp_ns / 1'000'000'000),
+                                   static_cast<std::uint32_t>(c.header.stamp_ns % 1'000'000'000));
+    si.sample_identity.sequence_number(
+        eprosima::fastrtps::rtps::SequenceNumber_t(static_cast<std::uint64_t>(c.cue_id)));
+    Record(static_cast<int>(record::TopicIndex::kCueCommand), m, &si);
   }
 }
 
@@ -327,6 +395,15 @@ std::uint64_t Instructor::SendCue(const std::string& station_id, cues::CueKind k
   }
   dds_->guard.set_trigger_value(true);
   return c.cue_id;
+}
+
+std::optional<record::RecorderStats> Instructor::RecorderStats() const {
+  if (!recorder_) return std::nullopt;
+  return recorder_->stats();
+}
+
+void Instructor::FlushRecording() {
+  if (recorder_) recorder_->Flush();
 }
 
 std::vector<StationView> Instructor::Stations() const {

@@ -22,6 +22,7 @@
 
 #include "common/net/dds_context.h"
 #include "common/net/messages.h"
+#include "common/record/recorder.h"
 
 namespace microdex::instructor {
 
@@ -29,6 +30,9 @@ struct InstructorOptions {
   net::DdsOptions dds;
   std::string issuer = "instructor";
   bool record_latency = false;  // keep state-latency samples (benchmark)
+  // Record every sample of every station, and the cues sent, to this SQLite file ("": none).
+  std::string record_file;
+  record::RecorderConfig recorder;
 };
 
 enum class Presence {
@@ -114,6 +118,11 @@ class Instructor {
 
   std::string session_id() const { return session_id_; }
 
+  // The recorder's counters (record_file only); nullopt without a recording.
+  std::optional<record::RecorderStats> RecorderStats() const;
+  // Writes what the recorder holds and waits for the commit (record_file only).
+  void FlushRecording();
+
  private:
   struct Dds;
   void Run();
@@ -126,12 +135,16 @@ class Instructor {
   void HandleScores();
   void SendQueuedCues();
   void CheckSilence();
+  // Hands the sample to the recorder (serialized again to CDR with its type); DDS thread only.
+  template <class Msg>
+  void Record(int topic, Msg& m, const void* sample_info);
   StationView& ViewFor(const std::string& station_id);
   // Marks v lost by `signal` if it is alive (mutex_ held).
   static void MarkLost(StationView& v, LossSignal signal, std::int64_t now_ns);
 
   InstructorOptions options_;
   std::string session_id_;
+  std::unique_ptr<record::Recorder> recorder_;  // before dds_: outlives the DDS thread
   std::unique_ptr<Dds> dds_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> next_cue_id_{1};

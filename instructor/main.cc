@@ -27,7 +27,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   double duration_s = 0;
   double table_period_s = 1;
   std::vector<std::string> cue_texts;
-  std::string record, security;
+  std::string security;
   CLI::App app{"microdex-instructor: discovers stations, mirrors their state, sends cues"};
   app.add_flag("--headless", headless, "text view on stdout (the GUI is not in this build)");
   app.add_option("--duration", duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
@@ -37,15 +37,16 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--table-period", table_period_s, "seconds between tables (0: only at the end)");
   app.add_option("--issuer", o.issuer, "name of this console in the cues it sends");
   microdex::net::AddDdsOptions(app, o.dds);
-  app.add_option("--record", record, "(not available in this build)");
+  app.add_option("--record", o.record_file,
+                 "record the session (every station's topics, the cues sent) to this new SQLite "
+                 "file; see microdex-replay");
   app.add_option("--security", security, "(not available in this build)");
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-instructor")) {
     return *status;
   }
-  if (!record.empty() || !security.empty()) {
-    std::fprintf(stderr, "microdex-instructor: %s: not available in this build yet\n",
-                 record.empty() ? "--security" : "--record");
+  if (!security.empty()) {
+    std::fprintf(stderr, "microdex-instructor: --security: not available in this build yet\n");
     return 2;
   }
   if (!headless) {
@@ -123,6 +124,19 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
       std::printf("score %s: %.1f%s (contact/fault %.2f s in %u episodes%s, tremor %.1f um)\n",
                   v.info.header.station_id.c_str(), s.score, s.is_final ? " final" : "",
                   s.time_in_contact_s, s.contacts, clearance, s.tremor_rms_m * 1e6);
+    }
+    if (const auto rs = console.RecorderStats()) {
+      console.FlushRecording();
+      const auto r = *console.RecorderStats();
+      std::printf("recorded %llu samples to %s (%llu dropped%s%s)\n",
+                  static_cast<unsigned long long>(r.written), o.record_file.c_str(),
+                  static_cast<unsigned long long>(r.dropped),
+                  r.error.empty() ? "" : "; error: ", r.error.c_str());
+      if (!r.error.empty()) {
+        std::fflush(stdout);
+        std::fprintf(stderr, "microdex-instructor: %s\n", r.error.c_str());
+        return 2;
+      }
     }
     std::fflush(stdout);
   } catch (const std::exception& e) {

@@ -1,0 +1,231 @@
+// microdex-replay: replays a recorded session over DDS, re-simulates it and checks its state
+// hashes, or exports it (README.md in this folder, "Replay").
+
+#include <termios.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include "common/net/app_cli.h"
+#include "instructor/replay_export.h"
+#include "instructor/replay_player.h"
+#include "instructor/replay_resim.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+// The terminal in raw mode while it is alive (keys without Enter), restored after.
+class RawTerminal {
+ public:
+  RawTerminal() {
+    if (!isatty(STDIN_FILENO) || tcgetattr(STDIN_FILENO, &saved_) != 0) return;
+    termios raw = saved_;
+    raw.c_lflag &= ~static_cast<tcflag_t>(ICANON | ECHO);
+    raw.c_cc[VMIN] = 0;
+    raw.c_cc[VTIME] = 1;  // read() returns after 0.1 s without a key
+    active_ = tcsetattr(STDIN_FILENO, TCSANOW, &raw) == 0;
+  }
+  ~RawTerminal() {
+    if (active_) tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
+  }
+  RawTerminal(const RawTerminal&) = delete;
+  RawTerminal& operator=(const RawTerminal&) = delete;
+  bool active() const { return active_; }
+
+ private:
+  termios saved_{};
+  bool active_ = false;
+};
+
+// Prints "PROGRAM: first problem (and N more)" and returns 2, or 0 without problems.
+int ReportProblems(const microdex::record::SessionReader& reader) {
+  const auto& p = reader.problems();
+  if (p.empty()) return 0;
+  if (p.size() == 1) {
+    std::fprintf(stderr, "microdex-replay: %s\n", p[0].c_str());
+  } else {
+    std::fprintf(stderr, "microdex-replay: %s (and %zu more problems)\n", p[0].c_str(),
+                 p.size() - 1);
+  }
+  return 2;
+}
+
+}  // namespace
+
+// Errors are caught around parsing and the run; what could escape is an allocation failure
+// while setting up, which ends the process as it should.
+int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
+  const microdex::net::StopSignals stop_signals;
+  using namespace microdex;
+  std::string file;
+  double speed = 1;
+  std::optional<double> from_s, to_s;
+  bool resimulate = false;
+  std::string export_dir, summary_file, scene_dir;
+  net::DdsOptions dds;
+  dds.profile_file = net::DefaultDdsProfileFile();
+  dds.participant_name = "microdex-replay";
+  CLI::App app{
+      "microdex-replay: replays a recorded session (microdex-instructor --record) over DDS, "
+      "re-simulates it and checks every state hash, or exports it"};
+  app.add_option("file", file, "the recording (SQLite)")->required();
+  app.add_option("--speed", speed, "replay speed (1: real time; 4: four times faster)");
+  app.add_option("--from", from_s, "start this many seconds into the session");
+  app.add_option("--to", to_s, "stop this many seconds into the session");
+  app.add_flag("--resimulate", resimulate,
+               "re-run every station from its scene, seed and recorded inputs and compare the "
+               "state hash of every step; exit 0 when all match, 1 naming the station and the "
+               "first divergent step");
+  app.add_option("--scene-dir", scene_dir,
+                 "--resimulate: folder to look for a scene whose recorded path does not exist");
+  app.add_option("--export-csv", export_dir, "write one CSV per topic into this folder");
+  app.add_option("--summary", summary_file, "write the session summary (Markdown) to this file");
+  net::AddDdsOptions(app, dds);
+  if (const std::optional<int> status = net::ParseCommandLine(app, argc, argv, "microdex-replay")) {
+    return *status;
+  }
+  if (!(speed > 0) || speed > 1024) {
+    std::fprintf(stderr, "microdex-replay: --speed: expected 0 < X <= 1024\n");
+    return 2;
+  }
+  if ((from_s && !(*from_s >= 0)) || (to_s && !(*to_s >= 0)) ||
+      (from_s && to_s && *to_s < *from_s)) {
+    std::fprintf(stderr, "microdex-replay: --from/--to: expected 0 <= from <= to (seconds)\n");
+    return 2;
+  }
+  stop_signals.Watch(g_stop);
+  try {
+    record::SessionReader reader(file);
+    if (resimulate) {
+      instructor::ResimOptions ro;
+      ro.scene_dir = scene_dir;
+      const bool tty = isatty(STDERR_FILENO) != 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      if (tty) {
+        ro.progress = [&](const std::string& station, std::uint64_t done, std::uint64_t all) {
+          const double el =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          const double eta = done > 0 && all > done
+                                 ? el / static_cast<double>(done) * static_cast<double>(all - done)
+                                 : 0;
+          std::fprintf(stderr, "\r%s: %llu/%llu steps, ETA %.0f s   ", station.c_str(),
+                       static_cast<unsigned long long>(done), static_cast<unsigned long long>(all),
+                       eta);
+        };
+      }
+      const auto results = instructor::Resimulate(reader, ro);
+      if (tty) std::fprintf(stderr, "\r%60s\r", "");
+      int status = 0;
+      for (const auto& r : results) {
+        std::printf("%s\n", instructor::FormatResimResult(r).c_str());
+        if (r.diverged) status = 1;
+      }
+      std::fflush(stdout);
+      if (results.empty()) {
+        std::fprintf(stderr, "microdex-replay: %s: no station to re-simulate\n", file.c_str());
+        return 2;
+      }
+      if (status != 0) {
+        for (const auto& r : results) {
+          if (r.diverged) {
+            std::fprintf(stderr, "microdex-replay: %s: station %s diverges at step %llu\n",
+                         file.c_str(), r.station.c_str(),
+                         static_cast<unsigned long long>(r.divergent_step));
+            return 1;
+          }
+        }
+      }
+      for (const auto& r : results) {
+        if (!r.problem.empty()) {
+          std::fprintf(stderr, "microdex-replay: %s: station %s: %s\n", file.c_str(),
+                       r.station.c_str(), r.problem.c_str());
+          return 2;
+        }
+      }
+      return ReportProblems(reader);
+    }
+    if (!export_dir.empty() || !summary_file.empty()) {
+      if (!export_dir.empty()) {
+        const std::size_t rows = instructor::ExportCsv(reader, export_dir);
+        std::printf("%zu rows written to %s/\n", rows, export_dir.c_str());
+      }
+      if (!summary_file.empty()) {
+        std::ofstream f(summary_file);
+        f << instructor::SessionSummaryMarkdown(reader);
+        if (!f) throw std::runtime_error(summary_file + ": cannot write");
+        std::printf("summary written to %s\n", summary_file.c_str());
+      }
+      std::fflush(stdout);
+      return ReportProblems(reader);
+    }
+    if (std::string why = dds.Validate(); !why.empty()) {
+      std::fprintf(stderr, "microdex-replay: --%s\n", why.c_str());
+      return 2;
+    }
+    // Replay over DDS.
+    const auto [first_ns, last_ns] = reader.TimeRange();
+    const std::int64_t start_ns =
+        first_ns + (from_s ? static_cast<std::int64_t>(*from_s * 1e9) : 0);
+    instructor::PlayerClock clock(start_ns, speed);
+    instructor::PlayOptions po;
+    po.speed = speed;
+    po.from_s = from_s;
+    po.to_s = to_s;
+    std::printf(
+        "replaying %s: %.1f s at %gx on domain %d (keys: space pause, n step 0.1 s, "
+        "+/- speed, q quit)\n",
+        file.c_str(), static_cast<double>(last_ns - first_ns) * 1e-9, speed, dds.domain_id);
+    std::fflush(stdout);
+    std::atomic<bool> done{false};
+    std::thread keys([&] {
+      RawTerminal term;
+      if (!term.active()) return;
+      while (!done.load() && !g_stop.load()) {
+        char c = 0;
+        if (read(STDIN_FILENO, &c, 1) != 1) continue;
+        if (c == ' ') {
+          clock.TogglePause();
+          std::printf("%s\n", clock.paused() ? "paused" : "playing");
+        } else if (c == 'n') {
+          clock.Step(100'000'000);
+        } else if (c == '+') {
+          clock.SetSpeed(clock.speed() * 2);
+          std::printf("speed %gx\n", clock.speed());
+        } else if (c == '-') {
+          clock.SetSpeed(clock.speed() / 2);
+          std::printf("speed %gx\n", clock.speed());
+        } else if (c == 'q') {
+          g_stop = true;
+        }
+        std::fflush(stdout);
+      }
+    });
+    instructor::PlayStats stats;
+    try {
+      stats = instructor::Play(reader, dds, po, clock, g_stop);
+    } catch (...) {
+      done = true;
+      keys.join();
+      throw;
+    }
+    done = true;
+    keys.join();
+    std::printf("replayed %llu samples, %.1f s of the session\n",
+                static_cast<unsigned long long>(stats.published), stats.session_s);
+    std::fflush(stdout);
+    if (stats.undecodable > 0) {
+      std::fprintf(stderr, "microdex-replay: %s: %llu samples do not decode (skipped)\n",
+                   file.c_str(), static_cast<unsigned long long>(stats.undecodable));
+      return 2;
+    }
+    return ReportProblems(reader);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-replay: %s\n", e.what());
+    return 2;
+  }
+}

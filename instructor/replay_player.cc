@@ -1,0 +1,220 @@
+#include "instructor/replay_player.h"
+
+#include <time.h>
+
+#include <algorithm>
+#include <map>
+#include <thread>
+
+#include "common/record/recorded_topics.h"
+#include "cue_commandPubSubTypes.h"
+#include "device_inputPubSubTypes.h"
+#include "instructor/recorded_sample.h"
+#include "needle_statePubSubTypes.h"
+#include "scorePubSubTypes.h"
+#include "station_infoPubSubTypes.h"
+#include "task_eventPubSubTypes.h"
+#include "telemetryPubSubTypes.h"
+#include "thread_statePubSubTypes.h"
+#include "tissue_statePubSubTypes.h"
+#include "tool_statePubSubTypes.h"
+
+namespace microdex::instructor {
+namespace {
+
+namespace dds = eprosima::fastdds::dds;
+using record::TopicIndex;
+
+std::int64_t MonoNowNs() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// One writer per recorded topic; Publish decodes a recorded sample and writes it.
+class Publishers {
+ public:
+  explicit Publishers(net::DdsContext& context) {
+    net::DdsContext& dds = context;
+    info_ = dds.CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+    writers_[TopicIndex::kStationInfo] = info_;
+    writers_[TopicIndex::kDeviceInput] =
+        dds.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+    writers_[TopicIndex::kToolState] =
+        dds.CreateWriter<msg::ToolStatePubSubType>(net::kToolStateTopic);
+    writers_[TopicIndex::kNeedleState] =
+        dds.CreateWriter<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
+    writers_[TopicIndex::kThreadState] =
+        dds.CreateWriter<msg::ThreadStatePubSubType>(net::kThreadStateTopic);
+    writers_[TopicIndex::kTissueState] =
+        dds.CreateWriter<msg::TissueStatePubSubType>(net::kTissueStateTopic);
+    writers_[TopicIndex::kTelemetry] =
+        dds.CreateWriter<msg::TelemetryPubSubType>(net::kTelemetryTopic);
+    writers_[TopicIndex::kCueCommand] =
+        dds.CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
+    writers_[TopicIndex::kTaskEvent] =
+        dds.CreateWriter<msg::TaskEventPubSubType>(net::kTaskEventTopic);
+    writers_[TopicIndex::kScore] = dds.CreateWriter<msg::ScorePubSubType>(net::kScoreTopic);
+  }
+
+  // False when the bytes do not decode.
+  bool Publish(const record::MessageView& m) {
+    switch (static_cast<TopicIndex>(m.topic)) {
+      case TopicIndex::kStationInfo: {
+        msg::StationInfo s;
+        if (!DecodeSample<msg::StationInfoPubSubType>(m.cdr, s)) return false;
+        info_->write(&s);
+        stations_[s.station_id().to_string()] = s;
+        return true;
+      }
+      case TopicIndex::kDeviceInput:
+        return Write<msg::DeviceInputPubSubType, msg::DeviceInput>(m);
+      case TopicIndex::kToolState:
+        return Write<msg::ToolStatePubSubType, msg::ToolState>(m);
+      case TopicIndex::kNeedleState:
+        return Write<msg::NeedleStatePubSubType, msg::NeedleState>(m);
+      case TopicIndex::kThreadState:
+        return Write<msg::ThreadStatePubSubType, msg::ThreadState>(m);
+      case TopicIndex::kTissueState:
+        return Write<msg::TissueStatePubSubType, msg::TissueState>(m);
+      case TopicIndex::kTelemetry:
+        return Write<msg::TelemetryPubSubType, msg::Telemetry>(m);
+      case TopicIndex::kCueCommand:
+        return Write<msg::CueCommandPubSubType, msg::CueCommand>(m);
+      case TopicIndex::kTaskEvent:
+        return Write<msg::TaskEventPubSubType, msg::TaskEvent>(m);
+      case TopicIndex::kScore:
+        return Write<msg::ScorePubSubType, msg::Score>(m);
+    }
+    return false;
+  }
+
+  // The replayed stations leave: their StationInfo instances are disposed.
+  void DisposeStations() {
+    for (auto& [id, s] : stations_) info_->dispose(&s, info_->lookup_instance(&s));
+  }
+
+ private:
+  template <class PubSubType, class Msg>
+  bool Write(const record::MessageView& m) {
+    Msg s;
+    if (!DecodeSample<PubSubType>(m.cdr, s)) return false;
+    writers_[static_cast<TopicIndex>(m.topic)]->write(&s);
+    return true;
+  }
+
+  dds::DataWriter* info_ = nullptr;
+  std::map<TopicIndex, dds::DataWriter*> writers_;
+  std::map<std::string, msg::StationInfo> stations_;
+};
+
+}  // namespace
+
+PlayerClock::PlayerClock(std::int64_t session_start_ns, double speed)
+    : anchor_session_ns_(session_start_ns),
+      anchor_wall_ns_(MonoNowNs()),
+      speed_(std::clamp(speed, 1.0 / 64, 1024.0)) {}
+
+std::int64_t PlayerClock::SessionAtLocked(std::int64_t wall_ns) const {
+  if (paused_) return anchor_session_ns_;
+  return anchor_session_ns_ +
+         static_cast<std::int64_t>(static_cast<double>(wall_ns - anchor_wall_ns_) * speed_);
+}
+
+std::int64_t PlayerClock::SessionNowNs() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return SessionAtLocked(MonoNowNs());
+}
+
+std::optional<std::int64_t> PlayerClock::WallTimeOf(std::int64_t session_ns) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (paused_) {
+    if (session_ns <= anchor_session_ns_) return MonoNowNs();
+    return std::nullopt;
+  }
+  return anchor_wall_ns_ +
+         static_cast<std::int64_t>(static_cast<double>(session_ns - anchor_session_ns_) / speed_);
+}
+
+void PlayerClock::SetSpeed(double speed) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::int64_t now = MonoNowNs();
+  anchor_session_ns_ = SessionAtLocked(now);
+  anchor_wall_ns_ = now;
+  speed_ = std::clamp(speed, 1.0 / 64, 1024.0);
+}
+
+double PlayerClock::speed() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return speed_;
+}
+
+void PlayerClock::TogglePause() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::int64_t now = MonoNowNs();
+  anchor_session_ns_ = SessionAtLocked(now);
+  anchor_wall_ns_ = now;
+  paused_ = !paused_;
+}
+
+bool PlayerClock::paused() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return paused_;
+}
+
+void PlayerClock::Step(std::int64_t dt_ns) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (paused_) anchor_session_ns_ += dt_ns;
+}
+
+PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const PlayOptions& o,
+               PlayerClock& clock, const std::atomic<bool>& stop) {
+  const auto [first_ns, last_ns] = reader.TimeRange();
+  const std::int64_t from_ns =
+      first_ns + (o.from_s ? static_cast<std::int64_t>(*o.from_s * 1e9) : 0);
+  const std::int64_t to_ns = o.to_s ? first_ns + static_cast<std::int64_t>(*o.to_s * 1e9) : last_ns;
+  net::DdsContext context(dds);
+  Publishers pub(context);
+  PlayStats stats;
+  // A replay that starts later than the beginning still announces every station first: the
+  // latest StationInfo of each before `from`.
+  if (from_ns > first_ns) {
+    record::MessageFilter f;
+    f.topic = static_cast<int>(TopicIndex::kStationInfo);
+    f.to_ns = from_ns;
+    reader.ForEach(f, [&](const record::MessageView& m) {
+      if (pub.Publish(m)) ++stats.published;
+      return true;
+    });
+  }
+  record::MessageFilter f;
+  f.from_ns = from_ns;
+  f.to_ns = to_ns;
+  std::int64_t reached = from_ns;
+  reader.ForEach(f, [&](const record::MessageView& m) {
+    if (m.topic == static_cast<int>(TopicIndex::kCueCommand) && !o.republish_cues) return true;
+    // Wait until the clock reaches the message (sleeping in slices, so pause and stop work).
+    for (;;) {
+      if (stop.load()) return false;
+      const std::optional<std::int64_t> wall = clock.WallTimeOf(m.receive_ns);
+      const std::int64_t now = MonoNowNs();
+      if (wall && *wall <= now) break;
+      const std::int64_t wait = wall ? std::min<std::int64_t>(*wall - now, 20'000'000) : 20'000'000;
+      std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
+    }
+    if (pub.Publish(m)) {
+      ++stats.published;
+    } else {
+      ++stats.undecodable;
+    }
+    reached = m.receive_ns;
+    return true;
+  });
+  stats.session_s = static_cast<double>(reached - from_ns) * 1e-9;
+  pub.DisposeStations();
+  // Let reliable samples reach the readers before the participant goes.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  return stats;
+}
+
+}  // namespace microdex::instructor

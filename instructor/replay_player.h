@@ -1,0 +1,59 @@
+#pragma once
+// Republishes a recorded session over DDS, paced by the recorded receive times, so that an
+// instructor console mirrors it as if it were live. Pacing goes through one PlayerClock (play,
+// pause, speed, step), which the terminal keys and the tests drive.
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "common/net/dds_context.h"
+#include "common/record/session_reader.h"
+
+namespace microdex::instructor {
+
+// Session time (recorded receive time, ns) against wall time: playing at a speed, or paused.
+// Thread-safe: the keys change it from another thread than the player's.
+class PlayerClock {
+ public:
+  PlayerClock(std::int64_t session_start_ns, double speed);
+  // The session time reached now.
+  std::int64_t SessionNowNs() const;
+  // Wall time (monotonic) at which session time t is reached; nullopt while paused.
+  std::optional<std::int64_t> WallTimeOf(std::int64_t session_ns) const;
+  void SetSpeed(double speed);  // clamped to [1/64, 1024]
+  double speed() const;
+  void TogglePause();
+  bool paused() const;
+  // While paused: advance the session time by dt and stay paused.
+  void Step(std::int64_t dt_ns);
+
+ private:
+  std::int64_t SessionAtLocked(std::int64_t wall_ns) const;
+  mutable std::mutex mutex_;
+  std::int64_t anchor_session_ns_;
+  std::int64_t anchor_wall_ns_;
+  double speed_;
+  bool paused_ = false;
+};
+
+struct PlayOptions {
+  double speed = 1;
+  std::optional<double> from_s, to_s;  // seconds from the session's first message
+  bool republish_cues = false;         // the recorded cue commands are not sent again
+};
+
+struct PlayStats {
+  std::uint64_t published = 0;
+  std::uint64_t undecodable = 0;
+  double session_s = 0;  // session time covered
+};
+
+// Plays the recording until its end, `stop`, or to_s. Throws std::runtime_error for DDS
+// failures (profile, ...).
+PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const PlayOptions& o,
+               PlayerClock& clock, const std::atomic<bool>& stop);
+
+}  // namespace microdex::instructor
