@@ -119,7 +119,8 @@ Instructor::Instructor(const InstructorOptions& options)
   }
   d.context = std::make_unique<net::DdsContext>(options_.dds);
   d.info = d.context->CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic);
-  d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+  d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(
+      recorder_ ? net::kDeviceInputRecordTopic : net::kDeviceInputTopic);
   d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(net::kToolStateTopic);
   d.needle = d.context->CreateReader<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
   d.thread = d.context->CreateReader<msg::ThreadStatePubSubType>(net::kThreadStateTopic);

@@ -34,12 +34,15 @@ std::int64_t MonoNowNs() {
 // One writer per recorded topic; Publish decodes a recorded sample and writes it.
 class Publishers {
  public:
-  explicit Publishers(net::DdsContext& context) {
+  // `stations`: one DeviceInput writer each (the profile's writer holds one instance, as a
+  // station's does).
+  Publishers(net::DdsContext& context, const std::vector<std::string>& stations) {
     net::DdsContext& dds = context;
+    for (const auto& s : stations) {
+      inputs_[s] = dds.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+    }
     info_ = dds.CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
     writers_[TopicIndex::kStationInfo] = info_;
-    writers_[TopicIndex::kDeviceInput] =
-        dds.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
     writers_[TopicIndex::kToolState] =
         dds.CreateWriter<msg::ToolStatePubSubType>(net::kToolStateTopic);
     writers_[TopicIndex::kNeedleState] =
@@ -67,8 +70,13 @@ class Publishers {
         stations_[s.station_id().to_string()] = s;
         return true;
       }
-      case TopicIndex::kDeviceInput:
-        return Write<msg::DeviceInputPubSubType, msg::DeviceInput>(m);
+      case TopicIndex::kDeviceInput: {
+        const auto w = inputs_.find(std::string(m.station));
+        msg::DeviceInput s;
+        if (w == inputs_.end() || !DecodeSample<msg::DeviceInputPubSubType>(m.cdr, s)) return false;
+        w->second->write(&s);
+        return true;
+      }
       case TopicIndex::kToolState:
         return Write<msg::ToolStatePubSubType, msg::ToolState>(m);
       case TopicIndex::kNeedleState:
@@ -105,6 +113,7 @@ class Publishers {
 
   dds::DataWriter* info_ = nullptr;
   std::map<TopicIndex, dds::DataWriter*> writers_;
+  std::map<std::string, dds::DataWriter*> inputs_;  // by station
   std::map<std::string, msg::StationInfo> stations_;
 };
 
@@ -174,7 +183,7 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
       first_ns + (o.from_s ? static_cast<std::int64_t>(*o.from_s * 1e9) : 0);
   const std::int64_t to_ns = o.to_s ? first_ns + static_cast<std::int64_t>(*o.to_s * 1e9) : last_ns;
   net::DdsContext context(dds);
-  Publishers pub(context);
+  Publishers pub(context, reader.Stations());
   PlayStats stats;
   // A replay that starts later than the beginning still announces every station first: the
   // latest StationInfo of each before `from`.

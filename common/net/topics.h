@@ -19,6 +19,11 @@ inline constexpr TopicSpec kStationInfoTopic{"microdex/station_info", "microdex_
 inline constexpr TopicSpec kDeviceInputTopic{"microdex/device_input", "microdex_topic_keep_all",
                                              "microdex_device_input_writer",
                                              "microdex_device_input_reader"};
+// The recording instructor's DeviceInput reader: transient-local, to get each station's
+// samples from step 0 out of the writer's history (deploy/dds: the writer keeps 10 s).
+inline constexpr TopicSpec kDeviceInputRecordTopic{
+    "microdex/device_input", "microdex_topic_keep_all", "microdex_device_input_writer",
+    "microdex_device_input_record_reader"};
 // The mirrored state topics (60 Hz, the latest sample is all a mirror needs) share one QoS.
 constexpr TopicSpec MirrorTopic(const char* name) {
   return {name, "microdex_topic_keep_last_1", "microdex_mirror_writer", "microdex_mirror_reader"};
