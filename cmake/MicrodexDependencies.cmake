@@ -11,6 +11,11 @@ find_package(CLI11 REQUIRED)
 find_package(GTest REQUIRED)
 find_package(benchmark REQUIRED)
 find_package(SQLite3 REQUIRED)
+# Boost.Beast (the view pages' HTTP + WebSocket server): header-only.
+find_package(Boost 1.74 REQUIRED)
+# node + npm bundle the view pages (common/view/CMakeLists.txt).
+find_program(NODE_EXECUTABLE node REQUIRED)
+find_program(NPM_EXECUTABLE npm REQUIRED)
 
 # SuiteSparse 5 ships no CMake config: CHOLMOD is found by hand.
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)

@@ -1,0 +1,158 @@
+#include "common/view/scene_view.h"
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+
+#include "common/geometry/loop_wire.h"
+
+namespace microdex::view {
+namespace {
+
+std::string Num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  std::string out = "[";
+  out.append(Num(v.x())).append(",").append(Num(v.y())).append(",").append(Num(v.z()));
+  return out.append("]");
+}
+
+std::string Pose(const Eigen::Isometry3d& X) {
+  const Eigen::Quaterniond q(X.linear());
+  std::string out = "{\"p\":";
+  out.append(Vec(X.translation())).append(",\"q\":[").append(Num(q.w())).append(",");
+  out.append(Num(q.x())).append(",").append(Num(q.y())).append(",").append(Num(q.z()));
+  return out.append("]}");
+}
+
+// The wire's axis as a polyline: segments by their ends, arcs every 5° at most.
+std::string WirePolyline(const geometry::WireDef& wire) {
+  std::string out = "[";
+  bool first = true;
+  auto add = [&](const Eigen::Vector3d& p) {
+    if (!first) out += ',';
+    out += Vec(p);
+    first = false;
+  };
+  for (const geometry::WirePieceDef& piece : wire.pieces) {
+    if (first) add(piece.StartPoint());
+    if (piece.kind == geometry::WirePieceDef::Kind::kSegment) {
+      add(piece.p_W1);
+      continue;
+    }
+    const Eigen::Vector3d v = piece.axis_W.cross(piece.u_W);
+    const int n =
+        std::max(2, static_cast<int>(std::ceil(piece.sweep_rad / (std::numbers::pi / 36))));
+    for (int i = 1; i <= n; ++i) {
+      const double s = piece.sweep_rad * i / n;
+      add(piece.p_WO + piece.radius_m * (std::cos(s) * piece.u_W + std::sin(s) * v));
+    }
+  }
+  return out + "]";
+}
+
+// The ideal tool path (the task's), sampled: drawn faintly as the course to follow.
+std::string IdealPath(const scene::SceneModel& s) {
+  if (s.task.kind == scene::TaskKind::kTremorHold ||
+      s.task.kind == scene::TaskKind::kKnotTopology ||
+      s.task.kind == scene::TaskKind::kKnotPlacement || s.task.kind == scene::TaskKind::kGrasp) {
+    return "[]";
+  }
+  const double t_end = std::max(s.task.pass_duration_s, 1e-3);
+  std::string out = "[";
+  constexpr int kSamples = 96;
+  for (int i = 0; i <= kSamples; ++i) {
+    const Eigen::Isometry3d X = s.CalcIdealToolPose(t_end * i / kSamples);
+    if (i > 0) out += ',';
+    out += Vec(X.translation());
+  }
+  return out + "]";
+}
+
+}  // namespace
+
+std::string JsonQuote(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string SceneViewJson(const scene::SceneModel& s) {
+  std::ostringstream j;
+  j << "{\"name\":" << JsonQuote(s.name)
+    << ",\"task\":" << JsonQuote(scene::TaskKindName(s.task.kind)) << ",\"modules\":[";
+  for (std::size_t i = 0; i < s.modules.size(); ++i) {
+    j << (i ? "," : "") << JsonQuote(s.modules[i]);
+  }
+  j << "],\"microscope\":{\"magnification\":" << Num(s.microscope.magnification)
+    << ",\"look_at\":" << Vec(s.microscope.look_at_m)
+    << ",\"view_dir\":" << Vec(s.microscope.view_dir_W) << "}";
+  j << ",\"tolerance\":" << Num(s.task.tolerance_m);
+  j << ",\"path\":" << IdealPath(s);
+  j << ",\"tool_start\":" << Pose(s.CalcIdealToolPose(0));
+  if (s.HasModule("needle")) {
+    j << ",\"vessel\":{\"core_radius\":" << Num(s.vessel.core_radius_m)
+      << ",\"tube_radius\":" << Num(s.vessel.tube_radius_m)
+      << ",\"segment_angle\":" << Num(s.vessel.segment_angle_rad)
+      << ",\"pose\":" << Pose(s.vessel.X_WV) << "}";
+    j << ",\"needle\":{\"radius\":" << Num(s.needle.radius_m)
+      << ",\"sweep\":" << Num(s.needle.sweep_rad) << ",\"X_TN\":" << Pose(s.X_TN()) << "}";
+  }
+  if (s.task.kind == scene::TaskKind::kTremorHold) {
+    j << ",\"target\":{\"p\":" << Vec(s.task.target_m) << ",\"radius\":" << Num(s.task.tolerance_m)
+      << "}";
+  }
+  if (s.thread) {
+    j << ",\"thread\":{\"anchor\":" << Vec(s.thread->p_W_anchor)
+      << ",\"radius\":" << Num(s.thread->def.diameter_m / 2) << "}";
+  }
+  if (s.tissue) {
+    j << ",\"tissue\":{\"lx\":" << Num(s.tissue->def.length_x_m)
+      << ",\"ly\":" << Num(s.tissue->def.length_y_m) << ",\"pose\":" << Pose(s.tissue->X_WS)
+      << ",\"bar\":"
+      << (s.tissue->tool == scene::TissueToolKind::kBar ? Num(s.tissue->bar_length_m) : "0") << "}";
+  }
+  if (s.loop) {
+    j << ",\"wire\":{\"radius\":" << Num(s.loop->wire.radius_m)
+      << ",\"points\":" << WirePolyline(s.loop->wire) << "}";
+    j << ",\"loop\":{\"radius\":" << Num(s.loop->loop.radius_m)
+      << ",\"wire_radius\":" << Num(s.loop->loop.wire_radius_m) << "}";
+  }
+  if (s.grasp) {
+    const grasp::ShapeDef& sh = s.grasp->def.shape;
+    j << ",\"grasp\":{\"shape\":" << JsonQuote(grasp::ShapeKindName(sh.kind))
+      << ",\"size\":" << Vec(sh.box_size_m) << ",\"radius\":" << Num(sh.radius_m)
+      << ",\"length\":" << Num(sh.length_m) << ",\"p\":" << Vec(s.grasp->p_W_object)
+      << ",\"yaw\":" << Num(s.grasp->yaw_rad) << ",\"jaw_width\":" << Num(s.grasp->def.jaws.width_m)
+      << ",\"jaw_length\":" << Num(s.grasp->def.jaws.length_m)
+      << ",\"jaw_thickness\":" << Num(s.grasp->def.jaws.thickness_m)
+      << ",\"open_gap\":" << Num(s.grasp->def.jaws.open_gap_m) << "}";
+  }
+  if (s.placement) {
+    j << ",\"placement\":{\"vessel_radius\":" << Num(s.placement->vessel_radius_m)
+      << ",\"end_height\":" << Num(s.placement->end_height_m)
+      << ",\"stitches\":" << s.placement->stitches << ",\"bite\":" << Num(s.placement->bite_m)
+      << "}";
+  }
+  j << "}";
+  return j.str();
+}
+
+}  // namespace microdex::view

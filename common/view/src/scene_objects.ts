@@ -1,0 +1,346 @@
+// From a scene (the JSON of common/view/scene_view.cc) and the state frames to three.js
+// objects, shared by the station's page and the console's tiles. The objects are built once
+// per scene; apply() updates their poses and buffers in place (no geometry rebuilt per frame).
+
+import * as THREE from 'three';
+import { Frame, HAS_NEEDLE, HAS_THREAD, HAS_TISSUE, S } from './frame';
+
+export type V3 = [number, number, number];
+export type Q4 = [number, number, number, number]; // w, x, y, z
+export interface Pose { p: V3; q: Q4 }
+
+export interface SceneJson {
+  name: string;
+  task: string;
+  modules: string[];
+  microscope: { magnification: number; look_at: V3; view_dir: V3 };
+  tolerance: number;
+  path: V3[];
+  tool_start: Pose;
+  vessel?: { core_radius: number; tube_radius: number; segment_angle: number; pose: Pose };
+  needle?: { radius: number; sweep: number; X_TN: Pose };
+  target?: { p: V3; radius: number };
+  thread?: { anchor: V3; radius: number };
+  tissue?: { lx: number; ly: number; pose: Pose; bar: number };
+  wire?: { radius: number; points: V3[] };
+  loop?: { radius: number; wire_radius: number };
+  grasp?: {
+    shape: string; size: V3; radius: number; length: number; p: V3; yaw: number;
+    jaw_width: number; jaw_length: number; jaw_thickness: number; open_gap: number;
+  };
+  placement?: { vessel_radius: number; end_height: number; stitches: number; bite: number };
+}
+
+// Colours the tests look for (tests/web): the needle is drawn unlit in NEEDLE_COLOR, red in
+// contact with the wall.
+export const NEEDLE_COLOR = 0x00e5ff;
+export const CONTACT_COLOR = 0xff2020;
+export const TOOL_COLOR = 0xc8c8d0;
+
+// Level of detail: the station's full view or a console tile.
+export interface Detail {
+  radial: number; // segments around tubes
+  along: number; // segments along curves
+  tissueStride: number; // every n-th node of the tissue grid
+}
+export const HIGH_DETAIL: Detail = { radial: 16, along: 96, tissueStride: 1 };
+export const LOW_DETAIL: Detail = { radial: 6, along: 32, tissueStride: 2 };
+
+export function quat(q: ArrayLike<number>, at = 0): THREE.Quaternion {
+  // Frames and the scene JSON store (w, x, y, z); three.js takes (x, y, z, w).
+  return new THREE.Quaternion(q[at + 1], q[at + 2], q[at + 3], q[at]);
+}
+
+export function setPose(o: THREE.Object3D, p: ArrayLike<number>, pAt: number,
+                        q: ArrayLike<number>, qAt: number): void {
+  o.position.set(p[pAt], p[pAt + 1], p[pAt + 2]);
+  o.quaternion.set(q[qAt + 1], q[qAt + 2], q[qAt + 3], q[qAt]);
+}
+
+// The needle: the arc (ρ cos s, ρ sin s, 0), s in [0, sweep], as a tube in its frame N.
+export function needleCurve(radius: number, sweep: number): THREE.Curve<THREE.Vector3> {
+  return new (class extends THREE.Curve<THREE.Vector3> {
+    getPoint(t: number, target = new THREE.Vector3()): THREE.Vector3 {
+      const s = t * sweep;
+      return target.set(radius * Math.cos(s), radius * Math.sin(s), 0);
+    }
+  })();
+}
+
+// A polyline (m, world) as a curve for TubeGeometry.
+export function polylineCurve(points: V3[]): THREE.CurvePath<THREE.Vector3> {
+  const path = new THREE.CurvePath<THREE.Vector3>();
+  for (let i = 1; i < points.length; ++i) {
+    path.add(new THREE.LineCurve3(new THREE.Vector3(...points[i - 1]),
+                                  new THREE.Vector3(...points[i])));
+  }
+  return path;
+}
+
+// Index buffer of an nx × ny grid of vertices (x fastest), two triangles per cell.
+export function gridIndices(nx: number, ny: number): Uint32Array {
+  const out = new Uint32Array((nx - 1) * (ny - 1) * 6);
+  let k = 0;
+  for (let j = 0; j + 1 < ny; ++j) {
+    for (let i = 0; i + 1 < nx; ++i) {
+      const a = j * nx + i;
+      out[k++] = a; out[k++] = a + 1; out[k++] = a + nx;
+      out[k++] = a + 1; out[k++] = a + nx + 1; out[k++] = a + nx;
+    }
+  }
+  return out;
+}
+
+// The tissue grid's vertex heights from the field, sub-sampled by `stride`: writes z of every
+// kept node into `positions` (x, y, z per vertex). Returns the kept grid's size.
+export function sampleTissue(w: Float32Array, nx: number, ny: number, stride: number,
+                             lx: number, ly: number, positions: Float32Array | null):
+    { nx: number; ny: number } {
+  const kx = Math.floor((nx - 1) / stride) + 1;
+  const ky = Math.floor((ny - 1) / stride) + 1;
+  if (positions) {
+    let v = 0;
+    for (let j = 0; j < ky; ++j) {
+      for (let i = 0; i < kx; ++i) {
+        const gi = i * stride;
+        const gj = j * stride;
+        positions[v++] = (gi / (nx - 1)) * lx;
+        positions[v++] = (gj / (ny - 1)) * ly;
+        positions[v++] = w[gj * nx + gi];
+      }
+    }
+  }
+  return { nx: kx, ny: ky };
+}
+
+function material(color: number, opts: THREE.MeshStandardMaterialParameters = {}):
+    THREE.MeshStandardMaterial {
+  return new THREE.MeshStandardMaterial({ color, roughness: 0.55, metalness: 0.1, ...opts });
+}
+
+// One station's scene as three.js objects.
+export class SceneView {
+  readonly root = new THREE.Group();
+  readonly tool = new THREE.Group();
+  needle: THREE.Mesh | null = null;
+  needleMaterial: THREE.MeshBasicMaterial | null = null;
+  thread: THREE.Line | null = null;
+  tissue: THREE.Mesh | null = null;
+  private tissueKey = '';
+  private shadowDot: THREE.Mesh;
+  private floorZ: number;
+  lastFrame: Frame | null = null;
+
+  constructor(readonly scene: SceneJson, readonly detail: Detail = HIGH_DETAIL) {
+    const d = detail;
+    const scale = sceneScale(scene);
+    this.floorZ = floorHeight(scene);
+    // Table: a dark plane under everything (a depth cue with the tool's shadow dot).
+    const table = new THREE.Mesh(new THREE.PlaneGeometry(scale * 12, scale * 12),
+                                 material(0x2a3036, { roughness: 0.9 }));
+    table.position.set(scene.microscope.look_at[0], scene.microscope.look_at[1], this.floorZ);
+    this.root.add(table);
+
+    if (scene.vessel) {
+      const v = scene.vessel;
+      const torus = new THREE.Mesh(
+          new THREE.TorusGeometry(v.core_radius, v.tube_radius, d.radial, d.along, v.segment_angle),
+          material(0xd0606a, { transparent: true, opacity: 0.45, side: THREE.DoubleSide,
+                               depthWrite: false }));
+      setPose(torus, v.pose.p, 0, v.pose.q, 0);
+      this.root.add(torus);
+    }
+    if (scene.needle) {
+      const n = scene.needle;
+      const tube = Math.max(n.radius * 0.03, 40e-6);
+      this.needleMaterial = new THREE.MeshBasicMaterial({ color: NEEDLE_COLOR });
+      this.needle = new THREE.Mesh(
+          new THREE.TubeGeometry(needleCurve(n.radius, n.sweep), d.along, tube, d.radial / 2),
+          this.needleMaterial);
+      this.root.add(this.needle);
+    }
+    if (scene.target) {
+      const t = scene.target;
+      const ring = new THREE.Mesh(new THREE.TorusGeometry(t.radius, t.radius * 0.08, 8, d.along),
+                                  new THREE.MeshBasicMaterial({ color: 0x40ff60 }));
+      ring.position.set(...t.p);
+      this.root.add(ring);
+      const dot = new THREE.Mesh(new THREE.SphereGeometry(t.radius * 0.12, 12, 8),
+                                 new THREE.MeshBasicMaterial({ color: 0x40ff60 }));
+      dot.position.set(...t.p);
+      this.root.add(dot);
+    }
+    if (scene.wire && scene.wire.points.length >= 2) {
+      const w = scene.wire;
+      const wire = new THREE.Mesh(
+          new THREE.TubeGeometry(polylineCurve(w.points), d.along * 2, w.radius, d.radial),
+          material(0xd8b040, { metalness: 0.6, roughness: 0.35 }));
+      this.root.add(wire);
+    }
+    if (scene.grasp) {
+      const g = scene.grasp;
+      let geom: THREE.BufferGeometry;
+      if (g.shape === 'sphere') geom = new THREE.SphereGeometry(g.radius, d.radial, d.radial);
+      else if (g.shape === 'cylinder') {
+        geom = new THREE.CylinderGeometry(g.radius, g.radius, g.length, d.radial);
+        geom.rotateX(Math.PI / 2); // its axis along z
+      } else geom = new THREE.BoxGeometry(...g.size);
+      const obj = new THREE.Mesh(geom, material(0x6080e0));
+      obj.position.set(...g.p);
+      obj.rotation.z = g.yaw;
+      this.root.add(obj);
+    }
+    if (scene.placement) {
+      const p = scene.placement;
+      const geom = new THREE.CylinderGeometry(p.vessel_radius, p.vessel_radius, p.end_height,
+                                              d.radial * 2, 1, true);
+      geom.rotateX(Math.PI / 2);
+      geom.translate(0, 0, p.end_height / 2);
+      this.root.add(new THREE.Mesh(geom, material(0xd0606a, { side: THREE.DoubleSide })));
+    }
+    if (scene.path.length >= 2) {
+      const line = new THREE.Line(
+          new THREE.BufferGeometry().setFromPoints(scene.path.map((p) => new THREE.Vector3(...p))),
+          new THREE.LineBasicMaterial({ color: 0x80c0ff, transparent: true, opacity: 0.5 }));
+      this.root.add(line);
+    }
+    if (scene.thread) {
+      const positions = new Float32Array(512 * 3);
+      const geom = new THREE.BufferGeometry();
+      geom.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+      geom.setDrawRange(0, 0);
+      this.thread = new THREE.Line(geom, new THREE.LineBasicMaterial({ color: 0x2040ff }));
+      this.thread.frustumCulled = false;
+      this.root.add(this.thread);
+    }
+
+    // The tool: a shaft along +z_T from the tip, a tip ball; a loop in T's xy plane.
+    const shaftLength = scale * 1.5;
+    const shaftRadius = scale * 0.025;
+    const shaft = new THREE.Mesh(
+        new THREE.CylinderGeometry(shaftRadius, shaftRadius * 0.4, shaftLength, d.radial),
+        material(TOOL_COLOR, { metalness: 0.7, roughness: 0.3 }));
+    shaft.rotateX(Math.PI / 2);
+    shaft.position.z = shaftLength / 2;
+    this.tool.add(shaft);
+    const tip = new THREE.Mesh(new THREE.SphereGeometry(shaftRadius * 0.6, d.radial, d.radial / 2),
+                               material(0xffd040));
+    this.tool.add(tip);
+    if (scene.loop) {
+      const loop = new THREE.Mesh(
+          new THREE.TorusGeometry(scene.loop.radius, scene.loop.wire_radius, d.radial / 2, d.along),
+          material(0xe0e0e8, { metalness: 0.8, roughness: 0.25 }));
+      this.tool.add(loop);
+    }
+    if (scene.grasp) {
+      const g = scene.grasp;
+      for (const side of [1, -1]) {
+        const jaw = new THREE.Mesh(new THREE.BoxGeometry(g.jaw_width, g.jaw_thickness, g.jaw_length),
+                                   material(TOOL_COLOR, { metalness: 0.7 }));
+        jaw.position.set(0, side * (g.open_gap / 2 + g.jaw_thickness / 2), 0);
+        this.tool.add(jaw);
+      }
+    }
+    setPose(this.tool, scene.tool_start.p, 0, scene.tool_start.q, 0);
+    this.root.add(this.tool);
+    // The tool tip's shadow on the table (a depth cue under a microscope's vertical light).
+    this.shadowDot = new THREE.Mesh(new THREE.CircleGeometry(shaftRadius * 1.5, 16),
+                                    new THREE.MeshBasicMaterial({ color: 0x000000,
+                                                                  transparent: true,
+                                                                  opacity: 0.45 }));
+    this.root.add(this.shadowDot);
+    this.placeShadow();
+
+    // Lighting: the microscope's coaxial light plus a hemisphere fill.
+    this.root.add(new THREE.HemisphereLight(0xffffff, 0x303040, 1.2));
+    const key = new THREE.DirectionalLight(0xffffff, 2.0);
+    const dir = scene.microscope.view_dir;
+    key.position.set(-dir[0] + 0.3, -dir[1] + 0.2, -dir[2]);
+    this.root.add(key);
+  }
+
+  // Updates the objects from a frame (poses, thread nodes, tissue field, contact colour).
+  apply(f: Frame): void {
+    this.lastFrame = f;
+    const s = f.scalars;
+    setPose(this.tool, s, S.toolP, s, S.toolQ);
+    this.placeShadow();
+    if (this.needle && (f.flags & HAS_NEEDLE)) {
+      setPose(this.needle, s, S.needleP, s, S.needleQ);
+      this.needleMaterial!.color.setHex(s[S.contact] ? CONTACT_COLOR : NEEDLE_COLOR);
+    }
+    if (this.thread && (f.flags & HAS_THREAD)) {
+      const attr = this.thread.geometry.getAttribute('position') as THREE.BufferAttribute;
+      const n = Math.min(f.threadNodes.length / 3, attr.count);
+      (attr.array as Float32Array).set(f.threadNodes.subarray(0, n * 3));
+      attr.needsUpdate = true;
+      this.thread.geometry.setDrawRange(0, n);
+    }
+    if (f.flags & HAS_TISSUE) this.applyTissue(f);
+  }
+
+  private applyTissue(f: Frame): void {
+    const s = f.scalars;
+    const lx = s[S.tissueLx];
+    const ly = s[S.tissueLy];
+    const stride = this.detail.tissueStride;
+    const key = `${f.tissueNodesX}x${f.tissueNodesY}`;
+    if (!this.tissue || key !== this.tissueKey) {
+      if (this.tissue) {
+        this.root.remove(this.tissue);
+        this.tissue.geometry.dispose();
+      }
+      const size = sampleTissue(f.tissue, f.tissueNodesX, f.tissueNodesY, stride, lx, ly, null);
+      const geom = new THREE.BufferGeometry();
+      geom.setAttribute('position',
+                        new THREE.BufferAttribute(new Float32Array(size.nx * size.ny * 3), 3));
+      geom.setIndex(new THREE.BufferAttribute(gridIndices(size.nx, size.ny), 1));
+      this.tissue = new THREE.Mesh(geom, material(0xe8a890, { roughness: 0.7,
+                                                                side: THREE.DoubleSide }));
+      this.tissue.frustumCulled = false;
+      this.tissueKey = key;
+      this.root.add(this.tissue);
+    }
+    setPose(this.tissue, s, S.tissueP, s, S.tissueQ);
+    const attr = this.tissue.geometry.getAttribute('position') as THREE.BufferAttribute;
+    sampleTissue(f.tissue, f.tissueNodesX, f.tissueNodesY, stride, lx, ly,
+                 attr.array as Float32Array);
+    attr.needsUpdate = true;
+    this.tissue.geometry.computeVertexNormals();
+  }
+
+  private placeShadow(): void {
+    this.shadowDot.position.set(this.tool.position.x, this.tool.position.y, this.floorZ + 1e-6);
+  }
+
+  // The needle's midpoint in world (the tests look for its colour there).
+  needleMidpointWorld(): THREE.Vector3 | null {
+    if (!this.needle || !this.scene.needle) return null;
+    const n = this.scene.needle;
+    const p = needleCurve(n.radius, n.sweep).getPoint(0.5);
+    this.needle.updateMatrixWorld();
+    return p.applyMatrix4(this.needle.matrixWorld);
+  }
+}
+
+// The scene's size: what the microscope shows at its magnification (m).
+export function fieldOfView(scene: SceneJson): number {
+  // A surgical microscope's field is about 200 mm / magnification across.
+  return 0.2 / scene.microscope.magnification;
+}
+
+export function sceneScale(scene: SceneJson): number { return fieldOfView(scene) / 2; }
+
+// The table below the scene's objects.
+export function floorHeight(scene: SceneJson): number {
+  let z = scene.microscope.look_at[2];
+  const lower = (v: number) => { z = Math.min(z, v); };
+  if (scene.vessel) lower(scene.vessel.pose.p[2] - scene.vessel.core_radius * 0.5);
+  if (scene.tissue) lower(scene.tissue.pose.p[2] - 0.5e-3);
+  if (scene.wire) for (const p of scene.wire.points) lower(p[2] - scene.wire.radius * 4);
+  if (scene.target) lower(scene.target.p[2] - 1e-3);
+  if (scene.thread) lower(scene.thread.anchor[2] - 1e-3);
+  if (scene.grasp) return 0;
+  if (scene.placement) return 0;
+  return z - 1e-3;
+}

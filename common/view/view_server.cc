@@ -1,0 +1,386 @@
+#include "common/view/view_server.h"
+
+#include <spdlog/spdlog.h>
+
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <deque>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "common/view/scene_view.h"
+
+namespace microdex::view {
+
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace asio = boost::asio;
+using tcp = asio::ip::tcp;
+
+class WsSession;
+
+struct ViewServer::Impl {
+  ViewServerConfig config;
+  std::map<std::string, WebFile> files;
+  DynamicFn dynamic;
+  PollFn poll;
+  TextFn on_text;
+  ViewServer* owner = nullptr;
+  asio::io_context ioc{1};
+  tcp::acceptor acceptor{ioc};
+  asio::steady_timer timer{ioc};
+  std::vector<std::weak_ptr<WsSession>> sessions;  // server thread only
+  std::thread thread;
+  bool running = false;
+
+  void Accept();
+  void ArmTimer();
+  std::size_t OpenSessions();
+};
+
+namespace {
+
+std::string ErrorJson(const std::string& reason) {
+  return "{\"type\":\"error\",\"error\":" + JsonQuote(reason) + "}";
+}
+
+}  // namespace
+
+// One page's WebSocket: reads its text messages, writes queued frames and replies in order.
+class WsSession : public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(tcp::socket&& socket, ViewServer::Impl& server)
+      : ws_(std::move(socket)), server_(server) {}
+
+  void Run(http::request<http::string_body> request) {
+    ws_.read_message_max(server_.config.max_message_bytes);
+    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    ws_.async_accept(request, beast::bind_front_handler(&WsSession::OnAccept, shared_from_this()));
+  }
+
+  bool open() const { return open_; }
+
+  void Send(const std::shared_ptr<const std::string>& data, bool binary) {
+    if (!open_) return;
+    if (binary) {
+      if (queued_frames_ >= server_.config.max_queued_frames) {
+        ++server_.owner->dropped_;
+        return;
+      }
+      ++queued_frames_;
+    } else if (queue_.size() - queued_frames_ >= ViewServer::kMaxQueuedTexts) {
+      // A page that stops reading its replies: drop it rather than queue without bound.
+      ++server_.owner->clients_dropped_;
+      spdlog::warn("view: a page stopped reading; closing it");
+      Close();
+      return;
+    }
+    queue_.push_back({data, binary});
+    if (queue_.size() == 1) DoWrite();
+  }
+
+ private:
+  struct Item {
+    std::shared_ptr<const std::string> data;
+    bool binary = false;
+  };
+
+  void OnAccept(beast::error_code ec) {
+    if (ec) return;
+    open_ = true;
+    DoRead();
+  }
+
+  void DoRead() {
+    ws_.async_read(buffer_, beast::bind_front_handler(&WsSession::OnRead, shared_from_this()));
+  }
+
+  void OnRead(beast::error_code ec, std::size_t /*bytes*/) {
+    if (ec) {
+      if (ec == websocket::error::message_too_big) {
+        ++server_.owner->rejected_;
+        ++server_.owner->clients_dropped_;
+        spdlog::warn("view: a page sent a message over {} bytes; dropped it",
+                     server_.config.max_message_bytes);
+      }
+      open_ = false;
+      return;
+    }
+    if (!ws_.got_text()) {
+      ++server_.owner->rejected_;
+      Send(std::make_shared<const std::string>(ErrorJson("binary messages are not accepted")),
+           false);
+    } else {
+      const std::string message = beast::buffers_to_string(buffer_.data());
+      try {
+        std::string reply = server_.on_text(message);
+        if (!reply.empty()) Send(std::make_shared<const std::string>(std::move(reply)), false);
+      } catch (const std::invalid_argument& e) {
+        ++server_.owner->rejected_;
+        Send(std::make_shared<const std::string>(ErrorJson(e.what())), false);
+      }
+    }
+    buffer_.consume(buffer_.size());
+    if (open_) DoRead();
+  }
+
+  void DoWrite() {
+    ws_.binary(queue_.front().binary);
+    ws_.async_write(asio::buffer(*queue_.front().data),
+                    beast::bind_front_handler(&WsSession::OnWrite, shared_from_this()));
+  }
+
+  void OnWrite(beast::error_code ec, std::size_t /*bytes*/) {
+    if (ec) {
+      open_ = false;
+      queue_.clear();
+      queued_frames_ = 0;
+      return;
+    }
+    if (queue_.front().binary) --queued_frames_;
+    queue_.pop_front();
+    if (!queue_.empty() && open_) DoWrite();
+  }
+
+  void Close() {
+    open_ = false;
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+  }
+
+  websocket::stream<beast::tcp_stream> ws_;
+  ViewServer::Impl& server_;
+  beast::flat_buffer buffer_;
+  std::deque<Item> queue_;
+  std::size_t queued_frames_ = 0;
+  bool open_ = false;
+};
+
+// One HTTP connection: GET of the pages and the scene, or the upgrade to the WebSocket.
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket&& socket, ViewServer::Impl& server)
+      : stream_(std::move(socket)), server_(server) {}
+
+  void DoRead() {
+    parser_.emplace();
+    parser_->header_limit(8192);
+    parser_->body_limit(1024);
+    stream_.expires_after(std::chrono::seconds(30));
+    http::async_read(stream_, buffer_, *parser_,
+                     beast::bind_front_handler(&HttpSession::OnRead, shared_from_this()));
+  }
+
+ private:
+  void OnRead(beast::error_code ec, std::size_t /*bytes*/) {
+    if (ec == http::error::end_of_stream || ec == beast::error::timeout ||
+        ec == asio::error::operation_aborted || ec == asio::error::connection_reset) {
+      Shutdown();
+      return;
+    }
+    if (ec) {
+      ++server_.owner->rejected_;
+      Reply(http::status::bad_request, "text/plain", "bad request: " + ec.message() + "\n", 11,
+            false);
+      return;
+    }
+    http::request<http::string_body> req = parser_->release();
+    std::string target(req.target());
+    if (const auto q = target.find('?'); q != std::string::npos) target.resize(q);
+    if (websocket::is_upgrade(req)) {
+      if (target != "/ws") {
+        Reply(http::status::not_found, "text/plain", "no WebSocket at " + target + "\n",
+              req.version(), false);
+        return;
+      }
+      if (server_.OpenSessions() >= server_.config.max_clients) {
+        Reply(http::status::service_unavailable, "text/plain", "too many pages connected\n",
+              req.version(), false);
+        return;
+      }
+      stream_.expires_never();
+      auto ws = std::make_shared<WsSession>(stream_.release_socket(), server_);
+      server_.sessions.push_back(ws);
+      ws->Run(std::move(req));
+      return;
+    }
+    if (req.method() != http::verb::get && req.method() != http::verb::head) {
+      Reply(http::status::method_not_allowed, "text/plain", "only GET\n", req.version(),
+            req.keep_alive());
+      return;
+    }
+    if (const auto it = server_.files.find(target); it != server_.files.end()) {
+      Reply(http::status::ok, it->second.content_type, it->second.body, req.version(),
+            req.keep_alive());
+      return;
+    }
+    std::optional<WebFile> dynamic;
+    if (server_.dynamic) dynamic = server_.dynamic(target);
+    if (dynamic) {
+      Reply(http::status::ok, dynamic->content_type, dynamic->body, req.version(),
+            req.keep_alive());
+      return;
+    }
+    Reply(http::status::not_found, "text/plain", "not found: " + target + "\n", req.version(),
+          req.keep_alive());
+  }
+
+  void Reply(http::status status, const std::string& type, const std::string& body,
+             unsigned version, bool keep_alive) {
+    auto res = std::make_shared<http::response<http::string_body>>(status, version);
+    res->set(http::field::server, "microdex");
+    res->set(http::field::content_type, type);
+    res->set(http::field::cache_control, "no-store");
+    res->keep_alive(keep_alive);
+    res->body() = body;
+    res->prepare_payload();
+    response_ = res;
+    http::async_write(stream_, *res,
+                      beast::bind_front_handler(&HttpSession::OnWrite, shared_from_this()));
+  }
+
+  void OnWrite(beast::error_code ec, std::size_t /*bytes*/) {
+    if (ec) return;
+    const bool keep_alive = response_->keep_alive();
+    response_.reset();
+    if (!keep_alive) {
+      Shutdown();
+      return;
+    }
+    DoRead();
+  }
+
+  void Shutdown() {
+    beast::error_code ignored;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+  }
+
+  beast::tcp_stream stream_;
+  ViewServer::Impl& server_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  std::shared_ptr<http::response<http::string_body>> response_;
+};
+
+void ViewServer::Impl::Accept() {
+  acceptor.async_accept(ioc, [this](beast::error_code ec, tcp::socket socket) {
+    if (ec == asio::error::operation_aborted) return;
+    if (!ec) std::make_shared<HttpSession>(std::move(socket), *this)->DoRead();
+    Accept();
+  });
+}
+
+void ViewServer::Impl::ArmTimer() {
+  timer.expires_after(config.poll_period);
+  timer.async_wait([this](beast::error_code ec) {
+    if (ec) return;
+    if (poll) poll();
+    ArmTimer();
+  });
+}
+
+std::size_t ViewServer::Impl::OpenSessions() {
+  std::erase_if(sessions, [](const std::weak_ptr<WsSession>& w) {
+    const std::shared_ptr<WsSession> s = w.lock();
+    return !s;
+  });
+  return sessions.size();
+}
+
+std::map<std::string, WebFile> LoadWebFiles(const std::string& dir,
+                                            const std::vector<std::string>& names) {
+  std::map<std::string, WebFile> files;
+  for (const std::string& name : names) {
+    const std::string path = dir + "/" + name;
+    std::ifstream f(path, std::ios::binary);
+    if (!f) {
+      throw std::runtime_error("view page '" + path +
+                               "' not found (build the web_bundle target or set "
+                               "MICRODEX_WEB_DIR)");
+    }
+    std::ostringstream body;
+    body << f.rdbuf();
+    std::string type = "application/octet-stream";
+    if (name.ends_with(".html")) type = "text/html; charset=utf-8";
+    if (name.ends_with(".js")) type = "text/javascript; charset=utf-8";
+    if (name.ends_with(".css")) type = "text/css; charset=utf-8";
+    files["/" + name] = {type, body.str()};
+  }
+  return files;
+}
+
+ViewServer::ViewServer(ViewServerConfig config, std::map<std::string, WebFile> files,
+                       DynamicFn dynamic, PollFn poll, TextFn on_text)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->config = std::move(config);
+  impl_->files = std::move(files);
+  impl_->dynamic = std::move(dynamic);
+  impl_->poll = std::move(poll);
+  impl_->on_text = std::move(on_text);
+  impl_->owner = this;
+}
+
+ViewServer::~ViewServer() { Stop(); }
+
+void ViewServer::Start() {
+  Impl& s = *impl_;
+  beast::error_code ec;
+  const asio::ip::address address = asio::ip::make_address(s.config.address, ec);
+  const std::string where = s.config.address + ":" + std::to_string(s.config.port);
+  if (ec) throw std::runtime_error("view server: " + where + ": bad address");
+  const tcp::endpoint endpoint(address, s.config.port);
+  if (s.acceptor.open(endpoint.protocol(), ec); ec) {
+    throw std::runtime_error("view server: " + where + ": " + ec.message());
+  }
+  s.acceptor.set_option(asio::socket_base::reuse_address(true), ec);
+  if (s.acceptor.bind(endpoint, ec); ec) {
+    throw std::runtime_error("view server: " + where + ": " + ec.message());
+  }
+  if (s.acceptor.listen(asio::socket_base::max_listen_connections, ec); ec) {
+    throw std::runtime_error("view server: " + where + ": " + ec.message());
+  }
+  port_ = s.acceptor.local_endpoint().port();
+  s.Accept();
+  s.ArmTimer();
+  s.running = true;
+  s.thread = std::thread([&s] {
+    try {
+      s.ioc.run();
+    } catch (const std::exception& e) {
+      spdlog::error("view server stopped: {}", e.what());
+    }
+  });
+}
+
+void ViewServer::Stop() {
+  if (!impl_ || !impl_->running) return;
+  impl_->ioc.stop();
+  impl_->thread.join();
+  impl_->running = false;
+}
+
+void ViewServer::BroadcastBinary(const void* data, std::size_t size) {
+  if (impl_->OpenSessions() == 0) return;
+  auto bytes = std::make_shared<const std::string>(static_cast<const char*>(data), size);
+  for (const std::weak_ptr<WsSession>& w : impl_->sessions) {
+    if (const std::shared_ptr<WsSession> s = w.lock()) s->Send(bytes, true);
+  }
+}
+
+void ViewServer::BroadcastText(const std::string& text) {
+  if (impl_->OpenSessions() == 0) return;
+  auto bytes = std::make_shared<const std::string>(text);
+  for (const std::weak_ptr<WsSession>& w : impl_->sessions) {
+    if (const std::shared_ptr<WsSession> s = w.lock()) s->Send(bytes, false);
+  }
+}
+
+std::size_t ViewServer::clients() const { return impl_->OpenSessions(); }
+
+}  // namespace microdex::view

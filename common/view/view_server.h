@@ -1,0 +1,90 @@
+#pragma once
+// The HTTP + WebSocket server of the view pages (Boost.Beast), on a thread of its own: it
+// serves the bundled pages and a scene description, streams binary state frames to every
+// connected page, and passes the pages' text messages (device input, cue commands) to a
+// handler. Everything of a server — sessions, the poll timer, the handlers — runs on that one
+// thread (an asio io_context), so the callbacks need no locks among themselves; the app hands
+// data to them through its own lock-free handoffs (the station: a TripleBuffer of frames from
+// the publisher thread, an SpscRing of device input to the haptic thread).
+//
+// Hostile or broken clients: a request header over 8 KiB, a body over 1 KiB, a WebSocket
+// message over max_message_bytes, or a client that stops reading (more than
+// kMaxQueuedTexts replies waiting) is dropped; a text message the handler rejects gets
+// {"type":"error","error":REASON} and the connection stays; binary messages from a page are
+// rejected the same way. Slow readers lose old state frames, never the newest.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace microdex::view {
+
+struct ViewServerConfig {
+  std::string address = "127.0.0.1";
+  std::uint16_t port = 0;  // 0: any free port (port() tells which)
+  std::chrono::microseconds poll_period{2000};
+  std::size_t max_clients = 16;
+  std::size_t max_message_bytes = 4096;  // page → server
+  std::size_t max_queued_frames = 3;     // per client; newer frames are dropped beyond
+};
+
+struct WebFile {
+  std::string content_type;
+  std::string body;
+};
+
+// Reads `names` from `dir` (the bundled pages); throws std::runtime_error naming a file that
+// cannot be read.
+std::map<std::string, WebFile> LoadWebFiles(const std::string& dir,
+                                            const std::vector<std::string>& names);
+
+class ViewServer {
+ public:
+  // Called on the server thread every poll period.
+  using PollFn = std::function<void()>;
+  // A text message from a page; returns the reply ("" for none). Throws
+  // std::invalid_argument(reason) to reject the message (the page gets the reason).
+  using TextFn = std::function<std::string(const std::string& message)>;
+  // A GET target not among the files (e.g. "/scene.json"); nullopt: 404.
+  using DynamicFn = std::function<std::optional<WebFile>(const std::string& target)>;
+
+  // files: by target ("/" included when wanted).
+  ViewServer(ViewServerConfig config, std::map<std::string, WebFile> files, DynamicFn dynamic,
+             PollFn poll, TextFn on_text);
+  ~ViewServer();
+  ViewServer(const ViewServer&) = delete;
+  ViewServer& operator=(const ViewServer&) = delete;
+
+  // Binds and starts the thread; throws std::runtime_error("view server: ADDRESS:PORT: why").
+  void Start();
+  void Stop();
+  std::uint16_t port() const { return port_; }
+
+  // Server thread only (the poll and text handlers): send to every open page.
+  void BroadcastBinary(const void* data, std::size_t size);
+  void BroadcastText(const std::string& text);
+  std::size_t clients() const;  // server thread only
+
+  // Any thread.
+  std::uint64_t messages_rejected() const { return rejected_.load(); }
+  std::uint64_t frames_dropped() const { return dropped_.load(); }
+  std::uint64_t clients_dropped() const { return clients_dropped_.load(); }
+
+  static constexpr std::size_t kMaxQueuedTexts = 64;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::uint16_t port_ = 0;
+  std::atomic<std::uint64_t> rejected_{0}, dropped_{0}, clients_dropped_{0};
+  friend class WsSession;
+  friend class HttpSession;
+};
+
+}  // namespace microdex::view
