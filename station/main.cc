@@ -30,7 +30,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
 
   CLI::App app{"microdex-station: one trainee station (haptic loop, physics modules, DDS)"};
   app.add_option("--scene", o.scene_path, "scene file (YAML)")->required();
-  app.add_option("--device", o.device, "input device: sim (playback, dds, gui: later)");
+  app.add_option("--device", o.device,
+                 "input device: sim, page (the view page's keyboard and mouse; needs --view)");
   app.add_option("--skill", o.skill, "simulated trainee skill, 0 novice .. 1 expert");
   app.add_option("--seed", o.seed, "seed of the simulated trainee");
   app.add_option("--duration", o.duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--trainee", o.trainee, "trainee name shown to the instructor");
   app.add_option("--score-out", o.score_out, "write the final score as JSON to FILE");
   app.add_option("--mirror-rate", o.mirror_rate_hz, "rate of the mirrored state topics, Hz");
+  app.add_option("--view", o.view_port,
+                 "serve the microscope view on http://127.0.0.1:PORT/ (0: any free port)");
   microdex::net::AddDdsOptions(app, o.dds);
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,

@@ -12,10 +12,12 @@
 #include "common/state/state_hash.h"
 #include "station/haptic_loop.h"
 #include "station/module.h"
+#include "station/page_device.h"
 #include "station/rt/clock.h"
 #include "station/rt/realtime.h"
 #include "station/sim_trainee.h"
 #include "station/station_publisher.h"
+#include "station/station_view.h"
 
 namespace microdex::station {
 namespace {
@@ -130,12 +132,15 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
 
 std::string StationOptions::Validate() const {
   if (scene_path.empty()) return "--scene: required";
-  if (device != "sim") {
+  if (device != "sim" && device != "page") {
     if (device == "playback" || device == "dds" || device == "gui") {
-      return "--device " + device + ": not available in this build yet (only 'sim')";
+      return "--device " + device + ": not available in this build yet (only 'sim', 'page')";
     }
-    return "--device: expected sim|playback|dds|gui";
+    return "--device: expected sim|page|playback|dds|gui";
   }
+  if (!(view_port >= -1 && view_port <= 65535)) return "--view: expected a port 0..65535";
+  if (device == "page" && view_port < 0) return "--device page: needs --view PORT";
+  if (device == "page" && unpaced) return "--device page: cannot run --unpaced";
   if (!(skill >= 0 && skill <= 1)) return "--skill: expected 0..1";
   if (!(duration_s >= 0) || !std::isfinite(duration_s)) return "--duration: expected >= 0 s";
   if (station_id.empty() || station_id.size() > 64) return "--station-id: expected 1..64 chars";
@@ -152,7 +157,16 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   trainee_def.skill = o.skill;
   trainee_def.seed = o.seed;
   trainee_def.Validate();
-  SimTrainee device(scene, trainee_def);
+  std::unique_ptr<Device> device_owner;
+  PageDevice* page_device = nullptr;
+  if (o.device == "page") {
+    auto page = std::make_unique<PageDevice>(scene.CalcIdealToolPose(0));
+    page_device = page.get();
+    device_owner = std::move(page);
+  } else {
+    device_owner = std::make_unique<SimTrainee>(scene, trainee_def);
+  }
+  Device& device = *device_owner;
 
   bool realtime = false;
   if (o.realtime) {
@@ -176,6 +190,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   lc.seed = o.seed;
   lc.frame_period_steps = frame_period_steps;
   lc.wait_for_ring = o.unpaced;
+  // A person at the page keeps the station (and its view) after the task ends.
+  lc.stop_at_task_end = page_device == nullptr;
   HapticLoop loop(scene, device, rings, clock, lc);
 
   PublisherConfig pc;
@@ -189,6 +205,15 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   pc.seed = o.seed;
   pc.mirror_rate_hz = o.mirror_rate_hz;
   StationPublisher publisher(pc, o.dds, scene, rings, loop);
+  std::unique_ptr<StationView> view;
+  if (o.view_port >= 0) {
+    view = std::make_unique<StationView>(scene, o.view_port,
+                                         o.web_dir.empty() ? DefaultWebDir() : o.web_dir,
+                                         o.station_id, page_device);
+    publisher.SetViewFrames(&view->frames());
+    // One line a script can wait for (the port is the bound one when --view 0).
+    spdlog::info("view: http://127.0.0.1:{}/", view->port());
+  }
 
   const auto max_steps =
       o.duration_s > 0
@@ -223,6 +248,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   haptic.join();
   publisher.RequestStop();
   pub_thread.join();
+  view.reset();
   if (o.realtime && !o.unpaced && !fifo) {
     spdlog::warn("haptic thread not SCHED_FIFO: {}", fifo_why);
   }

@@ -26,6 +26,9 @@ struct StationOptions {
   // hash as a paced run. Not real time: the haptic thread may wait for the publisher.
   bool unpaced = false;
   net::DdsOptions dds;
+  // The microscope view (station_view.h) on 127.0.0.1:view_port; -1: none, 0: any free port.
+  int view_port = -1;
+  std::string web_dir;  // the bundled pages ("" : DefaultWebDir())
   // Empty when valid; otherwise a one-line reason naming the option.
   std::string Validate() const;
 };

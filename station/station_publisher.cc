@@ -308,6 +308,24 @@ void StationPublisher::PublishMirror() {
     net::ToMsg(n, w_->needle_msg);
     w_->needle->write(&w_->needle_msg);
   }
+  if (view_frames_ != nullptr) EncodeViewFrame();
+}
+
+// The view frame of this mirror period: the states just published, the thread and tissue
+// frames last taken, the latest score and telemetry.
+void StationPublisher::EncodeViewFrame() {
+  view::FrameSource src;
+  src.tool = &w_->tool_plain;
+  if (w_->needle != nullptr && last_.has_needle) src.needle = &w_->needle_plain;
+  if (w_->thread != nullptr && !w_->thread_plain.nodes.empty()) src.thread = &w_->thread_plain;
+  if (w_->tissue != nullptr && !w_->tissue_plain.displacement_m.empty()) {
+    src.tissue = &w_->tissue_plain;
+  }
+  if (have_score_) src.score = &last_score_;
+  if (have_telemetry_) src.telemetry = &last_telemetry_;
+  src.sent_realtime_ns = SystemClock().RealtimeNs();
+  view::EncodeFrame(src, view_frames_->back());
+  view_frames_->Publish();
 }
 
 // The modules write their large frames once per mirror period (HapticLoop); each is
@@ -379,6 +397,10 @@ void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
   }
   net::ToMsg(t, w_->telemetry_msg);
   w_->telemetry->write(&w_->telemetry_msg);
+  if (view_frames_ != nullptr) {
+    last_telemetry_ = t;
+    have_telemetry_ = true;
+  }
   window_periods_.Reset();
   window_overruns_ = 0;
   window_ticks_ = 0;
@@ -393,6 +415,10 @@ void StationPublisher::PublishScore(bool is_final) {
   s.is_final = is_final;
   net::ToMsg(s, w_->score_msg);
   w_->score->write(&w_->score_msg);
+  if (view_frames_ != nullptr) {
+    last_score_ = s;
+    have_score_ = true;
+  }
   if (is_final) final_score_ = s;
 }
 

@@ -23,6 +23,7 @@
 #include "common/net/dds_context.h"
 #include "common/net/messages.h"
 #include "common/scene/scene.h"
+#include "common/view/view_frame.h"
 #include "station/haptic_loop.h"
 #include "station/period_stats.h"
 #include "station/snapshot.h"
@@ -80,6 +81,9 @@ class StationPublisher {
   void Run();
   // Any thread.
   void RequestStop();
+  // Before Run(): also encode a view frame (common/view) at the mirror rate into `frames`
+  // (this thread is its producer; the station's view server its consumer).
+  void SetViewFrames(rt::TripleBuffer<view::FrameBytes>* frames) { view_frames_ = frames; }
 
   const PeriodStats& run_periods() const { return run_periods_; }
   // Step time of module i over the whole run (the "period" is the step's wall time).
@@ -92,6 +96,7 @@ class StationPublisher {
   void HandleCues();
   void Drain();
   void PublishMirror();
+  void EncodeViewFrame();
   void PublishFrames();
   void RecognizeKnot();
   void PublishTelemetry(std::int64_t now_ns);
@@ -124,6 +129,10 @@ class StationPublisher {
   std::string knot_;  // "" until the first recognition
   std::vector<std::pair<std::string, std::uint64_t>> seen_cues_;
   net::Score final_score_;
+  rt::TripleBuffer<view::FrameBytes>* view_frames_ = nullptr;
+  net::Score last_score_;  // the latest published (the view's live score)
+  net::Telemetry last_telemetry_;
+  bool have_score_ = false, have_telemetry_ = false;
   std::int64_t next_mirror_ns_ = 0, next_telemetry_ns_ = 0, next_score_ns_ = 0;
   std::int64_t telemetry_window_start_ns_ = 0;
 };

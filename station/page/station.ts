@@ -1,0 +1,239 @@
+// The station's microscope view: the shared scene objects (common/view/src) drawn through the
+// scene's microscope, the live score and task state, stereo, and the keyboard and mouse as the
+// station's device when it runs with --device page.
+
+import * as THREE from 'three';
+import { AnaglyphEffect } from 'three/examples/jsm/effects/AnaglyphEffect.js';
+import { StereoEffect } from 'three/examples/jsm/effects/StereoEffect.js';
+import { VRButton } from 'three/examples/jsm/webxr/VRButton.js';
+import { Frame, S, activeCueNames, decodeFrame, HAS_NEEDLE, HAS_SCORE, HAS_THREAD, HAS_TISSUE } from '../../common/view/src/frame';
+import { SceneJson, SceneView, HIGH_DETAIL, fieldOfView } from '../../common/view/src/scene_objects';
+import { microscopeCamera, screenAxes } from '../../common/view/src/microscope';
+import { AppSocket, socketUrl } from '../../common/view/src/socket';
+
+const OUTCOMES = ['running', 'completed', 'time limit'];
+type StereoMode = 'mono' | 'anaglyph' | 'side-by-side';
+const STEREO_MODES: StereoMode[] = ['mono', 'anaglyph', 'side-by-side'];
+
+// What the tests and the measurement script read (window.microdexView).
+interface ViewProbe {
+  ready: boolean;
+  framesReceived: number;
+  framesDrawn: number;
+  badFrames: number;
+  lastFrame: Frame | null;
+  latencyMs: number[]; // tick stamp → the frame drawn (page clock, CLOCK_REALTIME)
+  fps: number;
+  stereo: StereoMode;
+  project(p: [number, number, number]): [number, number];
+  needleScreen(): [number, number] | null;
+  toolPosition(): [number, number, number];
+}
+
+async function main(): Promise<void> {
+  const [scene, info] = await Promise.all([
+    fetch('/scene.json').then((r) => r.json()) as Promise<SceneJson>,
+    fetch('/info.json').then((r) => r.json()) as Promise<{ station_id: string; device: string }>,
+  ]);
+  const params = new URLSearchParams(location.search);
+  const container = document.getElementById('view')!;
+  const renderer = new THREE.WebGLRenderer({ antialias: params.get('aa') !== '0' });
+  renderer.setPixelRatio(1);
+  renderer.setSize(window.innerWidth, window.innerHeight);
+  renderer.setClearColor(0x101418);
+  container.appendChild(renderer.domElement);
+
+  const world = new THREE.Scene();
+  world.fog = new THREE.Fog(0x101418, 0, 1); // set from the camera below
+  const view = new SceneView(scene, HIGH_DETAIL);
+  world.add(view.root);
+  const camera = microscopeCamera(scene, window.innerWidth / window.innerHeight);
+  const dist = camera.position.distanceTo(new THREE.Vector3(...scene.microscope.look_at));
+  (world.fog as THREE.Fog).near = dist * 0.9;
+  (world.fog as THREE.Fog).far = dist * 3;
+
+  const anaglyph = new AnaglyphEffect(renderer, window.innerWidth, window.innerHeight);
+  const sbs = new StereoEffect(renderer);
+  sbs.setEyeSeparation(fieldOfView(scene) * 0.02);
+  let stereo: StereoMode = (STEREO_MODES as string[]).includes(params.get('stereo') ?? '')
+      ? params.get('stereo') as StereoMode : 'mono';
+  const stereoButton = document.getElementById('stereo') as HTMLButtonElement;
+  const setStereo = (m: StereoMode) => {
+    stereo = m;
+    probe.stereo = m;
+    stereoButton.textContent = `stereo: ${m}`;
+    renderer.setSize(window.innerWidth, window.innerHeight);
+  };
+  stereoButton.onclick = () => setStereo(STEREO_MODES[(STEREO_MODES.indexOf(stereo) + 1) % 3]);
+  if ('xr' in navigator) {
+    (navigator as any).xr?.isSessionSupported('immersive-vr').then((ok: boolean) => {
+      if (!ok) return;
+      renderer.xr.enabled = true;
+      document.getElementById('controls')!.appendChild(VRButton.createButton(renderer));
+    }).catch(() => undefined);
+  }
+
+  const probe: ViewProbe = {
+    ready: false, framesReceived: 0, framesDrawn: 0, badFrames: 0, lastFrame: null,
+    latencyMs: [], fps: 0, stereo,
+    project(p) {
+      const v = new THREE.Vector3(...p).project(camera);
+      return [(v.x + 1) / 2 * window.innerWidth, (1 - v.y) / 2 * window.innerHeight];
+    },
+    needleScreen() {
+      const m = view.needleMidpointWorld();
+      return m ? probe.project([m.x, m.y, m.z]) : null;
+    },
+    toolPosition() {
+      return [view.tool.position.x, view.tool.position.y, view.tool.position.z];
+    },
+  };
+  (window as any).microdexView = probe;
+  setStereo(stereo);
+
+  let pending: Frame | null = null;
+  const sock = new AppSocket(socketUrl(), {
+    onFrame(data) {
+      try {
+        pending = decodeFrame(data);
+        ++probe.framesReceived;
+      } catch (e) {
+        ++probe.badFrames;
+        console.warn(String(e));
+      }
+    },
+    onText(m) { if (m.type === 'error') console.warn(`station: ${m.error}`); },
+    onStatus(open) {
+      document.getElementById('link')!.innerHTML = open ? '' : '<span class="warn">disconnected</span>';
+    },
+  });
+
+  // Keyboard and mouse as the device.
+  const device = info.device === 'page' ? new PageInput(camera, scene, (m) => sock.send(m)) : null;
+  document.getElementById('help')!.textContent = device
+      ? 'arrows/WASD move · R/F depth · Q/E roll · space grip · 1–5 buttons · drag: move · V stereo'
+      : 'watching (the station\'s device is not this page) · V stereo';
+  window.addEventListener('keydown', (e) => {
+    if (e.key === 'v' || e.key === 'V') stereoButton.click();
+  });
+
+  window.addEventListener('resize', () => {
+    camera.aspect = window.innerWidth / window.innerHeight;
+    camera.updateProjectionMatrix();
+    renderer.setSize(window.innerWidth, window.innerHeight);
+    anaglyph.setSize(window.innerWidth, window.innerHeight);
+  });
+
+  const hudScore = document.getElementById('score')!;
+  const hudTask = document.getElementById('task')!;
+  const hudState = document.getElementById('state')!;
+  const hudCues = document.getElementById('cues')!;
+  let fpsCount = 0;
+  let fpsStart = performance.now();
+  let lastT = performance.now();
+  renderer.setAnimationLoop(() => {
+    const t = performance.now();
+    device?.tick((t - lastT) / 1000);
+    lastT = t;
+    if (pending) {
+      const f = pending;
+      pending = null;
+      view.apply(f);
+      probe.lastFrame = f;
+      ++probe.framesDrawn;
+      const s = f.scalars;
+      if (probe.latencyMs.length < 100000) {
+        probe.latencyMs.push(performance.timeOrigin + performance.now() - s[S.stampMs]);
+      }
+      hudScore.textContent = f.flags & HAS_SCORE
+          ? `score ${s[S.score].toFixed(1)} · ${(s[S.progress] * 100).toFixed(0)} %` : 'score –';
+      hudTask.textContent = `${scene.name} · ${scene.task} · ${OUTCOMES[s[S.outcome]] ?? '?'} · step ${s[S.step]}`;
+      const parts: string[] = [];
+      if (f.flags & HAS_NEEDLE) {
+        parts.push(s[S.contact] ? '<span class="warn">needle touching</span>'
+                                : `clearance ${(s[S.clearance] * 1e3).toFixed(3)} mm`);
+      }
+      if (f.flags & HAS_THREAD) parts.push(`strain ${(s[S.threadStrain] * 100).toFixed(2)} %`);
+      if (f.flags & HAS_TISSUE) parts.push(`depth ${(s[S.tissueDepth] * 1e3).toFixed(3)} mm`);
+      parts.push(`tremor ${(s[S.tremorRms] * 1e6).toFixed(0)} µm`);
+      hudState.innerHTML = parts.join(' · ');
+      const cues = activeCueNames(s[S.activeCues]);
+      hudCues.textContent = cues.length ? `cues: ${cues.join(', ')}` : '';
+    }
+    if (stereo === 'anaglyph') anaglyph.render(world, camera);
+    else if (stereo === 'side-by-side') sbs.render(world, camera);
+    else renderer.render(world, camera);
+    ++fpsCount;
+    if (t - fpsStart >= 1000) {
+      probe.fps = (fpsCount * 1000) / (t - fpsStart);
+      fpsCount = 0;
+      fpsStart = t;
+    }
+    probe.ready = true;
+  });
+}
+
+// Keys and mouse drags → small world moves of the tool (in the image plane, and along the
+// view axis for depth), sent at most once per animation frame.
+class PageInput {
+  private keys = new Set<string>();
+  private drag: { x: number; y: number } | null = null;
+  private dragMove = new THREE.Vector3();
+  private grip = 0;
+  private readonly speed: number; // m/s at full key press
+
+  constructor(private readonly camera: THREE.Camera, scene: SceneJson,
+              private readonly send: (m: string) => void) {
+    this.speed = fieldOfView(scene) / 4;
+    window.addEventListener('keydown', (e) => {
+      this.keys.add(e.key.toLowerCase());
+      if (e.key === ' ') {
+        this.grip = this.grip > 0.5 ? 0 : 1;
+        this.send(`grip ${this.grip}`);
+      }
+      if (e.key >= '1' && e.key <= '5') this.send(`buttons ${Number(e.key)}`);
+    });
+    window.addEventListener('keyup', (e) => {
+      this.keys.delete(e.key.toLowerCase());
+      if (e.key >= '1' && e.key <= '5') this.send('buttons 0');
+    });
+    window.addEventListener('blur', () => this.keys.clear());
+    const el = document.body;
+    el.addEventListener('mousedown', (e) => { this.drag = { x: e.clientX, y: e.clientY }; });
+    window.addEventListener('mouseup', () => { this.drag = null; });
+    window.addEventListener('mousemove', (e) => {
+      if (!this.drag) return;
+      const perPixel = this.speed * 4 / window.innerHeight;
+      const { right, up } = screenAxes(this.camera);
+      this.dragMove.addScaledVector(right, (e.clientX - this.drag.x) * perPixel)
+          .addScaledVector(up, -(e.clientY - this.drag.y) * perPixel);
+      this.drag = { x: e.clientX, y: e.clientY };
+    });
+  }
+
+  tick(dt: number): void {
+    const { right, up, forward } = screenAxes(this.camera);
+    const k = (a: string, b: string) => (this.keys.has(a) || this.keys.has(b) ? 1 : 0);
+    const fine = this.keys.has('shift') ? 0.2 : 1;
+    const step = this.speed * Math.min(dt, 0.1) * fine;
+    const move = this.dragMove.clone();
+    this.dragMove.set(0, 0, 0);
+    move.addScaledVector(right, (k('arrowright', 'd') - k('arrowleft', 'a')) * step);
+    move.addScaledVector(up, (k('arrowup', 'w') - k('arrowdown', 's')) * step);
+    move.addScaledVector(forward, (k('f', 'pagedown') - k('r', 'pageup')) * step);
+    const len = move.length();
+    if (len > 0) {
+      if (len > 1.9e-3) move.multiplyScalar(1.9e-3 / len);
+      this.send(`move ${move.x.toExponential(6)} ${move.y.toExponential(6)} ${move.z.toExponential(6)}`);
+    }
+    const roll = (k('e', 'e') - k('q', 'q')) * Math.min(dt, 0.1) * 1.0;
+    if (roll !== 0) {
+      const axis = forward.clone().multiplyScalar(roll);
+      this.send(`turn ${axis.x.toExponential(6)} ${axis.y.toExponential(6)} ${axis.z.toExponential(6)}`);
+    }
+  }
+}
+
+main().catch((e) => {
+  document.body.insertAdjacentHTML('beforeend', `<pre class="warn" style="position:fixed;bottom:0">${String(e)}</pre>`);
+});
