@@ -4,9 +4,11 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <thread>
 
 #include "common/net/app_cli.h"
+#include "instructor/console_server.h"
 #include "instructor/cue_spec.h"
 #include "instructor/instructor.h"
 
@@ -28,8 +30,13 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   double table_period_s = 1;
   std::vector<std::string> cue_texts;
   std::string security;
+  int http_port = -1;
+  std::string http_address = "127.0.0.1";
   CLI::App app{"microdex-instructor: discovers stations, mirrors their state, sends cues"};
-  app.add_flag("--headless", headless, "text view on stdout (the GUI is not in this build)");
+  app.add_flag("--headless", headless, "text view on stdout");
+  app.add_option("--http", http_port,
+                 "serve the live console on http://ADDRESS:PORT/ (0: any free port)");
+  app.add_option("--http-address", http_address, "address the console binds (127.0.0.1)");
   app.add_option("--duration", duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
   app.add_option("--cue", cue_texts,
                  "STATION:KIND:PARAM[@SECONDS], KIND one of clear, "
@@ -49,8 +56,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     std::fprintf(stderr, "microdex-instructor: --security: not available in this build yet\n");
     return 2;
   }
-  if (!headless) {
-    std::fprintf(stderr, "microdex-instructor: the GUI is not in this build yet; use --headless\n");
+  if (!headless && http_port < 0) {
+    std::fprintf(stderr, "microdex-instructor: expected --headless and/or --http PORT\n");
+    return 2;
+  }
+  if (http_port > 65535) {
+    std::fprintf(stderr, "microdex-instructor: --http: expected a port 0..65535\n");
     return 2;
   }
   if (!(duration_s >= 0) || !(table_period_s >= 0)) {
@@ -73,6 +84,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
 
   try {
     instructor::Instructor console(o);
+    std::unique_ptr<instructor::ConsoleServer> web;
+    if (http_port >= 0) {
+      web = std::make_unique<instructor::ConsoleServer>(console, http_address, http_port,
+                                                        instructor::DefaultWebDir());
+      std::printf("console: http://%s:%u/\n", http_address.c_str(), unsigned{web->port()});
+    }
     const std::int64_t start = instructor::MonotonicNowNs();
     std::int64_t next_table = start + static_cast<std::int64_t>(table_period_s * 1e9);
     std::vector<bool> sent(cues.size(), false);
@@ -101,7 +118,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
         if (!e.text.empty()) std::printf(" (%s)", e.text.c_str());
         std::printf("\n");
       }
-      if (table_period_s > 0 && now >= next_table) {
+      if (headless && table_period_s > 0 && now >= next_table) {
         std::printf("--- t = %.1f s\n%s", t,
                     instructor::FormatStationTable(console.Stations(), now).c_str());
         next_table += static_cast<std::int64_t>(table_period_s * 1e9);

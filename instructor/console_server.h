@@ -1,0 +1,69 @@
+#pragma once
+// The instructor's live console (`microdex-instructor --http PORT`): serves the console page
+// (instructor/page, with the shared front-end of common/view) and, over its WebSocket, one
+// binary state frame per station whenever its mirrored tool state is new (at most
+// kFrameRate_hz per station), and a JSON station list at kStatusRate_hz: trainee, scene,
+// presence, loop health, live score, and the cues this console sent with the station's
+// acknowledgement (applied at step N, or rejected and why). The page sends
+// "cue STATION KIND PARAM" (KIND: clear, convergent, divergent, tremor). The scene of a station
+// is read from the path its StationInfo names, when this machine has it (/scene/ID.json).
+//
+// Threads: everything here runs on the view server's thread; it reads the Instructor's
+// registry through its copying API (the instructor has no real-time thread).
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/view/view_frame.h"
+#include "common/view/view_server.h"
+#include "instructor/instructor.h"
+
+namespace microdex::instructor {
+
+class ConsoleServer {
+ public:
+  static constexpr double kFrameRate_hz = 60;
+  static constexpr double kStatusRate_hz = 4;
+  static constexpr std::size_t kCuesShown = 8;  // per station, the latest
+
+  // Throws std::runtime_error when the pages are missing or the port cannot be bound.
+  ConsoleServer(Instructor& instructor, const std::string& address, int port,
+                const std::string& web_dir);
+  ~ConsoleServer();
+  ConsoleServer(const ConsoleServer&) = delete;
+  ConsoleServer& operator=(const ConsoleServer&) = delete;
+
+  std::uint16_t port() const { return server_->port(); }
+
+  // The reply to a page's text message (throws std::invalid_argument for a bad one).
+  std::string HandleMessage(const std::string& message);
+  // The station list as the page reads it.
+  std::string StatusJson(const std::vector<StationView>& stations, std::int64_t now_ns) const;
+
+ private:
+  struct SentCue {
+    std::uint64_t cue_id = 0;
+    std::string kind;
+    double param = 0;
+    std::int64_t sent_realtime_ns = 0;
+  };
+  void Poll();
+  std::optional<view::WebFile> SceneFor(const std::string& station_id);
+
+  Instructor& instructor_;
+  std::map<std::string, std::vector<SentCue>> sent_;  // by station
+  std::map<std::string, std::uint64_t> frames_sent_;  // tool-state count at the last frame
+  std::map<std::string, std::string> scene_json_;     // by scene path
+  std::vector<std::string> ids_;                      // slot → station id, as last listed
+  std::unique_ptr<view::FrameBytes> frame_;
+  std::int64_t next_frames_ns_ = 0, next_status_ns_ = 0;
+  std::unique_ptr<view::ViewServer> server_;
+};
+
+// Where the bundled pages are: $MICRODEX_WEB_DIR, else the build tree's web/ folder.
+std::string DefaultWebDir();
+
+}  // namespace microdex::instructor
