@@ -25,9 +25,11 @@ interface ViewProbe {
   latencyMs: number[]; // tick stamp → the frame drawn (page clock, CLOCK_REALTIME)
   fps: number;
   stereo: StereoMode;
+  freeze: boolean; // keep drawing the last frame applied (tests: a still image to compare)
   project(p: [number, number, number]): [number, number];
   needleScreen(): [number, number] | null;
   toolPosition(): [number, number, number];
+  screenAxes(): { right: number[]; up: number[]; forward: number[] };
 }
 
 async function main(): Promise<void> {
@@ -54,7 +56,29 @@ async function main(): Promise<void> {
 
   const anaglyph = new AnaglyphEffect(renderer, window.innerWidth, window.innerHeight);
   const sbs = new StereoEffect(renderer);
-  sbs.setEyeSeparation(fieldOfView(scene) * 0.02);
+  // three's stereo cameras have a human eye separation (64 mm); the microscope's scene is
+  // millimetres across, so the stereo views draw a scaled copy of it: eyes 1/20 of the
+  // working distance apart (about 3°, a surgical microscope's stereo angle), converging at
+  // look_at.
+  const stereoCamera = new THREE.PerspectiveCamera();
+  const renderStereo = (effect: { render(s: THREE.Scene, c: THREE.Camera): void }) => {
+    const k = (0.064 * 20) / dist;
+    stereoCamera.copy(camera);
+    stereoCamera.position.multiplyScalar(k);
+    stereoCamera.near *= k;
+    stereoCamera.far *= k;
+    stereoCamera.focus = dist * k;
+    stereoCamera.updateProjectionMatrix();
+    stereoCamera.updateMatrixWorld();
+    const fog = world.fog as THREE.Fog;
+    world.scale.setScalar(k);
+    fog.near *= k;
+    fog.far *= k;
+    effect.render(world, stereoCamera);
+    world.scale.setScalar(1);
+    fog.near /= k;
+    fog.far /= k;
+  };
   let stereo: StereoMode = (STEREO_MODES as string[]).includes(params.get('stereo') ?? '')
       ? params.get('stereo') as StereoMode : 'mono';
   const stereoButton = document.getElementById('stereo') as HTMLButtonElement;
@@ -75,7 +99,7 @@ async function main(): Promise<void> {
 
   const probe: ViewProbe = {
     ready: false, framesReceived: 0, framesDrawn: 0, badFrames: 0, lastFrame: null,
-    latencyMs: [], fps: 0, stereo,
+    latencyMs: [], fps: 0, stereo, freeze: false,
     project(p) {
       const v = new THREE.Vector3(...p).project(camera);
       return [(v.x + 1) / 2 * window.innerWidth, (1 - v.y) / 2 * window.innerHeight];
@@ -86,6 +110,10 @@ async function main(): Promise<void> {
     },
     toolPosition() {
       return [view.tool.position.x, view.tool.position.y, view.tool.position.z];
+    },
+    screenAxes() {
+      const a = screenAxes(camera);
+      return { right: a.right.toArray(), up: a.up.toArray(), forward: a.forward.toArray() };
     },
   };
   (window as any).microdexView = probe;
@@ -135,7 +163,7 @@ async function main(): Promise<void> {
     const t = performance.now();
     device?.tick((t - lastT) / 1000);
     lastT = t;
-    if (pending) {
+    if (pending && !probe.freeze) {
       const f = pending;
       pending = null;
       view.apply(f);
@@ -160,8 +188,8 @@ async function main(): Promise<void> {
       const cues = activeCueNames(s[S.activeCues]);
       hudCues.textContent = cues.length ? `cues: ${cues.join(', ')}` : '';
     }
-    if (stereo === 'anaglyph') anaglyph.render(world, camera);
-    else if (stereo === 'side-by-side') sbs.render(world, camera);
+    if (stereo === 'anaglyph') renderStereo(anaglyph);
+    else if (stereo === 'side-by-side') renderStereo(sbs);
     else renderer.render(world, camera);
     ++fpsCount;
     if (t - fpsStart >= 1000) {

@@ -1,0 +1,126 @@
+// Building three.js objects from a scene (common/view/src/scene_objects.ts) and updating them
+// from frames: geometry where the scene says, poses from the frame, the tissue grid in place.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import * as THREE from 'three';
+import { HAS_NEEDLE, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame } from '../../../common/view/src/frame';
+import {
+  SceneJson, SceneView, HIGH_DETAIL, LOW_DETAIL, NEEDLE_COLOR, CONTACT_COLOR, gridIndices,
+  needleCurve, polylineCurve, sampleTissue, fieldOfView,
+} from '../../../common/view/src/scene_objects';
+import { microscopeCamera } from '../../../common/view/src/microscope';
+
+const base: SceneJson = {
+  name: 't', task: 'follow_path', modules: ['needle'], tolerance: 1e-4, path: [],
+  microscope: { magnification: 10, look_at: [0, 0, 0], view_dir: [0, 0, -1] },
+  tool_start: { p: [0.001, 0, 0], q: [1, 0, 0, 0] },
+  vessel: { core_radius: 5e-3, tube_radius: 0.5e-3, segment_angle: Math.PI, pose: { p: [0, 0, 0], q: [1, 0, 0, 0] } },
+  needle: { radius: 5e-3, sweep: Math.PI / 3, X_TN: { p: [0, 0, 0], q: [1, 0, 0, 0] } },
+};
+
+function frame(flags: number, set: Record<number, number>, thread: number[] = [],
+               tissue: number[] = [], nx = 0, ny = 0): Frame {
+  const scalars = new Float64Array(SCALAR_COUNT);
+  scalars[S.toolQ] = 1;
+  scalars[S.needleQ] = 1;
+  scalars[S.tissueQ] = 1;
+  for (const [k, v] of Object.entries(set)) scalars[Number(k)] = v;
+  return { flags, slot: 0, scalars, threadNodes: new Float32Array(thread),
+           tissue: new Float32Array(tissue), tissueNodesX: nx, tissueNodesY: ny };
+}
+
+test('the needle curve is the arc (rho cos s, rho sin s, 0)', () => {
+  const c = needleCurve(2, Math.PI / 2);
+  const end = c.getPoint(1);
+  assert.ok(Math.abs(end.x) < 1e-12 && Math.abs(end.y - 2) < 1e-12);
+  const mid = c.getPoint(0.5);
+  assert.ok(Math.abs(mid.length() - 2) < 1e-12);
+});
+
+test('the vessel is the torus segment of the scene, the needle follows the frame', () => {
+  const v = new SceneView(base, HIGH_DETAIL);
+  v.root.updateMatrixWorld(true);
+  const box = new THREE.Box3().setFromObject(v.root.children.find((o) =>
+      (o as THREE.Mesh).geometry instanceof THREE.TorusGeometry)!);
+  // Half a torus (segment π): x from −(R + r) to R + r, y from about 0 to R + r.
+  assert.ok(Math.abs(box.max.x - 5.5e-3) < 1e-5, `max x ${box.max.x}`);
+  assert.ok(Math.abs(box.max.y - 5.5e-3) < 2e-4, `max y ${box.max.y}`);
+  assert.ok(box.min.y > -0.6e-3, `min y ${box.min.y}`);
+  // A frame places the needle at its pose and colours it by contact.
+  const q = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(0, 0, 1), Math.PI / 2);
+  v.apply(frame(HAS_NEEDLE, { [S.needleP]: 1e-3, [S.needleP + 1]: 2e-3, [S.needleQ]: q.w,
+                              [S.needleQ + 3]: q.z, [S.contact]: 1 }));
+  assert.equal(v.needleMaterial!.color.getHex(), CONTACT_COLOR);
+  const mid = v.needleMidpointWorld()!;
+  // Midpoint of the arc at s = π/6 turned by 90° about z, then moved by (1, 2, 0) mm.
+  const m = new THREE.Vector3(5e-3 * Math.cos(Math.PI / 6), 5e-3 * Math.sin(Math.PI / 6), 0)
+      .applyQuaternion(q).add(new THREE.Vector3(1e-3, 2e-3, 0));
+  assert.ok(mid.distanceTo(m) < 1e-12, `${mid.toArray()} vs ${m.toArray()}`);
+  v.apply(frame(HAS_NEEDLE, { [S.contact]: 0 }));
+  assert.equal(v.needleMaterial!.color.getHex(), NEEDLE_COLOR);
+});
+
+test('the tool takes the frame pose', () => {
+  const v = new SceneView(base, LOW_DETAIL);
+  assert.deepEqual(v.tool.position.toArray(), [0.001, 0, 0]);
+  v.apply(frame(0, { [S.toolP]: 3e-3, [S.toolP + 1]: -1e-3, [S.toolP + 2]: 2e-3 }));
+  assert.deepEqual(v.tool.position.toArray(), [3e-3, -1e-3, 2e-3]);
+});
+
+test('thread nodes are copied into the line in place', () => {
+  const v = new SceneView({ ...base, thread: { anchor: [0, 0, 0], radius: 1.25e-5 } });
+  const geom = v.thread!.geometry;
+  const attr = geom.getAttribute('position');
+  v.apply(frame(HAS_THREAD, {}, [0, 0, 0, 1e-3, 0, 0, 2e-3, 1e-3, 0]));
+  assert.equal(geom.drawRange.count, 3);
+  assert.ok(Math.abs(attr.getY(2) - 1e-3) < 1e-9);
+  v.apply(frame(HAS_THREAD, {}, [0, 0, 0, 5e-3, 0, 0]));
+  assert.equal(geom.drawRange.count, 2);
+  assert.equal(v.thread!.geometry.getAttribute('position'), attr, 'the same buffer, updated');
+});
+
+test('tissue grid: indices, sub-sampling, heights from the field', () => {
+  const idx = gridIndices(3, 2);
+  assert.deepEqual(Array.from(idx), [0, 1, 3, 1, 4, 3, 1, 2, 4, 2, 5, 4]);
+  const w = new Float32Array(25).map((_, i) => -i);
+  const out = new Float32Array(9 * 3);
+  const size = sampleTissue(w, 5, 5, 2, 0.02, 0.01, out);
+  assert.deepEqual(size, { nx: 3, ny: 3 });
+  // Node (i, j) = (2, 1) of the kept grid is (4, 2) of the field: w = -(2 * 5 + 4).
+  const k = (1 * 3 + 2) * 3;
+  assert.ok(Math.abs(out[k] - 0.02) < 1e-9 && Math.abs(out[k + 1] - 0.005) < 1e-9);
+  assert.equal(out[k + 2], -14);
+
+  const v = new SceneView({ ...base, tissue: { lx: 0.02, ly: 0.02, pose: { p: [0, 0, 0], q: [1, 0, 0, 0] }, bar: 0 } });
+  const field = Array.from({ length: 9 }, (_, i) => (i === 4 ? -1e-3 : 0));
+  v.apply(frame(HAS_TISSUE, { [S.tissueLx]: 0.02, [S.tissueLy]: 0.02 }, [], field, 3, 3));
+  const pos = v.tissue!.geometry.getAttribute('position');
+  assert.equal(pos.count, 9);
+  assert.equal(pos.getZ(4), Math.fround(-1e-3)); // float32, as in the frame
+  assert.ok(Math.abs(pos.getX(4) - 0.01) < 1e-9);
+  const mesh = v.tissue;
+  v.apply(frame(HAS_TISSUE, { [S.tissueLx]: 0.02, [S.tissueLy]: 0.02 }, [], field.map(() => 0), 3, 3));
+  assert.equal(v.tissue, mesh, 'same grid size: the mesh is updated, not rebuilt');
+  assert.equal(v.tissue!.geometry.getAttribute('position').getZ(4), 0);
+});
+
+test('the wire polyline becomes a curve through its points', () => {
+  const c = polylineCurve([[0, 0, 0], [1, 0, 0], [1, 1, 0]]);
+  assert.ok(Math.abs(c.getLength() - 2) < 1e-9);
+  assert.ok(c.getPoint(1).distanceTo(new THREE.Vector3(1, 1, 0)) < 1e-9);
+});
+
+test('the microscope camera looks at look_at and shows the field of its magnification', () => {
+  const scene = { ...base, microscope: { magnification: 20, look_at: [0.01, 0, 0.002] as [number, number, number], view_dir: [0, -1, -1] as [number, number, number] } };
+  const cam = microscopeCamera(scene, 16 / 9);
+  const centre = new THREE.Vector3(...scene.microscope.look_at).project(cam);
+  assert.ok(Math.abs(centre.x) < 1e-9 && Math.abs(centre.y) < 1e-9);
+  const dir = new THREE.Vector3();
+  cam.getWorldDirection(dir);
+  assert.ok(dir.distanceTo(new THREE.Vector3(0, -1, -1).normalize()) < 1e-9);
+  // A segment of the field's length across the view at look_at spans the image height.
+  const field = fieldOfView(scene);
+  const up = new THREE.Vector3().setFromMatrixColumn(cam.matrixWorld, 1);
+  const top = new THREE.Vector3(...scene.microscope.look_at).addScaledVector(up, field / 2).project(cam);
+  assert.ok(Math.abs(top.y - 1) < 1e-6, `top at ${top.y}`);
+});
