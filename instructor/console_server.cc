@@ -57,7 +57,9 @@ ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address,
   view::ViewServerConfig config;
   config.address = address;
   config.port = static_cast<std::uint16_t>(port);
-  config.max_queued_frames = 24;  // one frame per station per period, up to 8 stations
+  // One frame per station per period, up to 8 stations, before the page takes them.
+  config.max_queued_frames = 24;
+  config.frame_credit = 16;
   server_ = std::make_unique<view::ViewServer>(
       config, std::move(files),
       [this](const std::string& target) -> std::optional<view::WebFile> {
@@ -209,7 +211,11 @@ void ConsoleServer::Poll() {
   }
   if (now < next_frames_ns_) return;
   next_frames_ns_ = now + static_cast<std::int64_t>(1e9 / kFrameRate_hz);
-  for (std::size_t i = 0; i < stations.size(); ++i) {
+  // Each period starts at the next station: a page short of credit (view_server.h) loses
+  // frames of every station in turn, not always of the last ones.
+  ++first_slot_;
+  for (std::size_t k = 0; k < stations.size(); ++k) {
+    const std::size_t i = (first_slot_ + k) % stations.size();
     const StationView& v = stations[i];
     if (!v.tool.latest) continue;
     std::uint64_t& sent = frames_sent_[ids[i]];

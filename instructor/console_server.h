@@ -60,6 +60,7 @@ class ConsoleServer {
   std::vector<std::string> ids_;                      // slot → station id, as last listed
   std::unique_ptr<view::FrameBytes> frame_;
   std::int64_t next_frames_ns_ = 0, next_status_ns_ = 0;
+  std::size_t first_slot_ = 0;
   std::unique_ptr<view::ViewServer> server_;
 };
 

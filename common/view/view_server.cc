@@ -2,11 +2,13 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
+#include <cstdlib>
 #include <deque>
 #include <fstream>
 #include <sstream>
@@ -58,7 +60,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   WsSession(tcp::socket&& socket, ViewServer::Impl& server)
       : ws_(std::move(socket)), server_(server) {}
 
-  void Run(http::request<http::string_body> request) {
+  void Run(const http::request<http::string_body>& request) {
     ws_.read_message_max(server_.config.max_message_bytes);
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.async_accept(request, beast::bind_front_handler(&WsSession::OnAccept, shared_from_this()));
@@ -69,10 +71,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void Send(const std::shared_ptr<const std::string>& data, bool binary) {
     if (!open_) return;
     if (binary) {
-      if (queued_frames_ >= server_.config.max_queued_frames) {
+      if (credit_ <= 0 || queued_frames_ >= server_.config.max_queued_frames) {
         ++server_.owner->dropped_;
         return;
       }
+      --credit_;
       ++queued_frames_;
     } else if (queue_.size() - queued_frames_ >= ViewServer::kMaxQueuedTexts) {
       // A page that stops reading its replies: drop it rather than queue without bound.
@@ -119,6 +122,12 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     } else {
       const std::string message = beast::buffers_to_string(buffer_.data());
       try {
+        if (message.starts_with("credit ")) {
+          TakeCredit(message);
+          buffer_.consume(buffer_.size());
+          DoRead();
+          return;
+        }
         std::string reply = server_.on_text(message);
         if (!reply.empty()) Send(std::make_shared<const std::string>(std::move(reply)), false);
       } catch (const std::invalid_argument& e) {
@@ -128,6 +137,18 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     }
     buffer_.consume(buffer_.size());
     if (open_) DoRead();
+  }
+
+  // "credit N": the page has taken N more frames (1..ViewServer::kMaxCredit).
+  void TakeCredit(const std::string& message) {
+    char* end = nullptr;
+    const long n = std::strtol(message.c_str() + 7, &end, 10);
+    if (end == message.c_str() + 7 || *end != '\0' || n < 1 ||
+        n > static_cast<long>(ViewServer::kMaxCredit)) {
+      throw std::invalid_argument("credit: expected an integer 1.." +
+                                  std::to_string(ViewServer::kMaxCredit));
+    }
+    credit_ = std::min<long>(credit_ + n, static_cast<long>(server_.config.frame_credit));
   }
 
   void DoWrite() {
@@ -159,7 +180,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   beast::flat_buffer buffer_;
   std::deque<Item> queue_;
   std::size_t queued_frames_ = 0;
+  long credit_ = 0;  // frames this page may still be sent before it takes some
   bool open_ = false;
+
+ public:
+  void GrantInitialCredit() { credit_ = static_cast<long>(server_.config.frame_credit); }
 };
 
 // One HTTP connection: GET of the pages and the scene, or the upgrade to the WebSocket.
@@ -206,6 +231,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       }
       stream_.expires_never();
       auto ws = std::make_shared<WsSession>(stream_.release_socket(), server_);
+      ws->GrantInitialCredit();
       server_.sessions.push_back(ws);
       ws->Run(std::move(req));
       return;
@@ -297,7 +323,9 @@ std::map<std::string, WebFile> LoadWebFiles(const std::string& dir,
                                             const std::vector<std::string>& names) {
   std::map<std::string, WebFile> files;
   for (const std::string& name : names) {
-    const std::string path = dir + "/" + name;
+    std::string path = dir;
+    path += '/';
+    path += name;
     std::ifstream f(path, std::ios::binary);
     if (!f) {
       throw std::runtime_error("view page '" + path +

@@ -11,7 +11,9 @@
 // message over max_message_bytes, or a client that stops reading (more than
 // kMaxQueuedTexts replies waiting) is dropped; a text message the handler rejects gets
 // {"type":"error","error":REASON} and the connection stays; binary messages from a page are
-// rejected the same way. Slow readers lose old state frames, never the newest.
+// rejected the same way. Slow readers lose old state frames, never the newest: a page takes
+// frames by credit ("credit N" after it has drawn N; ViewServerConfig::frame_credit), and the
+// server drops the frames it has no credit for.
 
 #include <atomic>
 #include <chrono>
@@ -32,6 +34,10 @@ struct ViewServerConfig {
   std::size_t max_clients = 16;
   std::size_t max_message_bytes = 4096;  // page → server
   std::size_t max_queued_frames = 3;     // per client; newer frames are dropped beyond
+  // Flow control: a page is sent at most this many frames more than it has taken ("credit N"
+  // messages after drawing), so a slow page gets the newest frames rather than a backlog
+  // held in socket buffers.
+  std::size_t frame_credit = 3;
 };
 
 struct WebFile {
@@ -77,6 +83,7 @@ class ViewServer {
   std::uint64_t clients_dropped() const { return clients_dropped_.load(); }
 
   static constexpr std::size_t kMaxQueuedTexts = 64;
+  static constexpr std::size_t kMaxCredit = 1024;
 
  private:
   struct Impl;

@@ -161,8 +161,10 @@ function main(): void {
   };
   (window as any).microdexConsole = probe;
 
+  let taken = 0; // frames received since the last credit sent (view_server.h)
   const sock: AppSocket = new AppSocket(socketUrl(), {
     onFrame(data) {
+      ++taken;
       let f: Frame;
       try {
         f = decodeFrame(data);
@@ -240,6 +242,7 @@ function main(): void {
       ++drawn;
     }
     probe.tilesDrawn = drawn;
+    if (taken > 0 && sock.send(`credit ${taken}`)) taken = 0;
     ++fpsCount;
     const t = performance.now();
     if (t - fpsStart >= 1000) {

@@ -8,7 +8,7 @@ import { StereoEffect } from 'three/examples/jsm/effects/StereoEffect.js';
 import { VRButton } from 'three/examples/jsm/webxr/VRButton.js';
 import { Frame, S, activeCueNames, decodeFrame, HAS_NEEDLE, HAS_SCORE, HAS_THREAD, HAS_TISSUE } from '../../common/view/src/frame';
 import { SceneJson, SceneView, HIGH_DETAIL, fieldOfView } from '../../common/view/src/scene_objects';
-import { microscopeCamera, screenAxes } from '../../common/view/src/microscope';
+import { microscopeCamera, screenAxes, softwareGl } from '../../common/view/src/microscope';
 import { AppSocket, socketUrl } from '../../common/view/src/socket';
 
 const OUTCOMES = ['running', 'completed', 'time limit'];
@@ -39,7 +39,10 @@ async function main(): Promise<void> {
   ]);
   const params = new URLSearchParams(location.search);
   const container = document.getElementById('view')!;
-  const renderer = new THREE.WebGLRenderer({ antialias: params.get('aa') !== '0' });
+  // Multisampling costs a software renderer more than the rest of the frame: off there
+  // unless ?aa=1.
+  const aa = params.get('aa');
+  const renderer = new THREE.WebGLRenderer({ antialias: aa !== null ? aa !== '0' : !softwareGl() });
   renderer.setPixelRatio(1);
   renderer.setSize(window.innerWidth, window.innerHeight);
   renderer.setClearColor(0x101418);
@@ -120,9 +123,11 @@ async function main(): Promise<void> {
   setStereo(stereo);
 
   let pending: Frame | null = null;
+  let taken = 0; // frames received since the last credit sent (view_server.h)
   const sock = new AppSocket(socketUrl(), {
     onFrame(data) {
       try {
+        ++taken;
         pending = decodeFrame(data);
         ++probe.framesReceived;
       } catch (e) {
@@ -197,6 +202,7 @@ async function main(): Promise<void> {
       fpsCount = 0;
       fpsStart = t;
     }
+    if (taken > 0 && sock.send(`credit ${taken}`)) taken = 0;
     probe.ready = true;
   });
 }

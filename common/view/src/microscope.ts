@@ -43,3 +43,14 @@ export function screenAxes(camera: THREE.Camera): { right: THREE.Vector3; up: TH
     forward: new THREE.Vector3(-m[8], -m[9], -m[10]).normalize(),
   };
 }
+
+// True when WebGL is drawn in software (SwiftShader, llvmpipe): the pages then spare
+// multisampling.
+export function softwareGl(): boolean {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  if (!gl) return true;
+  const info = gl.getExtension('WEBGL_debug_renderer_info');
+  const name = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
+  gl.getExtension('WEBGL_lose_context')?.loseContext();
+  return /swiftshader|llvmpipe|software/i.test(name);
+}

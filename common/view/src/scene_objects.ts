@@ -36,6 +36,8 @@ export interface SceneJson {
 export const NEEDLE_COLOR = 0x00e5ff;
 export const CONTACT_COLOR = 0xff2020;
 export const TOOL_COLOR = 0xc8c8d0;
+export const THREAD_COLOR = 0x3050ff;
+export const PATH_COLOR = 0xd0d080; // the task's ideal path, faint
 
 // Level of detail: the station's full view or a console tile.
 export interface Detail {
@@ -113,9 +115,93 @@ export function sampleTissue(w: Float32Array, nx: number, ny: number, stride: nu
   return { nx: kx, ny: ky };
 }
 
-function material(color: number, opts: THREE.MeshStandardMaterialParameters = {}):
-    THREE.MeshStandardMaterial {
-  return new THREE.MeshStandardMaterial({ color, roughness: 0.55, metalness: 0.1, ...opts });
+// Lambert shading: cheap per pixel (software WebGL draws every pixel on the CPU); metal
+// parts get a little emissive sheen instead of a PBR highlight.
+interface Look { transparent?: boolean; opacity?: number; side?: THREE.Side; depthWrite?: boolean;
+                 metal?: boolean }
+function material(color: number, look: Look = {}): THREE.MeshLambertMaterial {
+  const { metal, ...rest } = look;
+  const m = new THREE.MeshLambertMaterial({ color, ...rest });
+  if (metal) m.emissive.setHex(color).multiplyScalar(0.25);
+  // One pass for double-sided transparent surfaces (three draws back and front apart).
+  if (rest.transparent) m.forceSinglePass = true;
+  return m;
+}
+
+// A tube along a polyline of up to maxNodes nodes whose vertices are rewritten in place
+// (the thread: its nodes move every frame). Rings are carried along by parallel transport.
+export class PolylineTube {
+  readonly mesh: THREE.Mesh;
+  private readonly positions: Float32Array;
+  private readonly normals: Float32Array;
+
+  constructor(readonly maxNodes: number, readonly radius: number, readonly sides: number,
+              mat: THREE.Material) {
+    this.positions = new Float32Array(maxNodes * sides * 3);
+    this.normals = new Float32Array(maxNodes * sides * 3);
+    const index = new Uint32Array((maxNodes - 1) * sides * 6);
+    let k = 0;
+    for (let i = 0; i + 1 < maxNodes; ++i) {
+      for (let j = 0; j < sides; ++j) {
+        const a = i * sides + j;
+        const b = i * sides + ((j + 1) % sides);
+        index[k++] = a; index[k++] = b; index[k++] = a + sides;
+        index[k++] = b; index[k++] = b + sides; index[k++] = a + sides;
+      }
+    }
+    const geom = new THREE.BufferGeometry();
+    geom.setAttribute('position', new THREE.BufferAttribute(this.positions, 3));
+    geom.setAttribute('normal', new THREE.BufferAttribute(this.normals, 3));
+    geom.setIndex(new THREE.BufferAttribute(index, 1));
+    geom.setDrawRange(0, 0);
+    this.mesh = new THREE.Mesh(geom, mat);
+    this.mesh.frustumCulled = false;
+  }
+
+  // nodes: x, y, z per node. Returns the number of nodes drawn.
+  update(nodes: Float32Array): number {
+    const n = Math.min(nodes.length / 3, this.maxNodes);
+    const t = new THREE.Vector3();
+    const nrm = new THREE.Vector3();
+    const bin = new THREE.Vector3();
+    const p = new THREE.Vector3();
+    const q = new THREE.Vector3();
+    for (let i = 0; i < n; ++i) {
+      const a = Math.max(i - 1, 0);
+      const b = Math.min(i + 1, n - 1);
+      p.set(nodes[a * 3], nodes[a * 3 + 1], nodes[a * 3 + 2]);
+      q.set(nodes[b * 3], nodes[b * 3 + 1], nodes[b * 3 + 2]);
+      t.subVectors(q, p);
+      if (t.lengthSq() === 0) t.set(1, 0, 0);
+      t.normalize();
+      if (i === 0) {
+        nrm.set(Math.abs(t.x) < 0.9 ? 1 : 0, Math.abs(t.x) < 0.9 ? 0 : 1, 0);
+      }
+      // Parallel transport: the previous normal made perpendicular to this tangent.
+      nrm.addScaledVector(t, -nrm.dot(t));
+      if (nrm.lengthSq() < 1e-12) nrm.set(-t.y, t.x, 0);
+      nrm.normalize();
+      bin.crossVectors(t, nrm);
+      for (let j = 0; j < this.sides; ++j) {
+        const ang = (2 * Math.PI * j) / this.sides;
+        const c = Math.cos(ang);
+        const s = Math.sin(ang);
+        const v = (i * this.sides + j) * 3;
+        const nx = c * nrm.x + s * bin.x;
+        const ny = c * nrm.y + s * bin.y;
+        const nz = c * nrm.z + s * bin.z;
+        this.normals[v] = nx; this.normals[v + 1] = ny; this.normals[v + 2] = nz;
+        this.positions[v] = nodes[i * 3] + this.radius * nx;
+        this.positions[v + 1] = nodes[i * 3 + 1] + this.radius * ny;
+        this.positions[v + 2] = nodes[i * 3 + 2] + this.radius * nz;
+      }
+    }
+    const g = this.mesh.geometry;
+    g.getAttribute('position').needsUpdate = true;
+    g.getAttribute('normal').needsUpdate = true;
+    g.setDrawRange(0, Math.max(n - 1, 0) * this.sides * 6);
+    return n;
+  }
 }
 
 // One station's scene as three.js objects.
@@ -124,7 +210,7 @@ export class SceneView {
   readonly tool = new THREE.Group();
   needle: THREE.Mesh | null = null;
   needleMaterial: THREE.MeshBasicMaterial | null = null;
-  thread: THREE.Line | null = null;
+  thread: PolylineTube | null = null;
   tissue: THREE.Mesh | null = null;
   private tissueKey = '';
   private shadowDot: THREE.Mesh;
@@ -137,7 +223,7 @@ export class SceneView {
     this.floorZ = floorHeight(scene);
     // Table: a dark plane under everything (a depth cue with the tool's shadow dot).
     const table = new THREE.Mesh(new THREE.PlaneGeometry(scale * 12, scale * 12),
-                                 material(0x2a3036, { roughness: 0.9 }));
+                                 new THREE.MeshBasicMaterial({ color: 0x2a3036 }));
     table.position.set(scene.microscope.look_at[0], scene.microscope.look_at[1], this.floorZ);
     this.root.add(table);
 
@@ -174,7 +260,7 @@ export class SceneView {
       const w = scene.wire;
       const wire = new THREE.Mesh(
           new THREE.TubeGeometry(polylineCurve(w.points), d.along * 2, w.radius, d.radial),
-          material(0xd8b040, { metalness: 0.6, roughness: 0.35 }));
+          material(0xd8b040, { metal: true }));
       this.root.add(wire);
     }
     if (scene.grasp) {
@@ -201,17 +287,16 @@ export class SceneView {
     if (scene.path.length >= 2) {
       const line = new THREE.Line(
           new THREE.BufferGeometry().setFromPoints(scene.path.map((p) => new THREE.Vector3(...p))),
-          new THREE.LineBasicMaterial({ color: 0x80c0ff, transparent: true, opacity: 0.5 }));
+          new THREE.LineBasicMaterial({ color: PATH_COLOR, transparent: true, opacity: 0.6 }));
       this.root.add(line);
     }
     if (scene.thread) {
-      const positions = new Float32Array(512 * 3);
-      const geom = new THREE.BufferGeometry();
-      geom.setAttribute('position', new THREE.BufferAttribute(positions, 3));
-      geom.setDrawRange(0, 0);
-      this.thread = new THREE.Line(geom, new THREE.LineBasicMaterial({ color: 0x2040ff }));
-      this.thread.frustumCulled = false;
-      this.root.add(this.thread);
+      // Drawn at least a pixel or two wide: a 10-0 suture (25 µm) is thinner than a pixel
+      // of the whole field.
+      const radius = Math.max(scene.thread.radius, fieldOfView(scene) / 600);
+      this.thread = new PolylineTube(512, radius, Math.max(4, d.radial / 2),
+                                     material(THREAD_COLOR));
+      this.root.add(this.thread.mesh);
     }
 
     // The tool: a shaft along +z_T from the tip, a tip ball; a loop in T's xy plane.
@@ -219,7 +304,7 @@ export class SceneView {
     const shaftRadius = scale * 0.025;
     const shaft = new THREE.Mesh(
         new THREE.CylinderGeometry(shaftRadius, shaftRadius * 0.4, shaftLength, d.radial),
-        material(TOOL_COLOR, { metalness: 0.7, roughness: 0.3 }));
+        material(TOOL_COLOR, { metal: true }));
     shaft.rotateX(Math.PI / 2);
     shaft.position.z = shaftLength / 2;
     this.tool.add(shaft);
@@ -229,14 +314,14 @@ export class SceneView {
     if (scene.loop) {
       const loop = new THREE.Mesh(
           new THREE.TorusGeometry(scene.loop.radius, scene.loop.wire_radius, d.radial / 2, d.along),
-          material(0xe0e0e8, { metalness: 0.8, roughness: 0.25 }));
+          material(0xe0e0e8, { metal: true }));
       this.tool.add(loop);
     }
     if (scene.grasp) {
       const g = scene.grasp;
       for (const side of [1, -1]) {
         const jaw = new THREE.Mesh(new THREE.BoxGeometry(g.jaw_width, g.jaw_thickness, g.jaw_length),
-                                   material(TOOL_COLOR, { metalness: 0.7 }));
+                                   material(TOOL_COLOR, { metal: true }));
         jaw.position.set(0, side * (g.open_gap / 2 + g.jaw_thickness / 2), 0);
         this.tool.add(jaw);
       }
@@ -269,13 +354,7 @@ export class SceneView {
       setPose(this.needle, s, S.needleP, s, S.needleQ);
       this.needleMaterial!.color.setHex(s[S.contact] ? CONTACT_COLOR : NEEDLE_COLOR);
     }
-    if (this.thread && (f.flags & HAS_THREAD)) {
-      const attr = this.thread.geometry.getAttribute('position') as THREE.BufferAttribute;
-      const n = Math.min(f.threadNodes.length / 3, attr.count);
-      (attr.array as Float32Array).set(f.threadNodes.subarray(0, n * 3));
-      attr.needsUpdate = true;
-      this.thread.geometry.setDrawRange(0, n);
-    }
+    if (this.thread && (f.flags & HAS_THREAD)) this.thread.update(f.threadNodes);
     if (f.flags & HAS_TISSUE) this.applyTissue(f);
   }
 
@@ -295,8 +374,7 @@ export class SceneView {
       geom.setAttribute('position',
                         new THREE.BufferAttribute(new Float32Array(size.nx * size.ny * 3), 3));
       geom.setIndex(new THREE.BufferAttribute(gridIndices(size.nx, size.ny), 1));
-      this.tissue = new THREE.Mesh(geom, material(0xe8a890, { roughness: 0.7,
-                                                                side: THREE.DoubleSide }));
+      this.tissue = new THREE.Mesh(geom, material(0xe8a890, { side: THREE.DoubleSide }));
       this.tissue.frustumCulled = false;
       this.tissueKey = key;
       this.root.add(this.tissue);

@@ -67,16 +67,31 @@ test('the tool takes the frame pose', () => {
   assert.deepEqual(v.tool.position.toArray(), [3e-3, -1e-3, 2e-3]);
 });
 
-test('thread nodes are copied into the line in place', () => {
-  const v = new SceneView({ ...base, thread: { anchor: [0, 0, 0], radius: 1.25e-5 } });
-  const geom = v.thread!.geometry;
+test('the thread tube is rebuilt in place around the frame\'s nodes', () => {
+  const v = new SceneView({ ...base, thread: { anchor: [0, 0, 0], radius: 1e-3 } });
+  const tube = v.thread!;
+  const geom = tube.mesh.geometry;
   const attr = geom.getAttribute('position');
-  v.apply(frame(HAS_THREAD, {}, [0, 0, 0, 1e-3, 0, 0, 2e-3, 1e-3, 0]));
-  assert.equal(geom.drawRange.count, 3);
-  assert.ok(Math.abs(attr.getY(2) - 1e-3) < 1e-9);
+  const nodes = [0, 0, 0, 1e-2, 0, 0, 2e-2, 1e-2, 0];
+  v.apply(frame(HAS_THREAD, {}, nodes));
+  assert.equal(geom.drawRange.count, 2 * tube.sides * 6);
+  // Every ring vertex lies one radius from its node, its normal along the offset.
+  for (let i = 0; i < 3; ++i) {
+    for (let j = 0; j < tube.sides; ++j) {
+      const k = i * tube.sides + j;
+      const off = new THREE.Vector3(attr.getX(k) - nodes[i * 3], attr.getY(k) - nodes[i * 3 + 1],
+                                    attr.getZ(k) - nodes[i * 3 + 2]);
+      assert.ok(Math.abs(off.length() - 1e-3) < 1e-8, `ring ${i} vertex ${j}: ${off.length()}`);
+      const nrm = geom.getAttribute('normal');
+      assert.ok(off.normalize().distanceTo(new THREE.Vector3(nrm.getX(k), nrm.getY(k), nrm.getZ(k))) < 1e-5);
+    }
+  }
+  // The rings are across the thread: node 0's ring is perpendicular to the first link.
+  const k0 = new THREE.Vector3(attr.getX(0), attr.getY(0), attr.getZ(0));
+  assert.ok(Math.abs(k0.x) < 1e-9);
   v.apply(frame(HAS_THREAD, {}, [0, 0, 0, 5e-3, 0, 0]));
-  assert.equal(geom.drawRange.count, 2);
-  assert.equal(v.thread!.geometry.getAttribute('position'), attr, 'the same buffer, updated');
+  assert.equal(geom.drawRange.count, 1 * tube.sides * 6);
+  assert.equal(geom.getAttribute('position'), attr, 'the same buffer, updated');
 });
 
 test('tissue grid: indices, sub-sampling, heights from the field', () => {

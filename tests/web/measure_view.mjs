@@ -1,0 +1,90 @@
+// Speed of the view pages in headless Chromium with software WebGL (SwiftShader): frames per
+// second of the station view at 1280 x 720 and of the console with 8 stations, and the
+// state-to-screen latency (the tick stamp of the state → the page drawing it, both
+// CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
+// node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N]
+import { writeFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { launchBrowser, sourceDir } from './browser.mjs';
+import { args, startProcess, stopProcess, waitFor } from './harness.mjs';
+
+const a = args({ bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
+                 seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0' });
+const seconds = Number(a.seconds);
+const rt = a.realtime === '1' ? [] : ['--no-realtime'];
+const quantile = (v, q) => {
+  if (!v.length) return NaN;
+  const s = [...v].sort((x, y) => x - y);
+  return s[Math.min(s.length - 1, Math.floor(q * s.length))];
+};
+const summary = (lat) => ({ n: lat.length, p50_ms: quantile(lat, 0.5), p99_ms: quantile(lat, 0.99),
+                            max_ms: quantile(lat, 1) });
+
+async function measurePage(page, probeName) {
+  // Warm up, then count frames and collect latencies over the window.
+  await page.waitForTimeout(2000);
+  const start = await page.evaluate((p) => {
+    const v = window[p];
+    v.latencyMs.length = 0;
+    window.__frames = 0;
+    const count = () => { ++window.__frames; requestAnimationFrame(count); };
+    requestAnimationFrame(count);
+    return performance.now();
+  }, probeName);
+  await page.waitForTimeout(seconds * 1000);
+  return page.evaluate(([p, t0]) => {
+    const v = window[p];
+    return { fps: window.__frames / ((performance.now() - t0) / 1000), latency: [...v.latencyMs] };
+  }, [probeName, start]);
+}
+
+const report = { seconds, machine_load: (await import('node:os')).loadavg() };
+const { context, close } = await launchBrowser({ width: 1280, height: 720 });
+try {
+  // Station view.
+  const station = await startProcess(join(a.bin, 'microdex-station'), [
+    '--scene', join(sourceDir, `assets/scenes/${a.scene}.yaml`), '--view', '0', ...rt,
+    '--duration', String(seconds + 60), '--partition', `measure-${process.pid}-s`,
+  ], /view: http:\/\/127\.0\.0\.1:(\d+)\//);
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${station.match[1]}/`);
+  await waitFor(() => page.evaluate(() => (window.microdexView?.framesDrawn ?? 0) >= 5), 'frames', 30000);
+  const s = await measurePage(page, 'microdexView');
+  report.station = { scene: a.scene, width: 1280, height: 720, fps: s.fps, latency: summary(s.latency) };
+  await page.close();
+  await stopProcess(station.child);
+
+  // Console with N stations.
+  const n = Number(a.stations);
+  const dds = ['--partition', `measure-${process.pid}-c`];
+  const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
+                                        ['--http', '0', '--duration', String(seconds + 90), ...dds],
+                                        /console: http:\/\/127\.0\.0\.1:(\d+)\//);
+  const scenes = ['needle_tube', 'thread_pull', 'tissue_press', 'loop_along_wire', 'tremor_hold',
+                  'grasp', 'suture_on_tissue', 'needle_tube_minimal'];
+  const stations = [];
+  for (let i = 0; i < n; ++i) {
+    stations.push(await startProcess(join(a.bin, 'microdex-station'), [
+      '--scene', join(sourceDir, `assets/scenes/${scenes[i % scenes.length]}.yaml`),
+      '--station-id', `m${i}`, ...rt, '--duration', String(seconds + 60), ...dds,
+    ], /station|info/));
+  }
+  const cpage = await context.newPage();
+  await cpage.goto(`http://127.0.0.1:${instructor.match[1]}/`);
+  await waitFor(() => cpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
+                `${n} tiles drawn`, 60000);
+  const c = await measurePage(cpage, 'microdexConsole');
+  report.console = { stations: n, width: 1280, height: 720, fps: c.fps, latency: summary(c.latency) };
+  await cpage.screenshot({ path: join(a.out, 'console_8_stations.png') });
+  for (const st of stations) await stopProcess(st.child);
+  await stopProcess(instructor.child);
+} finally {
+  await close();
+}
+report.machine_load_after = (await import('node:os')).loadavg();
+writeFileSync(join(a.out, 'view_speed.json'), JSON.stringify(report, null, 1));
+const f = (v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
+console.log(`| view | fps (goal) | latency p50 / p99 ms (goal 25 / 60) |`);
+console.log(`| station, ${a.scene}, 1280x720 | ${f(report.station.fps)} (30) | ${f(report.station.latency.p50_ms)} / ${f(report.station.latency.p99_ms)} |`);
+console.log(`| console, ${report.console.stations} stations | ${f(report.console.fps)} (15) | ${f(report.console.latency.p50_ms)} / ${f(report.console.latency.p99_ms)} |`);
+console.log(`load average before ${report.machine_load.map((x) => x.toFixed(1)).join(' ')}, after ${report.machine_load_after.map((x) => x.toFixed(1)).join(' ')}`);
