@@ -52,7 +52,7 @@ ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address,
                              const std::string& web_dir)
     : instructor_(instructor), frame_(std::make_unique<view::FrameBytes>()) {
   std::map<std::string, view::WebFile> files =
-      view::LoadWebFiles(web_dir, {"console.html", "console.js"});
+      view::LoadWebFiles(web_dir, {"console.html", "console.js", "frame_worker.js"});
   files["/"] = files["/console.html"];
   view::ViewServerConfig config;
   config.address = address;

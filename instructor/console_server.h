@@ -25,7 +25,8 @@ namespace microdex::instructor {
 
 class ConsoleServer {
  public:
-  static constexpr double kFrameRate_hz = 60;
+  // Tiles are small and many: half the stations' default mirror rate is enough for them.
+  static constexpr double kFrameRate_hz = 30;
   static constexpr double kStatusRate_hz = 4;
   static constexpr std::size_t kCuesShown = 8;  // per station, the latest
 

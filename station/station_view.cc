@@ -20,10 +20,11 @@ StationView::StationView(const scene::SceneModel& scene, int port, const std::st
   info_json_ = "{\"station_id\":" + view::JsonQuote(station_id) +
                ",\"device\":" + (device != nullptr ? "\"page\"" : "\"watch\"") + "}";
   std::map<std::string, view::WebFile> files =
-      view::LoadWebFiles(web_dir, {"station.html", "station.js"});
+      view::LoadWebFiles(web_dir, {"station.html", "station.js", "frame_worker.js"});
   files["/"] = files["/station.html"];
   view::ViewServerConfig config;
   config.port = static_cast<std::uint16_t>(port);
+  config.frame_credit = 4;
   auto dynamic = [this](const std::string& target) -> std::optional<view::WebFile> {
     if (target == "/scene.json") return view::WebFile{"application/json", scene_json_};
     if (target == "/info.json") return view::WebFile{"application/json", info_json_};

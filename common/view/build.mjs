@@ -19,7 +19,10 @@ const pages = [
   { name: 'console', dir: join(root, 'instructor/page') },
 ];
 await esbuild.build({
-  entryPoints: Object.fromEntries(pages.map((p) => [p.name, join(p.dir, `${p.name}.ts`)])),
+  entryPoints: {
+    ...Object.fromEntries(pages.map((p) => [p.name, join(p.dir, `${p.name}.ts`)])),
+    frame_worker: join(here, 'src/frame_worker.ts'),
+  },
   bundle: true,
   format: 'iife',
   target: 'es2020',

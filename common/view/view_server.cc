@@ -263,6 +263,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     res->set(http::field::server, "microdex");
     res->set(http::field::content_type, type);
     res->set(http::field::cache_control, "no-store");
+    // Cross-origin isolation: the pages' frame worker shares its buffer with the page
+    // (SharedArrayBuffer); every resource is same-origin.
+    res->set("Cross-Origin-Opener-Policy", "same-origin");
+    res->set("Cross-Origin-Embedder-Policy", "require-corp");
     res->keep_alive(keep_alive);
     res->body() = body;
     res->prepare_payload();

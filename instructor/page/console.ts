@@ -7,7 +7,8 @@ import * as THREE from 'three';
 import { Frame, S, activeCueNames, decodeFrame } from '../../common/view/src/frame';
 import { LOW_DETAIL, SceneJson, SceneView } from '../../common/view/src/scene_objects';
 import { microscopeCamera } from '../../common/view/src/microscope';
-import { AppSocket, socketUrl } from '../../common/view/src/socket';
+import { socketUrl } from '../../common/view/src/socket';
+import { FrameLink, MAX_SLOTS } from '../../common/view/src/frame_link';
 
 const MAX_TILES = 8;
 const OUTCOMES = ['running', 'completed', 'time limit'];
@@ -158,28 +159,11 @@ function main(): void {
   const probe = {
     stations: [] as StationJson[], framesReceived: 0, badFrames: 0, fps: 0, tilesDrawn: 0,
     framesBySlot: [] as number[], errors: [] as string[], latencyMs: [] as number[],
+    receivedMs: [] as number[],
   };
   (window as any).microdexConsole = probe;
 
-  let taken = 0; // frames received since the last credit sent (view_server.h)
-  const sock: AppSocket = new AppSocket(socketUrl(), {
-    onFrame(data) {
-      ++taken;
-      let f: Frame;
-      try {
-        f = decodeFrame(data);
-      } catch (e) {
-        ++probe.badFrames;
-        return;
-      }
-      ++probe.framesReceived;
-      probe.framesBySlot[f.slot] = (probe.framesBySlot[f.slot] ?? 0) + 1;
-      const tile = tiles.get(slots[f.slot]);
-      if (tile) {
-        tile.pending = f;
-        ++tile.frames;
-      }
-    },
+  const link = new FrameLink(socketUrl(), 'frame_worker.js', {
     onText(m) {
       if (m.type === 'stations') {
         const list = m.stations as StationJson[];
@@ -188,7 +172,7 @@ function main(): void {
         for (const s of list.slice(0, MAX_TILES)) {
           let tile = tiles.get(s.id);
           if (!tile) {
-            tile = new Tile(s, (text) => sock.send(text));
+            tile = new Tile(s, (text) => link.send(text));
             tiles.set(s.id, tile);
             grid.appendChild(tile.el);
           }
@@ -210,6 +194,29 @@ function main(): void {
     },
     onStatus(open) { document.getElementById('link')!.textContent = open ? 'live' : 'disconnected'; },
   });
+  (probe as any).sharedFrames = link.shared;
+  // The newest frame of each slot, to its tile.
+  const takeFrames = () => {
+    for (let slot = 0; slot < Math.min(slots.length, MAX_SLOTS); ++slot) {
+      const t = link.take(slot);
+      if (!t) continue;
+      let f: Frame;
+      try {
+        f = decodeFrame(t.buffer);
+      } catch (e) {
+        ++probe.badFrames;
+        continue;
+      }
+      ++probe.framesReceived;
+      if (probe.receivedMs.length < 100000) probe.receivedMs.push(t.receivedMs - f.scalars[S.stampMs]);
+      probe.framesBySlot[f.slot] = (probe.framesBySlot[f.slot] ?? 0) + 1;
+      const tile = tiles.get(slots[f.slot]);
+      if (tile) {
+        tile.pending = f;
+        ++tile.frames;
+      }
+    }
+  };
 
   window.addEventListener('resize', () => renderer.setSize(window.innerWidth, window.innerHeight, false));
   let fpsCount = 0;
@@ -222,6 +229,7 @@ function main(): void {
     renderer.setClearColor(clear);
     renderer.clear();
     let drawn = 0;
+    takeFrames();
     for (const tile of tiles.values()) {
       const f = tile.pending;
       tile.applyPending();
@@ -242,7 +250,7 @@ function main(): void {
       ++drawn;
     }
     probe.tilesDrawn = drawn;
-    if (taken > 0 && sock.send(`credit ${taken}`)) taken = 0;
+    link.drew();
     ++fpsCount;
     const t = performance.now();
     if (t - fpsStart >= 1000) {

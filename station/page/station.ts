@@ -9,7 +9,8 @@ import { VRButton } from 'three/examples/jsm/webxr/VRButton.js';
 import { Frame, S, activeCueNames, decodeFrame, HAS_NEEDLE, HAS_SCORE, HAS_THREAD, HAS_TISSUE } from '../../common/view/src/frame';
 import { SceneJson, SceneView, HIGH_DETAIL, fieldOfView } from '../../common/view/src/scene_objects';
 import { microscopeCamera, screenAxes, softwareGl } from '../../common/view/src/microscope';
-import { AppSocket, socketUrl } from '../../common/view/src/socket';
+import { socketUrl } from '../../common/view/src/socket';
+import { FrameLink } from '../../common/view/src/frame_link';
 
 const OUTCOMES = ['running', 'completed', 'time limit'];
 type StereoMode = 'mono' | 'anaglyph' | 'side-by-side';
@@ -23,8 +24,11 @@ interface ViewProbe {
   badFrames: number;
   lastFrame: Frame | null;
   latencyMs: number[]; // tick stamp → the frame drawn (page clock, CLOCK_REALTIME)
+  receivedMs: number[]; // tick stamp → the frame received by the page
+  encodedMs: number[]; // tick stamp → the frame encoded by the station's publisher thread
   fps: number;
   stereo: StereoMode;
+  sharedFrames: boolean; // frames through the worker's shared buffer (frame_link.ts)
   freeze: boolean; // keep drawing the last frame applied (tests: a still image to compare)
   project(p: [number, number, number]): [number, number];
   needleScreen(): [number, number] | null;
@@ -102,7 +106,7 @@ async function main(): Promise<void> {
 
   const probe: ViewProbe = {
     ready: false, framesReceived: 0, framesDrawn: 0, badFrames: 0, lastFrame: null,
-    latencyMs: [], fps: 0, stereo, freeze: false,
+    latencyMs: [], receivedMs: [], encodedMs: [], fps: 0, stereo, freeze: false, sharedFrames: false,
     project(p) {
       const v = new THREE.Vector3(...p).project(camera);
       return [(v.x + 1) / 2 * window.innerWidth, (1 - v.y) / 2 * window.innerHeight];
@@ -122,27 +126,34 @@ async function main(): Promise<void> {
   (window as any).microdexView = probe;
   setStereo(stereo);
 
-  let pending: Frame | null = null;
-  let taken = 0; // frames received since the last credit sent (view_server.h)
-  const sock = new AppSocket(socketUrl(), {
-    onFrame(data) {
-      try {
-        ++taken;
-        pending = decodeFrame(data);
-        ++probe.framesReceived;
-      } catch (e) {
-        ++probe.badFrames;
-        console.warn(String(e));
-      }
-    },
+  const link = new FrameLink(socketUrl(), 'frame_worker.js', {
     onText(m) { if (m.type === 'error') console.warn(`station: ${m.error}`); },
     onStatus(open) {
       document.getElementById('link')!.innerHTML = open ? '' : '<span class="warn">disconnected</span>';
     },
   });
+  probe.sharedFrames = link.shared;
+  // The newest frame, decoded (null: none new, or a bad one, counted).
+  const takeFrame = (): Frame | null => {
+    const t = link.take(0);
+    if (!t) return null;
+    try {
+      const f = decodeFrame(t.buffer);
+      ++probe.framesReceived;
+      if (probe.receivedMs.length < 100000) {
+        probe.receivedMs.push(t.receivedMs - f.scalars[S.stampMs]);
+        probe.encodedMs.push(f.scalars[S.sentMs] - f.scalars[S.stampMs]);
+      }
+      return f;
+    } catch (e) {
+      ++probe.badFrames;
+      console.warn(String(e));
+      return null;
+    }
+  };
 
   // Keyboard and mouse as the device.
-  const device = info.device === 'page' ? new PageInput(camera, scene, (m) => sock.send(m)) : null;
+  const device = info.device === 'page' ? new PageInput(camera, scene, (m) => link.send(m)) : null;
   document.getElementById('help')!.textContent = device
       ? 'arrows/WASD move · R/F depth · Q/E roll · space grip · 1–5 buttons · drag: move · V stereo'
       : 'watching (the station\'s device is not this page) · V stereo';
@@ -161,6 +172,7 @@ async function main(): Promise<void> {
   const hudTask = document.getElementById('task')!;
   const hudState = document.getElementById('state')!;
   const hudCues = document.getElementById('cues')!;
+  const drawing = params.get('draw') !== '0';
   let fpsCount = 0;
   let fpsStart = performance.now();
   let lastT = performance.now();
@@ -168,9 +180,8 @@ async function main(): Promise<void> {
     const t = performance.now();
     device?.tick((t - lastT) / 1000);
     lastT = t;
-    if (pending && !probe.freeze) {
-      const f = pending;
-      pending = null;
+    const f = probe.freeze ? null : takeFrame();
+    if (f) {
       view.apply(f);
       probe.lastFrame = f;
       ++probe.framesDrawn;
@@ -193,7 +204,8 @@ async function main(): Promise<void> {
       const cues = activeCueNames(s[S.activeCues]);
       hudCues.textContent = cues.length ? `cues: ${cues.join(', ')}` : '';
     }
-    if (stereo === 'anaglyph') renderStereo(anaglyph);
+    if (!drawing) { /* ?draw=0: measurements of the page without its rendering */ }
+    else if (stereo === 'anaglyph') renderStereo(anaglyph);
     else if (stereo === 'side-by-side') renderStereo(sbs);
     else renderer.render(world, camera);
     ++fpsCount;
@@ -202,7 +214,7 @@ async function main(): Promise<void> {
       fpsCount = 0;
       fpsStart = t;
     }
-    if (taken > 0 && sock.send(`credit ${taken}`)) taken = 0;
+    link.drew();
     probe.ready = true;
   });
 }

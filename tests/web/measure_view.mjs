@@ -9,7 +9,8 @@ import { launchBrowser, sourceDir } from './browser.mjs';
 import { args, startProcess, stopProcess, waitFor } from './harness.mjs';
 
 const a = args({ bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
-                 seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0' });
+                 seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0',
+                 width: '1280', height: '720', only: '', query: '' });
 const seconds = Number(a.seconds);
 const rt = a.realtime === '1' ? [] : ['--no-realtime'];
 const quantile = (v, q) => {
@@ -26,6 +27,8 @@ async function measurePage(page, probeName) {
   const start = await page.evaluate((p) => {
     const v = window[p];
     v.latencyMs.length = 0;
+    v.receivedMs.length = 0;
+    if (v.encodedMs) v.encodedMs.length = 0;
     window.__frames = 0;
     const count = () => { ++window.__frames; requestAnimationFrame(count); };
     requestAnimationFrame(count);
@@ -34,25 +37,31 @@ async function measurePage(page, probeName) {
   await page.waitForTimeout(seconds * 1000);
   return page.evaluate(([p, t0]) => {
     const v = window[p];
-    return { fps: window.__frames / ((performance.now() - t0) / 1000), latency: [...v.latencyMs] };
+    return { fps: window.__frames / ((performance.now() - t0) / 1000), latency: [...v.latencyMs],
+             received: [...v.receivedMs], encoded: [...(v.encodedMs ?? [])] };
   }, [probeName, start]);
 }
 
 const report = { seconds, machine_load: (await import('node:os')).loadavg() };
-const { context, close } = await launchBrowser({ width: 1280, height: 720 });
+const W = Number(a.width), H = Number(a.height);
+const { context, close } = await launchBrowser({ width: W, height: H });
 try {
   // Station view.
+  if (a.only !== 'console') {
   const station = await startProcess(join(a.bin, 'microdex-station'), [
     '--scene', join(sourceDir, `assets/scenes/${a.scene}.yaml`), '--view', '0', ...rt,
     '--duration', String(seconds + 60), '--partition', `measure-${process.pid}-s`,
   ], /view: http:\/\/127\.0\.0\.1:(\d+)\//);
   const page = await context.newPage();
-  await page.goto(`http://127.0.0.1:${station.match[1]}/`);
+  await page.goto(`http://127.0.0.1:${station.match[1]}/${a.query ? `?${a.query}` : ''}`);
   await waitFor(() => page.evaluate(() => (window.microdexView?.framesDrawn ?? 0) >= 5), 'frames', 30000);
   const s = await measurePage(page, 'microdexView');
-  report.station = { scene: a.scene, width: 1280, height: 720, fps: s.fps, latency: summary(s.latency) };
+  report.station = { scene: a.scene, width: W, height: H, fps: s.fps, latency: summary(s.latency),
+                    received: summary(s.received), encoded: summary(s.encoded) };
   await page.close();
   await stopProcess(station.child);
+  }
+  if (a.only !== 'station') {
 
   // Console with N stations.
   const n = Number(a.stations);
@@ -60,8 +69,9 @@ try {
   const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
                                         ['--http', '0', '--duration', String(seconds + 90), ...dds],
                                         /console: http:\/\/127\.0\.0\.1:(\d+)\//);
-  const scenes = ['needle_tube', 'thread_pull', 'tissue_press', 'loop_along_wire', 'tremor_hold',
-                  'grasp', 'suture_on_tissue', 'needle_tube_minimal'];
+  // The module scenes run until stopped (the training scenes end with their task).
+  const scenes = ['needle_tube', 'thread_pull', 'tissue_press', 'suture_on_tissue',
+                  'needle_tube_minimal', 'needle_tremor_only', 'needle_tube', 'thread_pull'];
   const stations = [];
   for (let i = 0; i < n; ++i) {
     stations.push(await startProcess(join(a.bin, 'microdex-station'), [
@@ -74,17 +84,25 @@ try {
   await waitFor(() => cpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
                 `${n} tiles drawn`, 60000);
   const c = await measurePage(cpage, 'microdexConsole');
-  report.console = { stations: n, width: 1280, height: 720, fps: c.fps, latency: summary(c.latency) };
+  report.console = { stations: n, width: W, height: H, fps: c.fps, latency: summary(c.latency),
+                    received: summary(c.received) };
   await cpage.screenshot({ path: join(a.out, 'console_8_stations.png') });
   for (const st of stations) await stopProcess(st.child);
   await stopProcess(instructor.child);
+  }
 } finally {
   await close();
 }
 report.machine_load_after = (await import('node:os')).loadavg();
 writeFileSync(join(a.out, 'view_speed.json'), JSON.stringify(report, null, 1));
 const f = (v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
-console.log(`| view | fps (goal) | latency p50 / p99 ms (goal 25 / 60) |`);
-console.log(`| station, ${a.scene}, 1280x720 | ${f(report.station.fps)} (30) | ${f(report.station.latency.p50_ms)} / ${f(report.station.latency.p99_ms)} |`);
-console.log(`| console, ${report.console.stations} stations | ${f(report.console.fps)} (15) | ${f(report.console.latency.p50_ms)} / ${f(report.console.latency.p99_ms)} |`);
+console.log(`| view | fps (goal) | state → drawn p50 / p99 ms (goal 25 / 60) | state → received by the page p50 / p99 ms |`);
+for (const [name, r, goal] of [[`station, ${a.scene}, ${W}x${H}`, report.station, 30],
+                               [`console, ${report.console?.stations} stations, ${W}x${H}`, report.console, 15]]) {
+  if (!r) continue;
+  console.log(`| ${name} | ${f(r.fps)} (${goal}) | ${f(r.latency.p50_ms)} / ${f(r.latency.p99_ms)} | ${f(r.received.p50_ms)} / ${f(r.received.p99_ms)} |`);
+}
+if (report.station) {
+  console.log(`station: tick stamp → frame encoded by the publisher thread p50 / p99 ${f(report.station.encoded.p50_ms)} / ${f(report.station.encoded.p99_ms)} ms`);
+}
 console.log(`load average before ${report.machine_load.map((x) => x.toFixed(1)).join(' ')}, after ${report.machine_load_after.map((x) => x.toFixed(1)).join(' ')}`);

@@ -122,6 +122,7 @@ try {
   check(replies.got.filter((m) => m.type === 'error').length === 4,
         `four malformed messages, four error replies: ${replies.got.map((m) => m.error).join(' | ')}`);
   check(replies.bigClosed, `an oversized message closes that connection (code ${replies.code})`);
+  await page.evaluate(() => { window.microdexView.freeze = false; });
   const before = (await probe()).received;
   await page.waitForTimeout(1000);
   check((await probe()).received > before, 'the station still streams frames');

@@ -44,9 +44,10 @@ export interface Detail {
   radial: number; // segments around tubes
   along: number; // segments along curves
   tissueStride: number; // every n-th node of the tissue grid
+  thinFraction: number; // thin things (the thread) drawn at least this fraction of the field thick
 }
-export const HIGH_DETAIL: Detail = { radial: 16, along: 96, tissueStride: 1 };
-export const LOW_DETAIL: Detail = { radial: 6, along: 32, tissueStride: 2 };
+export const HIGH_DETAIL: Detail = { radial: 16, along: 96, tissueStride: 1, thinFraction: 1 / 300 };
+export const LOW_DETAIL: Detail = { radial: 6, along: 32, tissueStride: 2, thinFraction: 1 / 90 };
 
 export function quat(q: ArrayLike<number>, at = 0): THREE.Quaternion {
   // Frames and the scene JSON store (w, x, y, z); three.js takes (x, y, z, w).
@@ -221,12 +222,9 @@ export class SceneView {
     const d = detail;
     const scale = sceneScale(scene);
     this.floorZ = floorHeight(scene);
-    // Table: a dark plane under everything (a depth cue with the tool's shadow dot).
-    const table = new THREE.Mesh(new THREE.PlaneGeometry(scale * 12, scale * 12),
-                                 new THREE.MeshBasicMaterial({ color: 0x2a3036 }));
-    table.position.set(scene.microscope.look_at[0], scene.microscope.look_at[1], this.floorZ);
-    this.root.add(table);
-
+    // No table plane: the background is the renderer's clear colour (a full-screen plane
+    // costs a software renderer a shaded pixel everywhere); the tool tip's shadow dot on the
+    // floor height keeps the depth cue.
     if (scene.vessel) {
       const v = scene.vessel;
       const torus = new THREE.Mesh(
@@ -291,9 +289,8 @@ export class SceneView {
       this.root.add(line);
     }
     if (scene.thread) {
-      // Drawn at least a pixel or two wide: a 10-0 suture (25 µm) is thinner than a pixel
-      // of the whole field.
-      const radius = Math.max(scene.thread.radius, fieldOfView(scene) / 600);
+      // Drawn a few pixels wide: a 10-0 suture (25 µm) is thinner than a pixel of the field.
+      const radius = Math.max(scene.thread.radius, (fieldOfView(scene) * d.thinFraction) / 2);
       this.thread = new PolylineTube(512, radius, Math.max(4, d.radial / 2),
                                      material(THREAD_COLOR));
       this.root.add(this.thread.mesh);

@@ -1,0 +1,50 @@
+// The frame worker (frame_link.ts): owns the page's WebSocket, writes each binary frame into
+// its SharedArrayBuffer slot the moment it arrives, and returns the credit of the frames
+// received whenever the page has drawn; text messages go to the page.
+import { writeSlot } from './frame_link';
+
+let ws: WebSocket | null = null;
+let sab: SharedArrayBuffer | null = null;
+let url = '';
+let delayMs = 250;
+let received = 0; // frames since the page last drew
+
+function connect(): void {
+  const socket = new WebSocket(url);
+  socket.binaryType = 'arraybuffer';
+  socket.onopen = () => { delayMs = 250; postMessage({ type: 'status', open: true }); };
+  socket.onmessage = (e: MessageEvent) => {
+    if (typeof e.data === 'string') {
+      try {
+        postMessage({ type: 'text', message: JSON.parse(e.data) });
+      } catch {
+        // not JSON: ignored
+      }
+      return;
+    }
+    writeSlot(sab!, e.data as ArrayBuffer, performance.timeOrigin + performance.now());
+    ++received;
+  };
+  socket.onclose = () => {
+    postMessage({ type: 'status', open: false });
+    setTimeout(connect, delayMs);
+    delayMs = Math.min(delayMs * 2, 4000);
+  };
+  ws = socket;
+}
+
+self.onmessage = (e: MessageEvent) => {
+  const m = e.data;
+  if (m.type === 'open') {
+    sab = m.sab;
+    url = m.url;
+    connect();
+  } else if (m.type === 'send' && ws && ws.readyState === WebSocket.OPEN) {
+    ws.send(m.text);
+  } else if (m.type === 'drew' && ws && ws.readyState === WebSocket.OPEN && received > 0) {
+    // The page has drawn: the frames taken since may be replaced (view_server.h credits), so
+    // the app sends about as many frames as the page draws, each the newest.
+    ws.send(`credit ${Math.min(received, 1024)}`);
+    received = 0;
+  }
+};
