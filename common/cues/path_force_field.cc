@@ -46,4 +46,18 @@ Eigen::Vector3d CalcPathFieldForce(const IdealPath& path, const Eigen::Vector3d&
                              signed_stiffness_N_per_m, max_force_N);
 }
 
+Eigen::Vector3d CalcDivergentFieldForce(const IdealPath& path, const Eigen::Vector3d& p_WT,
+                                        double stiffness_N_per_m, double max_force_N) {
+  if (!path.is_segment) {
+    // p − q is normal to the circle's tangent at its nearest point q already.
+    return CalcPathFieldForce(path.circle, p_WT, -stiffness_N_per_m, max_force_N);
+  }
+  const Eigen::Vector3d q_W = CalcNearestOnSegment(path.segment, p_WT);
+  Eigen::Vector3d d = p_WT - q_W;
+  const Eigen::Vector3d t = path.segment.b_W - path.segment.a_W;
+  const double tt = t.squaredNorm();
+  if (tt > 0) d -= (d.dot(t) / tt) * t;  // only the part across the movement
+  return CalcPointFieldForce(d, Eigen::Vector3d::Zero(), -stiffness_N_per_m, max_force_N);
+}
+
 }  // namespace microdex::cues

@@ -44,6 +44,13 @@ Eigen::Vector3d CalcPointFieldForce(const Eigen::Vector3d& p_WT, const Eigen::Ve
 // converges, < 0 diverges.
 Eigen::Vector3d CalcPathFieldForce(const PathCircle& circle, const Eigen::Vector3d& p_WT,
                                    double signed_stiffness_N_per_m, double max_force_N);
+// The divergent field of Fig. 2.1b (after Burdet et al.): unstable across the intended
+// direction only. The push is k times the component of (p_WT − q_W) normal to the path's
+// tangent at q_W, so that at a segment's ends the field does not push along the movement;
+// saturated at max_force_N. stiffness_N_per_m >= 0.
+Eigen::Vector3d CalcDivergentFieldForce(const IdealPath& path, const Eigen::Vector3d& p_WT,
+                                        double stiffness_N_per_m, double max_force_N);
+
 // The same towards (away from) either kind of path.
 Eigen::Vector3d CalcPathFieldForce(const IdealPath& path, const Eigen::Vector3d& p_WT,
                                    double signed_stiffness_N_per_m, double max_force_N);
