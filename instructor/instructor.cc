@@ -380,7 +380,7 @@ void Instructor::SendQueuedCues() {
 }
 
 std::uint64_t Instructor::SendCue(const std::string& station_id, cues::CueKind kind, double param,
-                                  std::uint64_t at_step) {
+                                  std::uint64_t at_step, bool off) {
   if (station_id.empty() || station_id.size() > net::kMaxIdLength) {
     throw std::invalid_argument("cue target: expected a station id or 'all'");
   }
@@ -389,6 +389,7 @@ std::uint64_t Instructor::SendCue(const std::string& station_id, cues::CueKind k
   c.cue_id = next_cue_id_++;
   c.kind = kind;
   c.param = param;
+  c.off = off;
   c.issuer = options_.issuer.substr(0, net::kMaxIdLength);
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -106,9 +106,10 @@ class Instructor {
   std::optional<StationView> Station(const std::string& station_id) const;
 
   // Queues a cue for `station_id` (or net::kAllStations) applied at `at_step` (0: on
-  // receipt); returns its cue id. Throws std::invalid_argument for a bad target.
+  // receipt); `off` switches the kind off. Returns its cue id. Throws std::invalid_argument
+  // for a bad target.
   std::uint64_t SendCue(const std::string& station_id, cues::CueKind kind, double param,
-                        std::uint64_t at_step = 0);
+                        std::uint64_t at_step = 0, bool off = false);
 
   // Task events of every station received since the last call, in arrival order.
   std::vector<net::TaskEvent> TakeEvents();

@@ -38,9 +38,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                  "serve the live console on http://ADDRESS:PORT/ (0: any free port)");
   app.add_option("--http-address", http_address, "address the console binds (127.0.0.1)");
   app.add_option("--duration", duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
-  app.add_option("--cue", cue_texts,
-                 "STATION:KIND:PARAM[@SECONDS], KIND one of clear, "
-                 "convergent, divergent, tremor; STATION may be 'all'");
+  app.add_option(
+      "--cue", cue_texts,
+      std::string("STATION:KIND:PARAM[@SECONDS] (PARAM 'off': switch off), KIND one of ") +
+          microdex::cues::CueKindNames() + "; STATION may be 'all'");
   app.add_option("--table-period", table_period_s, "seconds between tables (0: only at the end)");
   app.add_option("--issuer", o.issuer, "name of this console in the cues it sends");
   microdex::net::AddDdsOptions(app, o.dds);
@@ -101,9 +102,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
       const double t = static_cast<double>(now - start) * 1e-9;
       for (std::size_t i = 0; i < cues.size(); ++i) {
         if (!sent[i] && t >= cues[i].at_s) {
-          const auto id = console.SendCue(cues[i].station, cues[i].kind, cues[i].param);
-          std::printf("[%7.3f] cue %llu sent: %s %s %g\n", t, static_cast<unsigned long long>(id),
-                      cues[i].station.c_str(), cues::CueKindName(cues[i].kind), cues[i].param);
+          const auto id =
+              console.SendCue(cues[i].station, cues[i].kind, cues[i].param, 0, cues[i].off);
+          char param[32] = "off";
+          if (!cues[i].off) std::snprintf(param, sizeof param, "%g", cues[i].param);
+          std::printf("[%7.3f] cue %llu sent: %s %s %s\n", t, static_cast<unsigned long long>(id),
+                      cues[i].station.c_str(), cues::CueKindName(cues[i].kind), param);
           sent[i] = true;
         }
       }

@@ -30,7 +30,7 @@ void LoopModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector
     // the depth.
     const Eigen::Vector3d away = l.clearance.p_WC - l.clearance.p_WA;
     const double norm = away.norm();
-    if (norm > 0) f_T_W += wall_stiffness_N_per_m_ * (-l.clearance.clearance_m) * (away / norm);
+    if (norm > 0) f_T_W += WallStiffness(s) * (-l.clearance.clearance_m) * (away / norm);
   }
 }
 

@@ -22,6 +22,12 @@ class LoopModule final : public Module {
 
  private:
   geometry::LoopWireModel model_;
+  // The scene's wall stiffness scaled by the wall cue (0 when it is off).
+  double WallStiffness(const state::StationState& s) const {
+    return s.cues.on(cues::CueKind::kWall)
+               ? wall_stiffness_N_per_m_ * s.cues.p(cues::CueKind::kWall)
+               : 0.0;
+  }
   double wall_stiffness_N_per_m_;
 };
 

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdio>
 
+#include "common/cues/cue_kind.h"
 #include "common/net/app_cli.h"
 #include "station/station_app.h"
 
@@ -41,6 +42,11 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--mirror-rate", o.mirror_rate_hz, "rate of the mirrored state topics, Hz");
   app.add_option("--view", o.view_port,
                  "serve the microscope view on http://127.0.0.1:PORT/ (0: any free port)");
+  app.add_option("--cue", o.cues,
+                 std::string("KIND[:PARAM|:off], repeatable: a cue on from the first step; KIND "
+                             "one of ") +
+                     microdex::cues::CueKindNames());
+  app.add_option("--audio-out", o.audio_out, "render the audio cues that are on to FILE.wav");
   microdex::net::AddDdsOptions(app, o.dds);
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,

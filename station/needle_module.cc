@@ -39,7 +39,7 @@ void NeedleModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
     // point B nearest to it (inwards), proportionally to the depth.
     const Eigen::Vector3d inward = c.p_WB - c.p_WD;
     const double norm = inward.norm();
-    if (norm > 0) f_T_W += wall_stiffness_N_per_m_ * (-c.clearance_m) * (inward / norm);
+    if (norm > 0) f_T_W += WallStiffness(s) * (-c.clearance_m) * (inward / norm);
   }
   if (in.step % kErrorCheckPeriod == 0) {
     const geometry::ArcTorusClearance sampled =

@@ -26,6 +26,12 @@ class NeedleModule final : public Module {
 
  private:
   Eigen::Isometry3d X_TN_;
+  // The scene's wall stiffness scaled by the wall cue (0 when it is off).
+  double WallStiffness(const state::StationState& s) const {
+    return s.cues.on(cues::CueKind::kWall)
+               ? wall_stiffness_N_per_m_ * s.cues.p(cues::CueKind::kWall)
+               : 0.0;
+  }
   double wall_stiffness_N_per_m_;
   geometry::ArcDef arc_;  // the needle's shape, and its pose at the task's start
   geometry::TorusSegmentDef torus_;

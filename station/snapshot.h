@@ -69,6 +69,23 @@ struct LargeFrames {
   rt::TripleBuffer<TissueFrame> tissue;  // producer: haptic thread; consumer: publisher thread
 };
 
+// The cue signals after a step (state::CueState): what the overlay and the audio render.
+struct CueSnapshot {
+  std::array<double, cues::kCueKindCount> param{};
+  double clearance_m = 0;
+  double deviation_m = 0;
+  Vec3 p_W_nearest{};
+  std::uint8_t click = 0;
+  std::uint8_t error = 0;
+  std::uint8_t prediction_valid = 0;
+  std::uint8_t warning = 0;
+  Vec3 p_W_end{};
+  double prediction_error_m = 0;
+  std::uint8_t has_wall_points = 0;
+  Vec3 p_W_tool_near{};
+  Vec3 p_W_wall{};
+};
+
 struct TickSnapshot {
   std::uint64_t step = 0;
   std::int64_t tick_start_ns = 0;  // monotonic
@@ -84,7 +101,8 @@ struct TickSnapshot {
   Vec3 p_WT{};
   Quat q_WT{1, 0, 0, 0};
   Vec3 f_T_W{};
-  std::uint32_t active_cues = 0;
+  std::uint32_t active_cues = 0;  // bit cues::CueBit(kind) per cue on
+  CueSnapshot cue;
   // Modules (filled by the modules present).
   std::uint8_t has_needle = 0;
   NeedleSnapshot needle;

@@ -10,6 +10,7 @@
 
 #include "common/scene/scene.h"
 #include "common/state/state_hash.h"
+#include "station/audio_out.h"
 #include "station/haptic_loop.h"
 #include "station/module.h"
 #include "station/page_device.h"
@@ -121,7 +122,8 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
     const AppliedCue& a = t.cues_applied[i];
     f << (i ? ", " : "") << "{\"cue_id\": " << a.cue.cue_id
       << ", \"kind\": " << JsonString(cues::CueKindName(a.cue.kind))
-      << ", \"param\": " << JsonNumber(a.cue.param) << ", \"step\": " << a.step << "}";
+      << ", \"param\": " << JsonNumber(a.cue.param)
+      << ", \"off\": " << (a.cue.off ? "true" : "false") << ", \"step\": " << a.step << "}";
   }
   f << "],\n  \"cues_rejected\": " << t.cues_rejected << ",\n";
   f << "  \"state_hash\": \"" << StateHashHex(state::CalcStateHash(loop.state())) << "\",\n";
@@ -147,6 +149,14 @@ std::string StationOptions::Validate() const {
   if (station_id == "all") return "--station-id: 'all' is reserved for cues to every station";
   if (trainee.size() > 128) return "--trainee: longer than 128 characters";
   if (!(mirror_rate_hz >= 1 && mirror_rate_hz <= 1000)) return "--mirror-rate: expected 1..1000 Hz";
+  for (const std::string& c : cues) {
+    try {
+      cues::ParseCueArg(c);
+    } catch (const std::invalid_argument& e) {
+      return std::string("--cue ") + e.what();
+    }
+  }
+  if (cues.size() > 16) return "--cue: at most 16";
   if (std::string why = dds.Validate(); !why.empty()) return "--" + why;
   return {};
 }
@@ -193,6 +203,16 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   // A person at the page keeps the station (and its view) after the task ends.
   lc.stop_at_task_end = page_device == nullptr;
   HapticLoop loop(scene, device, rings, clock, lc);
+  // --cue: from the first step, through the ring the instructor's cues take (the threads
+  // start below, so this thread may stand in for the producer).
+  for (const std::string& text : o.cues) {
+    const cues::CueArg a = cues::ParseCueArg(text);
+    if (!rings.cues.TryPush({0, a.kind, a.param, 0, a.off})) {
+      throw std::runtime_error("--cue: too many cues");
+    }
+  }
+  std::unique_ptr<AudioOut> audio;
+  if (!o.audio_out.empty()) audio = std::make_unique<AudioOut>(scene.haptic.rate_hz);
 
   PublisherConfig pc;
   pc.station_id = o.station_id;
@@ -204,6 +224,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   pc.skill = o.skill;
   pc.seed = o.seed;
   pc.mirror_rate_hz = o.mirror_rate_hz;
+  if (audio) pc.on_snapshot = [&audio](const TickSnapshot& s) { audio->Add(s); };
   StationPublisher publisher(pc, o.dds, scene, rings, loop);
   std::unique_ptr<StationView> view;
   if (o.view_port >= 0) {
@@ -260,6 +281,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   if (!o.score_out.empty()) {
     WriteScoreJson(o.score_out, o, pc.session_id, scene, publisher, loop, rt_ok);
   }
+  if (audio) audio->Write(o.audio_out);
   return 0;
 }
 

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/net/dds_context.h"
 
@@ -21,6 +22,10 @@ struct StationOptions {
   std::string score_out;  // JSON file written at the end ("" none)
   double mirror_rate_hz = 60;
   bool realtime = true;  // try SCHED_FIFO + mlockall
+  // --cue KIND[:PARAM|:off]: cues switched on (off) at the first step, as the instructor's
+  // command would (common/cues/cue_kind.h).
+  std::vector<std::string> cues;
+  std::string audio_out;  // --audio-out FILE.wav: the audio cues rendered ("" none)
   // Step as fast as the machine allows, without the 1 kHz pacing (reports, tests): the same
   // scene, skill, seed and duration (in simulated seconds) give the same steps, score and state
   // hash as a paced run. Not real time: the haptic thread may wait for the publisher.

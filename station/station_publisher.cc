@@ -9,7 +9,9 @@
 
 #include "common/knot/recognition.h"
 #include "common/net/convert.h"
+#include "common/net/overlay_convert.h"
 #include "cue_commandPubSubTypes.h"
+#include "cue_overlayPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
 #include "scorePubSubTypes.h"
@@ -37,6 +39,7 @@ struct StationPublisher::Writers {
   dds::DataWriter* needle = nullptr;  // only with the needle module
   dds::DataWriter* thread = nullptr;  // only with the thread module
   dds::DataWriter* tissue = nullptr;  // only with the tissue module
+  dds::DataWriter* overlay = nullptr;
   dds::DataWriter* telemetry = nullptr;
   dds::DataWriter* events = nullptr;
   dds::DataWriter* score = nullptr;
@@ -49,6 +52,8 @@ struct StationPublisher::Writers {
   msg::NeedleState needle_msg;
   msg::ThreadState thread_msg;
   msg::TissueState tissue_msg;
+  msg::CueOverlay overlay_msg;
+  cues::CueOverlay overlay_plain;
   msg::Telemetry telemetry_msg;
   msg::TaskEvent event_msg;
   msg::Score score_msg;
@@ -119,6 +124,7 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   w_->info = dds_->CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
   w_->input = dds_->CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
   w_->tool = dds_->CreateWriter<msg::ToolStatePubSubType>(net::kToolStateTopic);
+  w_->overlay = dds_->CreateWriter<msg::CueOverlayPubSubType>(net::kCueOverlayTopic);
   // Only the scene's modules' topics.
   if (scene.HasModule("needle")) {
     w_->needle = dds_->CreateWriter<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
@@ -214,12 +220,12 @@ void StationPublisher::HandleCues() {
     const auto key = std::make_pair(cue.issuer + "/" + cue.header.session_id, cue.cue_id);
     if (std::find(seen_cues_.begin(), seen_cues_.end(), key) != seen_cues_.end()) continue;
     seen_cues_.push_back(key);
-    if (const char* why_not = CheckCue(cue.kind, cue.param); *why_not != '\0') {
+    if (const std::string why_not = CheckCue(cue.kind, cue.param, cue.off); !why_not.empty()) {
       ++totals_.cues_rejected;
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param, why_not);
       continue;
     }
-    state::CueRequest request{cue.cue_id, cue.kind, cue.param, cue.header.step};
+    state::CueRequest request{cue.cue_id, cue.kind, cue.param, cue.header.step, cue.off};
     if (!rings_.cues.TryPush(request)) {
       ++totals_.cues_rejected;
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param,
@@ -269,7 +275,7 @@ void StationPublisher::Drain() {
       const state::CueAck& a = s.acks[i];
       totals_.cues_applied.push_back({a, s.step});
       PublishEvent(net::TaskEventKind::kCueApplied, s.step, a.cue_id, a.param,
-                   cues::CueKindName(a.kind));
+                   std::string(cues::CueKindName(a.kind)) + (a.off ? " off" : ""));
     }
     // Value: the needle's clearance, else the faulting module's strain or force.
     const double event_value = s.has_needle ? s.needle.clearance_m : s.fault_value;
@@ -278,9 +284,37 @@ void StationPublisher::Drain() {
     } else if (s.contact_event < 0) {
       PublishEvent(net::TaskEventKind::kContactEnd, s.step, 0, event_value, "");
     }
+    if (config_.on_snapshot) config_.on_snapshot(s);
     last_ = s;
     have_last_ = true;
   }
+}
+
+// The visual cues of the latest step as drawing data (common/cues/cue_overlay.h), published
+// with the tool at the mirror rate (empty when no visual cue is on: the views clear).
+void StationPublisher::PublishOverlay() {
+  const TickSnapshot& s = last_;
+  cues::OverlayInput in;
+  in.step = s.step;
+  in.active = s.active_cues;
+  in.param = s.cue.param;
+  in.path = loop_.simulation().path();
+  in.tolerance_m = scene_.task.tolerance_m;
+  in.p_WT = E(s.p_WT);
+  in.p_W_nearest = E(s.cue.p_W_nearest);
+  in.deviation_m = s.cue.deviation_m;
+  in.clearance_m = s.cue.clearance_m;
+  in.has_wall_points = s.cue.has_wall_points != 0;
+  in.p_W_tool_near = E(s.cue.p_W_tool_near);
+  in.p_W_wall = E(s.cue.p_W_wall);
+  in.prediction_valid = s.cue.prediction_valid != 0;
+  in.warning = s.cue.warning != 0;
+  in.p_W_end = E(s.cue.p_W_end);
+  in.prediction_error_m = s.cue.prediction_error_m;
+  cues::CalcCueOverlay(in, w_->overlay_plain);
+  net::ToMsg(MakeHeader(s.step, s.stamp_ns), net::ActiveCuesToWire(s.active_cues),
+             w_->overlay_plain, w_->overlay_msg);
+  w_->overlay->write(&w_->overlay_msg);
 }
 
 void StationPublisher::PublishMirror() {
@@ -294,6 +328,7 @@ void StationPublisher::PublishMirror() {
   w_->tool_plain.active_cues = s.active_cues;
   net::ToMsg(w_->tool_plain, w_->tool_msg);
   w_->tool->write(&w_->tool_msg);
+  PublishOverlay();
   if (w_->needle != nullptr && s.has_needle) {
     auto& n = w_->needle_plain;
     n.header = MakeHeader(s.step, s.stamp_ns);

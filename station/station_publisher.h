@@ -6,7 +6,8 @@
 //     the haptic thread through the cue ring (rejections become TaskEvents);
 //   - drains the snapshot ring: one DeviceInput per step (1 kHz, reliable keep-all), one
 //     TaskEvent per cue applied (with the step it was applied at) and per contact change;
-//   - publishes the mirrored states (ToolState, and NeedleState/ThreadState/TissueState when the
+//   - publishes the mirrored states (ToolState and the cue overlay (CueOverlay), and
+//   NeedleState/ThreadState/TissueState when the
 //     scene has that module: their writers exist only then) at the mirror rate (thread and
 //     tissue as soon as the haptic thread hands over their frame, once per mirror period),
 //     Telemetry at 10 Hz and a running Score every second; recognises the thread's knot at
@@ -16,6 +17,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -48,6 +50,8 @@ struct PublisherConfig {
   bool realtime = false;
   // Wake-up this long after each tick start, to pick up its snapshot with little delay.
   std::int64_t wake_offset_ns = 60'000;
+  // Called on the publisher thread with every snapshot, in step order (the audio output).
+  std::function<void(const TickSnapshot&)> on_snapshot;
 };
 
 // A cue as the haptic thread acknowledged it, with the step it took effect at.
@@ -97,6 +101,7 @@ class StationPublisher {
   void Drain();
   void PublishMirror();
   void EncodeViewFrame();
+  void PublishOverlay();
   void PublishFrames();
   void RecognizeKnot();
   void PublishTelemetry(std::int64_t now_ns);

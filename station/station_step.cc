@@ -30,6 +30,9 @@ Simulation::Simulation(const scene::SceneModel& scene)
   cues::TremorFilterDef tf;
   tf.sample_rate_hz = scene.haptic.rate_hz;
   tremor_filter_ = cues::MakeTremorFilter(tf);
+  cues::EndPointPredictorDef pd;
+  pd.sample_rate_hz = scene.haptic.rate_hz;
+  predictor_ = cues::MakeEndPointPredictor(pd);
   step_time_s_.assign(modules_.size(), 0.0);
 }
 
@@ -38,10 +41,16 @@ state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
   state::SeedStationState(seed, s);
   s.score.min_clearance_m = std::numeric_limits<double>::infinity();
   for (const auto& m : modules_) m->InitState(s);
+  // Every kind's default parameter; the wall on as the scene has it.
+  for (std::uint32_t k = 0; k < cues::kCueKindCount; ++k) {
+    s.cues.param[k] = cues::CueParamLimits(static_cast<cues::CueKind>(k)).default_value;
+  }
+  s.cues.active = cues::CueBit(cues::CueKind::kWall);
+  s.cues.clearance_m = std::numeric_limits<double>::infinity();
   // The scene's cues on from the first step (cue id 0: the scene's own).
   for (const auto& [kind, param] : scene_.cues.on) {
-    if (s.cues.pending_count < state::kMaxPendingCues && cues::CheckCue(kind, param)[0] == '\0') {
-      s.cues.pending[s.cues.pending_count++] = {0, kind, param, 0};
+    if (s.cues.pending_count < state::kMaxPendingCues && cues::CheckCue(kind, param).empty()) {
+      s.cues.pending[s.cues.pending_count++] = {0, kind, param, 0, false};
     }
   }
   return s;
@@ -49,24 +58,24 @@ state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
 
 namespace {
 
-// Applies one cue to the cue state and acknowledges it with this step.
+// Applies one cue to the cue state and acknowledges it with this step. Clear switches every
+// kind off but the wall (a property of the scene the instructor turns down with `wall:0`).
 void ApplyCue(const state::CueRequest& cue, state::CueState& c) {
-  switch (cue.kind) {
-    case cues::CueKind::kClear:
-      c.field_stiffness_N_per_m = 0;
-      c.tremor_gain = 1;
-      break;
-    case cues::CueKind::kConvergentField:
-      c.field_stiffness_N_per_m = cue.param;
-      break;
-    case cues::CueKind::kDivergentField:
-      c.field_stiffness_N_per_m = -cue.param;
-      break;
-    case cues::CueKind::kAmplifiedTremor:
-      c.tremor_gain = cue.param;
-      break;
+  if (cue.kind == cues::CueKind::kClear) {
+    c.active &= cues::CueBit(cues::CueKind::kWall);
+  } else if (cue.off) {
+    c.active &= ~cues::CueBit(cue.kind);
+  } else {
+    c.active |= cues::CueBit(cue.kind);
+    c.param[static_cast<std::size_t>(cue.kind)] = cue.param;
+    // One field at a time: the convergent and the divergent field exclude each other.
+    if (cue.kind == cues::CueKind::kConvergentField) {
+      c.active &= ~cues::CueBit(cues::CueKind::kDivergentField);
+    } else if (cue.kind == cues::CueKind::kDivergentField) {
+      c.active &= ~cues::CueBit(cues::CueKind::kConvergentField);
+    }
   }
-  c.acks[c.ack_count++] = {cue.cue_id, cue.kind, cue.param};
+  c.acks[c.ack_count++] = {cue.cue_id, cue.kind, cue.param, cue.off};
 }
 
 // Reads the input's cue requests and state.cues; writes state.cues (pending, in force, acks).
@@ -81,7 +90,11 @@ void TakeCues(std::span<const state::CueRequest> arrived, std::uint64_t step, st
   int kept = 0;
   for (int i = 0; i < c.pending_count; ++i) {
     if (c.pending[i].apply_at_step <= step && c.ack_count < state::kMaxAcksPerStep) {
-      ApplyCue(c.pending[i], c);
+      // Checked where it entered (publisher, command line, scene); checked again here so that
+      // no path can put an out-of-limits parameter into the state.
+      if (cues::CheckCue(c.pending[i].kind, c.pending[i].param, c.pending[i].off).empty()) {
+        ApplyCue(c.pending[i], c);
+      }
     } else {
       c.pending[kept++] = c.pending[i];
     }
@@ -99,33 +112,38 @@ void CalcToolAfterCues(const cues::TremorFilterModel& filter, const DeviceSample
   const Eigen::Vector3d p_device = d.X_WT.translation();
   s.cues.tremor_band_m = cues::StepTremorFilter(filter, p_device, s.cues.tremor_filter);
   s.tool.X_WT = d.X_WT;
-  if (s.cues.tremor_gain != 1) {
-    s.tool.X_WT.translation() = p_device + (s.cues.tremor_gain - 1) * s.cues.tremor_band_m;
+  if (s.cues.on(cues::CueKind::kAmplifiedTremor)) {
+    const double gain = s.cues.p(cues::CueKind::kAmplifiedTremor);
+    s.tool.X_WT.translation() = p_device + (gain - 1) * s.cues.tremor_band_m;
   }
 }
 
 // Reads state.cues, the tool (and the loop module's nearest wire point); returns the field's
-// force on the tool.
+// force on the tool: convergent (a spring to the path) or divergent (across the path only).
 Eigen::Vector3d CalcCueForce(const cues::IdealPath& path, double max_force_N,
                              const state::StationState& s) {
-  if (s.cues.field_stiffness_N_per_m == 0) return Eigen::Vector3d::Zero();
+  const bool conv = s.cues.on(cues::CueKind::kConvergentField);
+  const bool div = s.cues.on(cues::CueKind::kDivergentField);
+  if (!conv && !div) return Eigen::Vector3d::Zero();
+  const double k =
+      conv ? s.cues.p(cues::CueKind::kConvergentField) : s.cues.p(cues::CueKind::kDivergentField);
+  const Eigen::Vector3d p_WT = s.tool.X_WT.translation();
   if (s.loop) {  // the wire course: towards the wire-axis point the loop module last found
-    return cues::CalcPointFieldForce(s.tool.X_WT.translation(), s.loop->p_WA_centre,
-                                     s.cues.field_stiffness_N_per_m, max_force_N);
+    return cues::CalcPointFieldForce(p_WT, s.loop->p_WA_centre, conv ? k : -k, max_force_N);
   }
-  return cues::CalcPathFieldForce(path, s.tool.X_WT.translation(), s.cues.field_stiffness_N_per_m,
-                                  max_force_N);
+  if (div) return cues::CalcDivergentFieldForce(path, p_WT, k, max_force_N);
+  return cues::CalcPathFieldForce(path, p_WT, k, max_force_N);
 }
 
-// Reads the tool; writes state.tool.f_T_W: finite and saturated, always.
-void SaturateForce(Eigen::Vector3d f, double max_force_N, state::StationState& s) {
-  if (!f.allFinite()) {
-    f.setZero();
-    ++s.tool.force_warnings;
-  }
-  const double fn = f.norm();
-  if (fn > max_force_N) f *= max_force_N / fn;
-  s.tool.f_T_W = f;
+// Reads the tool; writes state.tool.f_T_W: finite, saturated and rate-limited, always
+// (common/cues/force_limits.h).
+void LimitToolForce(const Eigen::Vector3d& f, double max_force_N, double dt_s,
+                    state::StationState& s) {
+  const cues::ForceLimitResult r =
+      cues::LimitForce(f, s.tool.f_T_W, max_force_N, cues::kMaxForceRate_N_per_s, dt_s);
+  if (r.non_finite) ++s.tool.force_warnings;
+  if (r.rate_limited) ++s.cues.force_rate_limited;
+  s.tool.f_T_W = r.f_N;
 }
 
 // Reads the tool, the needle and tremor sections and this step's fault; writes state.score.
@@ -283,6 +301,49 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
   if (t.outcome != 0) t.end_step = s.step;
 }
 
+// The nearest point of the task's path (the loop: the wire-axis point its module found).
+Eigen::Vector3d CalcNearestPathPoint(const cues::IdealPath& path, const state::StationState& s,
+                                     const Eigen::Vector3d& p_W) {
+  if (s.loop) return s.loop->p_WA_centre;
+  if (path.is_segment) return cues::CalcNearestOnSegment(path.segment, p_W);
+  Eigen::Vector3d q_W = p_W;
+  cues::CalcNearestOnCircle(path.circle, p_W, &q_W);
+  return q_W;
+}
+
+// Reads the tool, the modules' clearances, this step's fault and contact event; writes the
+// cue signals of state.cues (what the visual and audio cues show) and the end-point
+// prediction. Computed whether or not the cues are on, so switching one on is seamless.
+void UpdateCueSignals(const scene::SceneModel& scene, const cues::IdealPath& path,
+                      const cues::EndPointPredictorModel& predictor, double dt_s,
+                      state::StationState& s) {
+  state::CueState& c = s.cues;
+  const Eigen::Vector3d p_WT = s.tool.X_WT.translation();
+  c.p_W_nearest = CalcNearestPathPoint(path, s, p_WT);
+  c.deviation_m = s.loop ? s.loop->offset_m : (p_WT - c.p_W_nearest).norm();
+  // The clearance to the task's walls; without walls, the margin to the task's tolerance.
+  if (s.needle && s.needle->clearance.status == geometry::ClearanceStatus::kOk) {
+    c.clearance_m = s.needle->clearance.clearance_m;
+  } else if (s.loop && s.loop->clearance.status == geometry::LoopWireStatus::kOk) {
+    c.clearance_m = s.loop->clearance.clearance_m;
+  } else if (!s.needle && !s.loop) {
+    c.clearance_m = scene.task.tolerance_m - c.deviation_m;
+  }
+  c.click = s.score.contact_event > 0 ? 1 : 0;
+  c.error = s.score.fault;
+  // Predictive: the device's sub-movement end point, its distance from the path.
+  state::PredictorState& pr = c.prediction;
+  const cues::EndPointPrediction e =
+      cues::StepEndPointPredictor(predictor, s.tool.X_WT_device.translation(), pr.predictor);
+  pr.valid = e.valid ? 1 : 0;
+  if (e.valid) {
+    pr.p_W_end = e.p_W_end;
+    pr.error_m = s.loop ? (e.p_W_end - s.loop->p_WA_centre).norm()
+                        : (e.p_W_end - CalcNearestPathPoint(path, s, e.p_W_end)).norm();
+  }
+  cues::StepPredictiveWarning(e, pr.error_m, c.p(cues::CueKind::kPredictive), dt_s, pr.predictor);
+}
+
 }  // namespace
 
 void StepStation(Simulation& sim, const StationInput& in, state::StationState& s) {
@@ -315,13 +376,14 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
     }
   }
 
-  SaturateForce(f, scene.haptic.max_force_N, s);
+  LimitToolForce(f, scene.haptic.max_force_N, sim.dt_s_, s);
   if (s.score.outcome == 0) {  // the scores freeze when the task ends
     UpdateScore(scene, sim.dt_s_, s);
     UpdateTask(scene, sim.path_, sim.dt_s_, s);
   } else {
     s.score.contact_event = 0;
   }
+  UpdateCueSignals(scene, sim.path_, sim.predictor_, sim.dt_s_, s);
   ++s.step;
 }
 
@@ -360,11 +422,28 @@ void ProjectSnapshot(const Simulation& sim, const state::StationState& s, TickSn
   out.p_WT = ToVec3(s.tool.X_WT.translation());
   out.q_WT = ToQuat(s.tool.X_WT);
   out.f_T_W = ToVec3(s.tool.f_T_W);
-  out.active_cues = 0;
-  const auto bit = [](cues::CueKind k) { return 1u << static_cast<unsigned>(k); };
-  if (s.cues.field_stiffness_N_per_m > 0) out.active_cues |= bit(cues::CueKind::kConvergentField);
-  if (s.cues.field_stiffness_N_per_m < 0) out.active_cues |= bit(cues::CueKind::kDivergentField);
-  if (s.cues.tremor_gain != 1) out.active_cues |= bit(cues::CueKind::kAmplifiedTremor);
+  out.active_cues = s.cues.active;
+  CueSnapshot& cs = out.cue;
+  cs.param = s.cues.param;
+  cs.clearance_m = s.cues.clearance_m;
+  cs.deviation_m = s.cues.deviation_m;
+  cs.p_W_nearest = ToVec3(s.cues.p_W_nearest);
+  cs.click = s.cues.click;
+  cs.error = s.cues.error;
+  cs.prediction_valid = s.cues.prediction.valid;
+  cs.warning = s.cues.prediction.predictor.warning;
+  cs.p_W_end = ToVec3(s.cues.prediction.p_W_end);
+  cs.prediction_error_m = s.cues.prediction.error_m;
+  cs.has_wall_points = 0;
+  if (s.needle && s.needle->clearance.status == geometry::ClearanceStatus::kOk) {
+    cs.has_wall_points = 1;
+    cs.p_W_tool_near = ToVec3(s.needle->clearance.p_WD);
+    cs.p_W_wall = ToVec3(s.needle->clearance.p_WB);
+  } else if (s.loop && s.loop->clearance.status == geometry::LoopWireStatus::kOk) {
+    cs.has_wall_points = 1;
+    cs.p_W_tool_near = ToVec3(s.loop->clearance.p_WC);
+    cs.p_W_wall = ToVec3(s.loop->clearance.p_WA);
+  }
   out.has_needle = s.needle ? 1 : 0;
   if (s.needle) {
     const geometry::ArcTorusClearance& c = s.needle->clearance;

@@ -10,11 +10,14 @@
 //     TakeCues         queue the cue requests of this input; apply those due (state.cues)
 //     CalcToolAfterCues  tremor band of the raw device motion, amplified tremor → tool pose
 //     CalcCueForce     guidance / destabilising field on the tool
-//     StepModules      each module of the scene, in the scene's order (module sections)
-//     SaturateForce    finite and saturated, always (state.tool)
+//     StepModules      each module of the scene, in the scene's order (module sections; the
+//                      wall forces scaled by the wall cue)
+//     LimitToolForce   finite, saturated and rate-limited, always (state.tool)
 //     UpdateScore      running totals and fault episodes (state.score)
 //     UpdateTask       deviation from the path or target, passes, the task's outcome
 //                      (state.score; both frozen once the task has ended)
+//     UpdateCueSignals clearance, deviation, click, error, the end-point prediction and its
+//                      warning: what the visual and audio cues show (state.cues)
 //
 // Given a scene, a seed and the input stream (device samples and cue requests), the states
 // are bit-for-bit the same on the same build: tests/unit/station/station_step_test.cc.
@@ -24,6 +27,8 @@
 #include <span>
 #include <vector>
 
+#include "common/cues/end_point_predictor.h"
+#include "common/cues/force_limits.h"
 #include "common/cues/path_force_field.h"
 #include "common/cues/tremor_filter.h"
 #include "common/scene/scene.h"
@@ -51,6 +56,8 @@ class Simulation {
   state::StationState MakeInitialState(std::uint64_t seed) const;
 
   const scene::SceneModel& scene() const { return scene_; }
+  // The task's ideal path (what the guidance fields and the visual cues use).
+  const cues::IdealPath& path() const { return path_; }
   double dt_s() const { return dt_s_; }
   std::size_t module_count() const { return modules_.size(); }
   const Module& module(std::size_t i) const { return *modules_[i]; }
@@ -69,6 +76,7 @@ class Simulation {
   std::vector<std::unique_ptr<Module>> modules_;
   cues::IdealPath path_;
   cues::TremorFilterModel tremor_filter_;
+  cues::EndPointPredictorModel predictor_;
   rt::Clock* step_clock_ = nullptr;
   std::vector<double> step_time_s_;
 };

@@ -94,6 +94,26 @@ msg::CueKind CueKindToMsg(cues::CueKind kind) {
       return msg::CUE_DIVERGENT_FIELD;
     case cues::CueKind::kAmplifiedTremor:
       return msg::CUE_AMPLIFIED_TREMOR;
+    case cues::CueKind::kVisualPath:
+      return msg::CUE_VISUAL_PATH;
+    case cues::CueKind::kVisualLimits:
+      return msg::CUE_VISUAL_LIMITS;
+    case cues::CueKind::kVisualDeviation:
+      return msg::CUE_VISUAL_DEVIATION;
+    case cues::CueKind::kVisualClearance:
+      return msg::CUE_VISUAL_CLEARANCE;
+    case cues::CueKind::kAudioClick:
+      return msg::CUE_AUDIO_CLICK;
+    case cues::CueKind::kAudioError:
+      return msg::CUE_AUDIO_ERROR;
+    case cues::CueKind::kAudioProximity:
+      return msg::CUE_AUDIO_PROXIMITY;
+    case cues::CueKind::kAudioGeiger:
+      return msg::CUE_AUDIO_GEIGER;
+    case cues::CueKind::kWall:
+      return msg::CUE_WALL;
+    case cues::CueKind::kPredictive:
+      return msg::CUE_PREDICTIVE;
   }
   MICRODEX_CHECK(false);
   return msg::CUE_CLEAR;
@@ -112,6 +132,36 @@ bool CueKindFromMsg(msg::CueKind in, cues::CueKind* kind) {
       return true;
     case msg::CUE_AMPLIFIED_TREMOR:
       *kind = cues::CueKind::kAmplifiedTremor;
+      return true;
+    case msg::CUE_VISUAL_PATH:
+      *kind = cues::CueKind::kVisualPath;
+      return true;
+    case msg::CUE_VISUAL_LIMITS:
+      *kind = cues::CueKind::kVisualLimits;
+      return true;
+    case msg::CUE_VISUAL_DEVIATION:
+      *kind = cues::CueKind::kVisualDeviation;
+      return true;
+    case msg::CUE_VISUAL_CLEARANCE:
+      *kind = cues::CueKind::kVisualClearance;
+      return true;
+    case msg::CUE_AUDIO_CLICK:
+      *kind = cues::CueKind::kAudioClick;
+      return true;
+    case msg::CUE_AUDIO_ERROR:
+      *kind = cues::CueKind::kAudioError;
+      return true;
+    case msg::CUE_AUDIO_PROXIMITY:
+      *kind = cues::CueKind::kAudioProximity;
+      return true;
+    case msg::CUE_AUDIO_GEIGER:
+      *kind = cues::CueKind::kAudioGeiger;
+      return true;
+    case msg::CUE_WALL:
+      *kind = cues::CueKind::kWall;
+      return true;
+    case msg::CUE_PREDICTIVE:
+      *kind = cues::CueKind::kPredictive;
       return true;
   }
   return false;
@@ -579,6 +629,11 @@ bool FromMsg(const msg::Telemetry& in, Telemetry& out, std::string* why) {
   return c.ok();
 }
 
+std::uint32_t ActiveCuesToWire(std::uint32_t plain) { return ActiveCuesToMsg(plain); }
+bool ActiveCuesFromWire(std::uint32_t bits, std::uint32_t* plain) {
+  return ActiveCuesFromMsg(bits, plain);
+}
+
 // ---- CueCommand ----
 void ToMsg(const CueCommand& in, msg::CueCommand& out) {
   HeaderToMsg(in.header, out);
@@ -588,16 +643,18 @@ void ToMsg(const CueCommand& in, msg::CueCommand& out) {
   out.kind(CueKindToMsg(in.kind));
   out.param(in.param);
   out.issuer(in.issuer);
+  out.off(in.off);
 }
 
 bool FromMsg(const msg::CueCommand& in, CueCommand& out, std::string* why) {
   Checker c(why);
   HeaderFromMsg(in, out.header, c);
   if (!CueKindFromMsg(in.kind(), &out.kind)) c.Fail("kind: unknown cue kind");
-  c.Finite(in.param(), "param");
+  if (!in.off()) c.Finite(in.param(), "param");
   c.String(S(in.issuer()), kMaxIdLength, "issuer");
   out.cue_id = in.cue_id();
-  out.param = in.param();
+  out.off = in.off();
+  out.param = in.off() ? 0.0 : in.param();
   out.issuer = S(in.issuer());
   return c.ok();
 }

@@ -21,6 +21,11 @@
 
 namespace microdex::net {
 
+// A mask of active cues (bit 1 << cues::CueKind) as on the wire (bit 1 << msg::CueKind of the
+// same name), and back (false for a bit that names no kind).
+std::uint32_t ActiveCuesToWire(std::uint32_t plain);
+bool ActiveCuesFromWire(std::uint32_t bits, std::uint32_t* plain);
+
 void ToMsg(const StationInfo& in, msg::StationInfo& out);
 void ToMsg(const DeviceInput& in, msg::DeviceInput& out);
 void ToMsg(const ToolState& in, msg::ToolState& out);

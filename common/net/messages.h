@@ -140,8 +140,9 @@ struct CueCommand {
   Header header;  // station_id: the target station or kAllStations; step: 0 = on receipt
   std::uint64_t cue_id = 0;
   cues::CueKind kind = cues::CueKind::kClear;
-  double param = 0;
+  double param = 0;  // the kind's parameter (common/cues/cue_kind.h); unused when off
   std::string issuer;
+  bool off = false;  // switch the kind off
 };
 
 enum class TaskEventKind : std::uint32_t {

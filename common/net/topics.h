@@ -32,6 +32,7 @@ inline constexpr TopicSpec kToolStateTopic = MirrorTopic("microdex/tool_state");
 inline constexpr TopicSpec kNeedleStateTopic = MirrorTopic("microdex/needle_state");
 inline constexpr TopicSpec kThreadStateTopic = MirrorTopic("microdex/thread_state");
 inline constexpr TopicSpec kTissueStateTopic = MirrorTopic("microdex/tissue_state");
+inline constexpr TopicSpec kCueOverlayTopic = MirrorTopic("microdex/cue_overlay");
 inline constexpr TopicSpec kTelemetryTopic{"microdex/telemetry", "microdex_topic_keep_last_1",
                                            "microdex_telemetry_writer",
                                            "microdex_telemetry_reader"};

@@ -45,8 +45,7 @@ TissueToolKind ParseToolKind(const std::string& text) {
 cues::CueKind ParseCueName(const std::string& text) {
   cues::CueKind kind{};
   if (!cues::ParseCueKind(text, &kind) || kind == cues::CueKind::kClear) {
-    throw std::invalid_argument("unknown cue '" + text +
-                                "' (known: convergent, divergent, tremor)");
+    throw std::invalid_argument("unknown cue '" + text + "' (known: " + cues::CueKindNames() + ")");
   }
   return kind;
 }
@@ -385,9 +384,18 @@ SceneModel ReadScene(const YamlReader& reader) {
       }
     }
     if (const std::optional<YamlSection> on = c->OptionalMap("on")) {
-      on->CheckNoUnknownKeys({"convergent", "divergent", "tremor"});
-      for (const char* name : {"convergent", "divergent", "tremor"}) {
-        if (on->Has(name)) s.cues.on.emplace_back(ParseCueName(name), on->FiniteDouble(name, 0));
+      // Every kind but clear, by its name ("tremor": the first release's name of
+      // amplified_tremor).
+      std::vector<std::string> names = {"tremor"};
+      for (std::uint32_t k = 1; k < cues::kCueKindCount; ++k) {
+        names.emplace_back(cues::CueKindName(static_cast<cues::CueKind>(k)));
+      }
+      const std::vector<std::string_view> keys(names.begin(), names.end());
+      on->CheckNoUnknownKeys(keys);
+      for (const std::string& name : names) {
+        if (on->Has(name.c_str())) {
+          s.cues.on.emplace_back(ParseCueName(name), on->FiniteDouble(name.c_str(), 0));
+        }
       }
     }
   }
@@ -769,7 +777,7 @@ void ValidateScene(const SceneModel& s) {
                                                kind) == s.cues.available.end()) {
       Invalid(std::string("cues.on.") + cues::CueKindName(kind), "not in cues.available");
     }
-    if (const char* why = cues::CheckCue(kind, param); *why != '\0') {
+    if (const std::string why = cues::CheckCue(kind, param); !why.empty()) {
       Invalid(std::string("cues.on.") + cues::CueKindName(kind), why);
     }
   }

@@ -19,6 +19,7 @@
 #include <optional>
 
 #include "common/cues/cue_kind.h"
+#include "common/cues/end_point_predictor.h"
 #include "common/cues/tremor_filter.h"
 #include "common/fem/tissue_step.h"
 #include "common/geometry/arc_torus.h"
@@ -32,12 +33,14 @@ namespace microdex::state {
 inline constexpr int kMaxPendingCues = 32;
 inline constexpr int kMaxAcksPerStep = 4;
 
-// A cue as it enters the simulation: applied at the first step >= apply_at_step.
+// A cue as it enters the simulation: applied at the first step >= apply_at_step. `off`
+// switches the kind off (param unused).
 struct CueRequest {
   std::uint64_t cue_id = 0;
   cues::CueKind kind = cues::CueKind::kClear;
   double param = 0;
   std::uint64_t apply_at_step = 0;
+  bool off = false;
 };
 
 // A cue applied during a step (reported back with that step).
@@ -45,6 +48,7 @@ struct CueAck {
   std::uint64_t cue_id = 0;
   cues::CueKind kind = cues::CueKind::kClear;
   double param = 0;
+  bool off = false;
 };
 
 // The device as the station last read it, and the tool after the cues.
@@ -57,18 +61,40 @@ struct ToolState {
   std::uint32_t force_warnings = 0;  // non-finite forces replaced by zero, running count
 };
 
+// The end-point predictor of the current sub-movement (common/cues/end_point_predictor.h).
+struct PredictorState {
+  cues::EndPointPredictorState predictor;             // with the warning (predictor.warning)
+  Eigen::Vector3d p_W_end = Eigen::Vector3d::Zero();  // predicted end point (the last valid)
+  double error_m = 0;                                 // its distance from the path or target
+  std::uint8_t valid = 0;                             // a prediction this step
+};
+
 // The learning cues in force and the ones waiting for their step.
 struct CueState {
-  double field_stiffness_N_per_m = 0;  // > 0 convergent, < 0 divergent, 0 none
-  double tremor_gain = 1;              // amplified tremor, 1: off
+  std::uint32_t active = 0;  // bit cues::CueBit(kind) per kind switched on
+  // The parameter of each kind (CueParamLimits; kept when the kind is switched off).
+  std::array<double, cues::kCueKindCount> param{};
   // The 8–12 Hz band of the raw device motion, filtered every step (so that switching the
   // amplification on is seamless); the tremor module's RMS reads the same band.
   cues::TremorFilterState tremor_filter;
   Eigen::Vector3d tremor_band_m = Eigen::Vector3d::Zero();  // this step's band-passed position
+  // What the visual and audio cues show and sound this step (common/cues/audio_synth.h,
+  // cue_overlay.h), computed every step whether or not they are on.
+  double clearance_m = 0;  // the tool's clearance to the task's walls (+inf: none)
+  double deviation_m = 0;  // the tool's distance from the ideal path
+  Eigen::Vector3d p_W_nearest = Eigen::Vector3d::Zero();  // the path point nearest the tool
+  std::uint8_t click = 0;                                 // a contact began this step
+  std::uint8_t error = 0;                                 // at fault this step
+  PredictorState prediction;
+  // The force limiter (common/cues/force_limits.h): steps its rate limit clipped, running count.
+  std::uint32_t force_rate_limited = 0;
   std::array<CueRequest, kMaxPendingCues> pending{};
   int pending_count = 0;
   std::array<CueAck, kMaxAcksPerStep> acks{};  // applied during this step
   int ack_count = 0;
+
+  bool on(cues::CueKind kind) const { return (active & cues::CueBit(kind)) != 0; }
+  double p(cues::CueKind kind) const { return param[static_cast<std::size_t>(kind)]; }
 };
 
 // Running totals of the task score (station/score.h), updated every step.

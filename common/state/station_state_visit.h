@@ -59,26 +59,49 @@ void Tool(S& t, V& v) {
 
 template <typename S, typename V>
 void Cues(S& c, V& v) {
-  v("cues.field_stiffness_N_per_m", &c.field_stiffness_N_per_m, 1);
-  v("cues.tremor_gain", &c.tremor_gain, 1);
+  v("cues.active", &c.active, 1);
+  v("cues.param", c.param.data(), c.param.size());
   Matrix("cues.tremor_filter.hp_z1", c.tremor_filter.hp_z1, v);
   Matrix("cues.tremor_filter.hp_z2", c.tremor_filter.hp_z2, v);
   Matrix("cues.tremor_filter.lp_z1", c.tremor_filter.lp_z1, v);
   Matrix("cues.tremor_filter.lp_z2", c.tremor_filter.lp_z2, v);
   v("cues.tremor_filter.started", &c.tremor_filter.started, 1);
   Matrix("cues.tremor_band_m", c.tremor_band_m, v);
+  v("cues.clearance_m", &c.clearance_m, 1);
+  v("cues.deviation_m", &c.deviation_m, 1);
+  Matrix("cues.p_W_nearest", c.p_W_nearest, v);
+  v("cues.click", &c.click, 1);
+  v("cues.error", &c.error, 1);
+  auto& pr = c.prediction.predictor;
+  Matrix("cues.prediction.predictor.lp_z1", pr.lp_z1, v);
+  Matrix("cues.prediction.predictor.lp_z2", pr.lp_z2, v);
+  Matrix("cues.prediction.predictor.p_prev", pr.p_prev, v);
+  Matrix("cues.prediction.predictor.v_prev", pr.v_prev, v);
+  Matrix("cues.prediction.predictor.p_start", pr.p_start, v);
+  v("cues.prediction.predictor.started", &pr.started, 1);
+  v("cues.prediction.predictor.moving", &pr.moving, 1);
+  v("cues.prediction.predictor.t_s", &pr.t_s, 1);
+  v("cues.prediction.predictor.still_s", &pr.still_s, 1);
+  v("cues.prediction.predictor.over_s", &pr.over_s, 1);
+  v("cues.prediction.predictor.warning", &pr.warning, 1);
+  Matrix("cues.prediction.p_W_end", c.prediction.p_W_end, v);
+  v("cues.prediction.error_m", &c.prediction.error_m, 1);
+  v("cues.prediction.valid", &c.prediction.valid, 1);
+  v("cues.force_rate_limited", &c.force_rate_limited, 1);
   v("cues.pending_count", &c.pending_count, 1);
   Counted(c.pending, c.pending_count, [&](auto& r) {
     v("cues.pending[].cue_id", &r.cue_id, 1);
     Enum("cues.pending[].kind", r.kind, v);
     v("cues.pending[].param", &r.param, 1);
     v("cues.pending[].apply_at_step", &r.apply_at_step, 1);
+    v("cues.pending[].off", &r.off, 1);
   });
   v("cues.ack_count", &c.ack_count, 1);
   Counted(c.acks, c.ack_count, [&](auto& a) {
     v("cues.acks[].cue_id", &a.cue_id, 1);
     Enum("cues.acks[].kind", a.kind, v);
     v("cues.acks[].param", &a.param, 1);
+    v("cues.acks[].off", &a.off, 1);
   });
 }
 

@@ -139,8 +139,22 @@ TEST(CueSpec, ParsesAndRejectsNamingTheArgument) {
   EXPECT_EQ(c.param, 300);
   EXPECT_EQ(c.at_s, 12.5);
   EXPECT_EQ(ParseCueSpec("all:clear:0").at_s, 0);
-  for (const char* bad :
-       {"st-2:convergent", "st-2:vortex:3", "st-2:tremor:x", ":clear:0", "st-2:clear:0@-1"}) {
+  // Every kind by name, and off.
+  for (std::uint32_t k = 0; k < cues::kCueKindCount; ++k) {
+    const auto kind = static_cast<cues::CueKind>(k);
+    const std::string name = cues::CueKindName(kind);
+    const double param = cues::CueParamLimits(kind).max;
+    const CueSpec on = ParseCueSpec("all:" + name + ":" + std::to_string(param));
+    EXPECT_EQ(on.kind, kind) << name;
+    EXPECT_FALSE(on.off);
+    const CueSpec off = ParseCueSpec("st-1:" + name + ":off@2");
+    EXPECT_EQ(off.kind, kind) << name;
+    EXPECT_TRUE(off.off);
+    EXPECT_EQ(off.at_s, 2);
+  }
+  for (const char* bad : {"st-2:convergent", "st-2:vortex:3", "st-2:tremor:x", ":clear:0",
+                          "st-2:clear:0@-1", "st-2:convergent:nan", "st-2:divergent:inf",
+                          "st-2:convergent:2e6", "st-2:audio_click:2", "st-2:predictive:-1"}) {
     try {
       ParseCueSpec(bad);
       ADD_FAILURE() << bad << " accepted";

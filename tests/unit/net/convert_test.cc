@@ -230,7 +230,7 @@ TEST(NetConvert, CueCommandKindsAndRejection) {
   }
   msg::CueCommand m;
   m.station_id("station-1");
-  m.kind(static_cast<msg::CueKind>(9));
+  m.kind(static_cast<msg::CueKind>(cues::kCueKindCount + 3));
   CueCommand out;
   std::string why;
   EXPECT_FALSE(FromMsg(m, out, &why));

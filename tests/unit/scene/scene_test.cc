@@ -282,7 +282,12 @@ TEST(Scene, BadTrainingFieldsNameFileLineAndField) {
   EXPECT_EQ(ErrorOf(y + "scoring: {time_s: {limit: 0}}\n"),
             "test.yaml:7: scoring.time_s.limit: expected > 0");
   EXPECT_EQ(ErrorOf(y + "cues: {on: {tremor: 50}}\n"),
-            "test.yaml:7: cues.on.tremor: gain: expected 1 <= gain <= 20");
+            "test.yaml:7: cues.on.amplified_tremor: gain: expected a finite number in [1, 20] for "
+            "amplified_tremor, got 50");
+  EXPECT_EQ(ErrorOf(y + "cues: {on: {convergent: 2.0e6}}\n"),
+            "test.yaml:7: cues.on.convergent: stiffness_N_per_m: expected a finite number in [0, "
+            "1e+06] for convergent, got 2e+06");
+  EXPECT_EQ(ErrorOf(y + "cues: {on: {vortex: 1}}\n"), "test.yaml:7: cues.on.vortex: unknown key");
   EXPECT_EQ(ErrorOf(y + "microscope: {magnification: 0}\n"),
             "test.yaml:7: microscope.magnification: expected 1..50 (a surgical microscope: 10–20)");
   std::string kind = kGood;

@@ -371,14 +371,137 @@ TEST(HapticLoop, CholmodAllocatesInTheTickWhenTheMeshChanges) {
   EXPECT_GT(allocations, 0u);
 }
 
+// Every cue kind on at once (each at its default, the fields at their extreme stiffness, the
+// audio and visual signals and the end-point predictor running): still no allocation.
+TEST(HapticLoop, TickWithEveryCueOnNeverAllocates) {
+  for (const char* file : {"needle_along_tube.yaml", "loop_along_wire.yaml", "tremor_hold.yaml"}) {
+    SCOPED_TRACE(file);
+    SceneRig rig(scene::LoadScene(SceneFile(file)));
+    rig.Steps(300);
+    for (std::uint32_t k = 1; k < cues::kCueKindCount; ++k) {
+      const auto kind = static_cast<cues::CueKind>(k);
+      const double param = kind == cues::CueKind::kDivergentField
+                               ? cues::CueParamLimits(kind).max
+                               : cues::CueParamLimits(kind).default_value;
+      ASSERT_TRUE(rig.rings.cues.TryPush({k, kind, param, 0, false}));
+    }
+    std::atomic<bool> stop{false};
+    testing::StartCountingAllocations();
+    rig.loop.Run(stop, rig.loop.step() + 2000);
+    const std::uint64_t allocations = testing::StopCountingAllocations();
+    EXPECT_EQ(allocations, 0u);
+    const state::CueState& c = rig.loop.state().cues;
+    // The divergent field came after the convergent one: it replaced it.
+    EXPECT_FALSE(c.on(cues::CueKind::kConvergentField));
+    EXPECT_TRUE(c.on(cues::CueKind::kDivergentField));
+    EXPECT_TRUE(c.on(cues::CueKind::kPredictive));
+    EXPECT_TRUE(c.on(cues::CueKind::kAudioGeiger));
+  }
+}
+
+// Each kind switched on and off by request, acknowledged with the step it took effect at; the
+// mask the mirrors see follows; clear leaves the wall; requests that fail the check (NaN, out
+// of limits) never reach the state, whichever path they took.
+TEST(HapticLoop, EveryCueSwitchesOnAndOffAndIsAcknowledged) {
+  Rig rig(/*skill=*/0.5);
+  rig.Steps(10);
+  std::vector<TickSnapshot> snaps;
+  std::uint64_t id = 100;
+  for (std::uint32_t k = 1; k < cues::kCueKindCount; ++k) {
+    const auto kind = static_cast<cues::CueKind>(k);
+    SCOPED_TRACE(cues::CueKindName(kind));
+    const double param = cues::CueParamLimits(kind).max;
+    const std::uint64_t at = rig.loop.step() + 5;
+    ASSERT_TRUE(rig.rings.cues.TryPush({++id, kind, param, at, false}));
+    snaps.clear();
+    rig.Steps(10, &snaps);
+    bool acked = false;
+    for (const TickSnapshot& s : snaps) {
+      for (int i = 0; i < s.ack_count; ++i) {
+        if (s.acks[i].cue_id == id) {
+          acked = true;
+          EXPECT_EQ(s.step, at);
+          EXPECT_EQ(s.acks[i].kind, kind);
+          EXPECT_EQ(s.acks[i].param, param);
+        }
+      }
+    }
+    EXPECT_TRUE(acked);
+    EXPECT_TRUE(snaps.back().active_cues & cues::CueBit(kind));
+    EXPECT_EQ(snaps.back().cue.param[k], param);
+    ASSERT_TRUE(rig.rings.cues.TryPush({++id, kind, 0, 0, true}));
+    snaps.clear();
+    rig.Steps(3, &snaps);
+    EXPECT_FALSE(snaps.back().active_cues & cues::CueBit(kind)) << "switched off";
+  }
+  ASSERT_TRUE(rig.rings.cues.TryPush({++id, cues::CueKind::kAudioClick, 0.5, 0, false}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({++id, cues::CueKind::kWall, 1, 0, false}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({++id, cues::CueKind::kClear, 0, 0, false}));
+  snaps.clear();
+  rig.Steps(3, &snaps);
+  EXPECT_EQ(snaps.back().active_cues, cues::CueBit(cues::CueKind::kWall)) << "clear keeps the wall";
+  // Bad parameters pushed straight into the ring (bypassing the publisher's check).
+  const double kept = rig.loop.state().cues.p(cues::CueKind::kConvergentField);
+  ASSERT_TRUE(rig.rings.cues.TryPush(
+      {++id, cues::CueKind::kConvergentField, std::numeric_limits<double>::quiet_NaN(), 0, false}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({++id, cues::CueKind::kConvergentField, 1e9, 0, false}));
+  ASSERT_TRUE(rig.rings.cues.TryPush({++id, static_cast<cues::CueKind>(99), 1, 0, false}));
+  snaps.clear();
+  rig.Steps(3, &snaps);
+  EXPECT_FALSE(rig.loop.state().cues.on(cues::CueKind::kConvergentField));
+  EXPECT_EQ(rig.loop.state().cues.p(cues::CueKind::kConvergentField), kept);
+  for (const TickSnapshot& s : snaps) EXPECT_EQ(s.ack_count, 0);
+}
+
+// The haptic cues at the extremes of their parameters on a novice (contacts, wall forces):
+// every force sent is finite, within max_force_N, and changes by at most the rate limit.
+TEST(HapticLoop, ForceStaysWithinItsLimitsAtEveryCueExtreme) {
+  struct Case {
+    cues::CueKind kind;
+    double param;
+  };
+  const Case cases[] = {{cues::CueKind::kConvergentField, 0},
+                        {cues::CueKind::kConvergentField, 1e6},
+                        {cues::CueKind::kDivergentField, 1e6},
+                        {cues::CueKind::kAmplifiedTremor, 20},
+                        {cues::CueKind::kWall, 10},
+                        {cues::CueKind::kWall, 0}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(::testing::Message() << cues::CueKindName(c.kind) << " " << c.param);
+    Rig rig(/*skill=*/0.0);
+    ASSERT_TRUE(rig.rings.cues.TryPush({1, c.kind, c.param, 0, false}));
+    std::vector<TickSnapshot> snaps;
+    rig.Steps(6000, &snaps);
+    const double max_step = cues::kMaxForceRate_N_per_s * rig.loop.dt_s();
+    Eigen::Vector3d prev = Eigen::Vector3d::Zero();
+    double largest = 0;
+    for (const TickSnapshot& s : snaps) {
+      const Eigen::Vector3d f(s.f_T_W[0], s.f_T_W[1], s.f_T_W[2]);
+      ASSERT_TRUE(f.allFinite());
+      ASSERT_LE(f.norm(), rig.scene.haptic.max_force_N + 1e-12);
+      ASSERT_LE((f - prev).norm(), max_step + 1e-12) << "step " << s.step;
+      largest = std::max(largest, f.norm());
+      prev = f;
+    }
+    if (c.param > 1 && c.kind != cues::CueKind::kAmplifiedTremor) {
+      EXPECT_GT(largest, 0.1) << "the case should exercise the limits";
+    }
+    EXPECT_GT(snaps.back().score.contacts, 0u) << "the case should exercise the wall";
+  }
+}
+
 TEST(HapticLoop, CueLimits) {
-  EXPECT_STREQ(CheckCue(cues::CueKind::kClear, 0), "");
-  EXPECT_STREQ(CheckCue(cues::CueKind::kConvergentField, 100), "");
-  EXPECT_STRNE(CheckCue(cues::CueKind::kConvergentField, 0), "");
-  EXPECT_STRNE(CheckCue(cues::CueKind::kDivergentField, 1e6), "");
-  EXPECT_STRNE(CheckCue(cues::CueKind::kAmplifiedTremor, 0.5), "");
-  EXPECT_STRNE(CheckCue(cues::CueKind::kAmplifiedTremor, std::nan("")), "");
-  EXPECT_STRNE(CheckCue(static_cast<cues::CueKind>(17), 1), "");
+  EXPECT_EQ(CheckCue(cues::CueKind::kClear, 0), "");
+  EXPECT_EQ(CheckCue(cues::CueKind::kConvergentField, 100), "");
+  EXPECT_EQ(CheckCue(cues::CueKind::kConvergentField, 0), "");
+  EXPECT_EQ(CheckCue(cues::CueKind::kDivergentField, 1e6), "");
+  EXPECT_NE(CheckCue(cues::CueKind::kDivergentField, 1.0001e6), "");
+  EXPECT_NE(CheckCue(cues::CueKind::kConvergentField, -1), "");
+  EXPECT_NE(CheckCue(cues::CueKind::kAmplifiedTremor, 0.5), "");
+  EXPECT_NE(CheckCue(cues::CueKind::kAmplifiedTremor, std::nan("")), "");
+  EXPECT_EQ(CheckCue(cues::CueKind::kAmplifiedTremor, std::nan(""), /*off=*/true), "")
+      << "switching off takes no parameter";
+  EXPECT_NE(CheckCue(static_cast<cues::CueKind>(17), 1), "");
 }
 
 }  // namespace
