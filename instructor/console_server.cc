@@ -108,11 +108,11 @@ std::string ConsoleServer::HandleMessage(const std::string& message) {
   if (in >> extra) throw std::invalid_argument("cue: unexpected '" + extra.substr(0, 32) + "'");
   cues::CueKind kind{};
   if (!cues::ParseCueKind(kind_name, &kind)) {
-    throw std::invalid_argument("cue: unknown kind '" + kind_name.substr(0, 32) +
-                                "' (clear, convergent, divergent, tremor)");
+    throw std::invalid_argument("cue: unknown kind '" + kind_name.substr(0, 32) + "' (" +
+                                cues::CueKindNames() + ")");
   }
-  if (const char* why = cues::CheckCue(kind, param); *why != '\0') {
-    throw std::invalid_argument(std::string("cue: ") + why);
+  if (const std::string why = cues::CheckCue(kind, param); !why.empty()) {
+    throw std::invalid_argument("cue: " + why);
   }
   if (!instructor_.Station(station)) {
     throw std::invalid_argument("cue: no station '" + station.substr(0, 64) + "'");
