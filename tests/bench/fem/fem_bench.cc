@@ -76,7 +76,8 @@ double Median(std::vector<double> v) {
 double Percentile(std::vector<double> v, double p) {
   if (v.empty()) return kNaN;
   std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(std::lround(p * static_cast<double>(v.size() - 1))))];
 }
 
 std::string Num(double v) {
