@@ -25,7 +25,7 @@ enum class Preconditioner : std::uint8_t { kNone, kJacobi, kIc0 };
 struct CgWorkspace {
   std::vector<double> r, z, p, q;  // [max_n]
   std::vector<double> ic_vals;     // [max_nnz] IC(0) factor L on A's lower pattern
-  std::vector<double> inv_diag;    // [max_n]
+  std::vector<double> inv_diag;    // [max_n] Jacobi: 1 / A_ii; IC(0): 1 / L_ii
 };
 CgWorkspace MakeCgWorkspace(int max_n, int max_nnz);
 
