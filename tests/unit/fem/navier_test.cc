@@ -172,6 +172,23 @@ TEST(Navier, OffGridBarsWithinTwoPercentAtEveryLevelFromFive) {
   EXPECT_GT(worst_nodes, 0.02);  // the positions do test what snapping gets wrong
 }
 
+// A bar closer to an edge than about a third of a nominal cell: the strip between the bar and
+// the clamped edge is thinner than the cells that hold it.
+TEST(Navier, BarsNearAnEdgeWithinTwoPercentAtEveryLevelFromFive) {
+  GTEST_SKIP() << "not met yet: a bar 2 mm from an edge is 8 % off at level 5, 4.9 % at 6, "
+                  "2.5 % at 7 (README, Tool constraint: what it does not fix); the fix is to "
+                  "refine the cells holding the tool near an edge, as the end zones do";
+  const double y = 0.002;
+  const ToolContact bar = MakeBarTool({0.0457, y, -kPress_m}, {0.1241, y, -kPress_m});
+  const double reference =
+      -NavierBar(StudyDomain(), 0.0457, 0.1241, y, -kPress_m, 40).TotalForce_N();
+  for (int level = 5; level <= 7; ++level) {
+    EXPECT_NEAR(MultiscaleForce_N(level, ToolConstraint::kPenaltyPoints, bar), reference,
+                0.02 * reference)
+        << "level " << level;
+  }
+}
+
 // On grid lines, with ends on nodes (the study's bars), the penalty points give the answer of
 // the nearest-node constraint.
 TEST(Navier, GridAlignedBarsAgreeWithTheNearestNodeConstraint) {
