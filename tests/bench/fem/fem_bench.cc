@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <limits>
 #include <numbers>
@@ -80,6 +81,12 @@ double Percentile(std::vector<double> v, double p) {
                     static_cast<size_t>(std::lround(p * static_cast<double>(v.size() - 1))))];
 }
 
+double ThreadCpuMicroseconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
+}
+
 std::string Num(double v) {
   if (!std::isfinite(v)) return "null";
   char buf[64];
@@ -109,7 +116,9 @@ struct Moving {
   int failed, steps;
   double mean_unknowns;
   double select_us, assemble_us, solve_us;  // medians of the moving steps' stages
-  double static_median_us;                  // same model, tool held still, same run
+  // The step's CPU time (this thread): what the step costs when the shared machine preempts it.
+  double cpu_median_us, cpu_p99_us;
+  double static_median_us;  // same model, tool held still, same run
 };
 
 struct Options {
@@ -326,7 +335,7 @@ int RunFem(int argc, char** argv) {
       TissueWorkspace ws(model), ws_static(model);
       ws_static.reuse_values = false;
       TissueState state = MakeTissueState(model), state_static = MakeTissueState(model);
-      std::vector<double> us, us_static, select, assemble, solve;
+      std::vector<double> us, us_static, select, assemble, solve, cpu;
       int reused = 0, failed = 0;
       double unknowns = 0;
       auto pose = [](int k) {
@@ -345,9 +354,12 @@ int RunFem(int argc, char** argv) {
             if (state_static.step > 2) us_static.push_back(ws_static.stats.total_us);
           }
         }
+        const double cpu_begin_us = ThreadCpuMicroseconds();
         StepTissue(model, BarTool(pose(k), kPress_m), ws, state);
+        const double cpu_us = ThreadCpuMicroseconds() - cpu_begin_us;
         if (k < 5) continue;
         us.push_back(ws.stats.total_us);
+        cpu.push_back(cpu_us);
         select.push_back(ws.stats.select_us);
         assemble.push_back(ws.stats.assemble_us);
         solve.push_back(ws.stats.solve_us);
@@ -359,13 +371,15 @@ int RunFem(int argc, char** argv) {
                         Median(us), Percentile(us, 0.99), *std::max_element(us.begin(), us.end()),
                         static_cast<double>(reused) / us.size(), failed,
                         static_cast<int>(us.size()), unknowns / us.size(), Median(select),
-                        Median(assemble), Median(solve), Median(us_static)});
+                        Median(assemble), Median(solve), Median(cpu), Percentile(cpu, 0.99),
+                        Median(us_static)});
       std::fprintf(stderr,
                    "moving L%d %-10s %-17s %-14s median %7.1f us (select %6.1f assemble %6.1f "
-                   "solve %6.1f) p99 %7.1f  static %7.1f us  n=%.0f\n",
+                   "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f\n",
                    level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
                    moving.back().median_us, moving.back().select_us, moving.back().assemble_us,
                    moving.back().solve_us, moving.back().p99_us, moving.back().static_median_us,
+                   moving.back().cpu_median_us, moving.back().cpu_p99_us,
                    moving.back().mean_unknowns);
     }
   }
@@ -466,6 +480,9 @@ int RunFem(int argc, char** argv) {
     goals += ", \"station_moving_l7_median_us\": " + Num(st7 ? st7->median_us : kNaN) +
              ", \"station_moving_l7_p99_us\": " + Num(st7 ? st7->p99_us : kNaN) +
              ", \"station_moving_l8_median_us\": " + Num(st8 ? st8->median_us : kNaN) +
+             ", \"station_moving_l7_cpu_median_us\": " + Num(st7 ? st7->cpu_median_us : kNaN) +
+             ", \"station_moving_l7_cpu_p99_us\": " + Num(st7 ? st7->cpu_p99_us : kNaN) +
+             ", \"station_moving_l8_cpu_median_us\": " + Num(st8 ? st8->cpu_median_us : kNaN) +
              ", \"goal_station_moving_l7_500us_p99_1ms_met\": " + (station_l7 ? "true" : "false") +
              ", \"goal_station_moving_l8_1ms_met\": " + (station_l8 ? "true" : "false");
     goals += std::string(", \"goal_off_grid_within_2pct_met\": ") +
@@ -563,12 +580,14 @@ int RunFem(int argc, char** argv) {
                  "%s, \"p99_us\": %s, "
                  "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
                  "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
-                 "\"failed_steps\": %d, \"mean_unknowns\": %s}%s\n",
+                 "\"failed_steps\": %d, \"mean_unknowns\": %s, \"cpu_median_us\": %s, "
+                 "\"cpu_p99_us\": %s}%s\n",
                  m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(), m.steps,
                  Num(m.median_us).c_str(), Num(m.p99_us).c_str(), Num(m.max_us).c_str(),
                  Num(m.select_us).c_str(), Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
                  Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(), m.failed,
-                 Num(m.mean_unknowns).c_str(), i + 1 < moving.size() ? "," : "");
+                 Num(m.mean_unknowns).c_str(), Num(m.cpu_median_us).c_str(),
+                 Num(m.cpu_p99_us).c_str(), i + 1 < moving.size() ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"force_distribution\": [\n");
   for (size_t i = 0; i < distributions.size(); ++i) {
