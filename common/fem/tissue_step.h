@@ -33,8 +33,8 @@ inline bool IsGood(TissueStatus s) {
 
 // Cost and error of one step.
 struct TissueStepStats {
-  int unknowns = 0;  // free nodes of the reduced system
-  int contact_nodes = 0;
+  int unknowns = 0;       // free nodes of the reduced system
+  int contact_nodes = 0;  // prescribed nodes (nearest_nodes) or tool points (penalty_points)
   int active_nodes = 0;
   int triangles = 0;
   int leaves = 0;
