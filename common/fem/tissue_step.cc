@@ -302,7 +302,7 @@ double NodeValue(const TissueWorkspace& ws, int dof_code) {
   return ws.contact_w_m[-2 - dof_code];
 }
 
-// Spring of a tool point, N/m.
+// The cap of a tool point's spring (where the tool runs on the mesh's lines), N/m.
 double ToolPenalty_N_per_m(const TissueModel& model) {
   return model.def.tool_penalty * model.def.shear_modulus_Pa * model.def.thickness_m;
 }
