@@ -119,13 +119,16 @@ Instructor::Instructor(const InstructorOptions& options)
   }
   d.context = std::make_unique<net::DdsContext>(options_.dds);
   d.info = d.context->CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic);
-  d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(
-      recorder_ ? net::kDeviceInputRecordTopic : net::kDeviceInputTopic);
-  d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(net::kToolStateTopic);
-  d.needle = d.context->CreateReader<msg::NeedleStatePubSubType>(net::kNeedleStateTopic);
-  d.thread = d.context->CreateReader<msg::ThreadStatePubSubType>(net::kThreadStateTopic);
-  d.tissue = d.context->CreateReader<msg::TissueStatePubSubType>(net::kTissueStateTopic);
-  d.telemetry = d.context->CreateReader<msg::TelemetryPubSubType>(net::kTelemetryTopic);
+  // Recording: readers that keep every sample until it is taken (net::RecordingReaderSpec).
+  const auto spec = [&](const net::TopicSpec& s) {
+    return recorder_ ? net::RecordingReaderSpec(s) : s;
+  };
+  d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(spec(net::kDeviceInputTopic));
+  d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(spec(net::kToolStateTopic));
+  d.needle = d.context->CreateReader<msg::NeedleStatePubSubType>(spec(net::kNeedleStateTopic));
+  d.thread = d.context->CreateReader<msg::ThreadStatePubSubType>(spec(net::kThreadStateTopic));
+  d.tissue = d.context->CreateReader<msg::TissueStatePubSubType>(spec(net::kTissueStateTopic));
+  d.telemetry = d.context->CreateReader<msg::TelemetryPubSubType>(spec(net::kTelemetryTopic));
   d.events = d.context->CreateReader<msg::TaskEventPubSubType>(net::kTaskEventTopic);
   d.score = d.context->CreateReader<msg::ScorePubSubType>(net::kScoreTopic);
   d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);

@@ -77,6 +77,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--speed", speed, "replay speed (1: real time; 4: four times faster)");
   app.add_option("--from", from_s, "start this many seconds into the session");
   app.add_option("--to", to_s, "stop this many seconds into the session");
+  double wait_console_s = 5;
+  app.add_option("--wait-for-console", wait_console_s,
+                 "before playing, wait up to S seconds for a console to listen (default 5)");
   app.add_flag("--resimulate", resimulate,
                "re-run every station from its scene, seed and recorded inputs and compare the "
                "state hash of every step; exit 0 when all match, 1 naming the station and the "
@@ -88,6 +91,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   net::AddDdsOptions(app, dds);
   if (const std::optional<int> status = net::ParseCommandLine(app, argc, argv, "microdex-replay")) {
     return *status;
+  }
+  if (!(wait_console_s >= 0 && wait_console_s <= 600)) {
+    std::fprintf(stderr, "microdex-replay: --wait-for-console: expected 0..600 s\n");
+    return 2;
   }
   if (!(speed > 0) || speed > 1024) {
     std::fprintf(stderr, "microdex-replay: --speed: expected 0 < X <= 1024\n");
@@ -176,6 +183,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     po.speed = speed;
     po.from_s = from_s;
     po.to_s = to_s;
+    po.wait_for_console_s = wait_console_s;
     std::printf(
         "replaying %s: %.1f s at %gx on domain %d (keys: space pause, n step 0.1 s, "
         "+/- speed, q quit)\n",

@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <map>
 #include <thread>
 
@@ -97,6 +98,27 @@ class Publishers {
     return false;
   }
 
+  // Waits until every writer has matched a reader (a console is listening), or the deadline
+  // (monotonic ns) passes, or `stop`. True when all matched.
+  bool WaitForReaders(std::int64_t deadline_ns, const std::atomic<bool>& stop) {
+    std::vector<dds::DataWriter*> all;
+    for (const auto& [t, w] : writers_) {
+      if (t != TopicIndex::kCueCommand) all.push_back(w);
+    }
+    for (const auto& [s, w] : inputs_) all.push_back(w);
+    for (;;) {
+      bool matched = true;
+      for (dds::DataWriter* w : all) {
+        dds::PublicationMatchedStatus status;
+        w->get_publication_matched_status(status);
+        matched = matched && status.current_count > 0;
+      }
+      if (matched) return true;
+      if (stop.load() || MonoNowNs() >= deadline_ns) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+
   // The replayed stations leave: their StationInfo instances are disposed.
   void DisposeStations() {
     for (auto& [id, s] : stations_) info_->dispose(&s, info_->lookup_instance(&s));
@@ -145,6 +167,11 @@ std::optional<std::int64_t> PlayerClock::WallTimeOf(std::int64_t session_ns) con
          static_cast<std::int64_t>(static_cast<double>(session_ns - anchor_session_ns_) / speed_);
 }
 
+void PlayerClock::Restart() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  anchor_wall_ns_ = MonoNowNs();
+}
+
 void PlayerClock::SetSpeed(double speed) {
   std::lock_guard<std::mutex> lock(mutex_);
   const std::int64_t now = MonoNowNs();
@@ -185,6 +212,13 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
   net::DdsContext context(dds);
   Publishers pub(context, reader.Stations());
   PlayStats stats;
+  // A console that is listening gets the session from its start: wait for it to match (up to
+  // wait_for_console_s), then restart the clock.
+  if (o.wait_for_console_s > 0) {
+    stats.console_found = pub.WaitForReaders(
+        MonoNowNs() + static_cast<std::int64_t>(o.wait_for_console_s * 1e9), stop);
+  }
+  clock.Restart();
   // A replay that starts later than the beginning still announces every station first: the
   // latest StationInfo of each before `from`.
   if (from_ns > first_ns) {

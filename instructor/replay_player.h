@@ -23,6 +23,8 @@ class PlayerClock {
   std::int64_t SessionNowNs() const;
   // Wall time (monotonic) at which session time t is reached; nullopt while paused.
   std::optional<std::int64_t> WallTimeOf(std::int64_t session_ns) const;
+  // Session time stays where it is; wall time restarts from now.
+  void Restart();
   void SetSpeed(double speed);  // clamped to [1/64, 1024]
   double speed() const;
   void TogglePause();
@@ -43,12 +45,15 @@ struct PlayOptions {
   double speed = 1;
   std::optional<double> from_s, to_s;  // seconds from the session's first message
   bool republish_cues = false;         // the recorded cue commands are not sent again
+  // Before playing, wait up to this long for every topic to have a reader (a console).
+  double wait_for_console_s = 5;
 };
 
 struct PlayStats {
   std::uint64_t published = 0;
   std::uint64_t undecodable = 0;
   double session_s = 0;  // session time covered
+  bool console_found = false;
 };
 
 // Plays the recording until its end, `stop`, or to_s. Throws std::runtime_error for DDS

@@ -47,6 +47,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                              "one of ") +
                      microdex::cues::CueKindNames());
   app.add_option("--audio-out", o.audio_out, "render the audio cues that are on to FILE.wav");
+  app.add_option("--wait-for-recorder", o.wait_for_recorder_s,
+                 "before the first step, wait up to S seconds for a DeviceInput reader (a "
+                 "recording instructor) so that the recording holds every step from step 0");
   microdex::net::AddDdsOptions(app, o.dds);
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,

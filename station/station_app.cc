@@ -157,6 +157,9 @@ std::string StationOptions::Validate() const {
     }
   }
   if (cues.size() > 16) return "--cue: at most 16";
+  if (!(wait_for_recorder_s >= 0 && wait_for_recorder_s <= 600)) {
+    return "--wait-for-recorder: expected 0..600 s";
+  }
   if (std::string why = dds.Validate(); !why.empty()) return "--" + why;
   return {};
 }
@@ -234,6 +237,10 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     publisher.SetViewFrames(&view->frames());
     // One line a script can wait for (the port is the bound one when --view 0).
     spdlog::info("view: http://127.0.0.1:{}/", view->port());
+  }
+
+  if (o.wait_for_recorder_s > 0 && !publisher.WaitForInputReader(o.wait_for_recorder_s, stop)) {
+    spdlog::warn("no DeviceInput reader after {} s: starting unrecorded", o.wait_for_recorder_s);
   }
 
   const auto max_steps =

@@ -30,6 +30,9 @@ struct StationOptions {
   // scene, skill, seed and duration (in simulated seconds) give the same steps, score and state
   // hash as a paced run. Not real time: the haptic thread may wait for the publisher.
   bool unpaced = false;
+  // Before the first step, wait up to this long for a DeviceInput reader to match (a recording
+  // instructor): DeviceInput is volatile, so steps taken before it matched are not recorded.
+  double wait_for_recorder_s = 0;
   net::DdsOptions dds;
   // The microscope view (station_view.h) on 127.0.0.1:view_port; -1: none, 0: any free port.
   int view_port = -1;

@@ -1,11 +1,14 @@
 #include "station/station_publisher.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fastdds/dds/core/condition/GuardCondition.hpp>
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <thread>
 
 #include "common/knot/recognition.h"
 #include "common/net/convert.h"
@@ -182,6 +185,17 @@ StationPublisher::~StationPublisher() {
 
 net::Header StationPublisher::MakeHeader(std::uint64_t step, std::int64_t stamp_ns) const {
   return {config_.station_id, config_.session_id, step, stamp_ns};
+}
+
+bool StationPublisher::WaitForInputReader(double timeout_s, const std::atomic<bool>& stop) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    dds::PublicationMatchedStatus status;
+    w_->input->get_publication_matched_status(status);
+    if (status.current_count > 0) return true;
+    if (stop.load() || std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
 }
 
 void StationPublisher::RequestStop() {

@@ -88,6 +88,9 @@ class StationPublisher {
   // Before Run(): also encode a view frame (common/view) at the mirror rate into `frames`
   // (this thread is its producer; the station's view server its consumer).
   void SetViewFrames(rt::TripleBuffer<view::FrameBytes>* frames) { view_frames_ = frames; }
+  // Waits until a DeviceInput reader has matched (true), `timeout_s` passed or `stop` is set.
+  // Call before the haptic loop starts (the main thread).
+  bool WaitForInputReader(double timeout_s, const std::atomic<bool>& stop);
 
   const PeriodStats& run_periods() const { return run_periods_; }
   // Step time of module i over the whole run (the "period" is the step's wall time).

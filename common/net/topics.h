@@ -2,6 +2,8 @@
 // Topic names and the XML profile names behind each (deploy/dds/*.xml). QoS is set only in
 // those files; code refers to it by these names.
 
+#include <string_view>
+
 namespace microdex::net {
 
 struct TopicSpec {
@@ -19,11 +21,6 @@ inline constexpr TopicSpec kStationInfoTopic{"microdex/station_info", "microdex_
 inline constexpr TopicSpec kDeviceInputTopic{"microdex/device_input", "microdex_topic_keep_all",
                                              "microdex_device_input_writer",
                                              "microdex_device_input_reader"};
-// The recording instructor's DeviceInput reader: transient-local, to get each station's
-// samples from step 0 out of the writer's history (deploy/dds: the writer keeps 10 s).
-inline constexpr TopicSpec kDeviceInputRecordTopic{
-    "microdex/device_input", "microdex_topic_keep_all", "microdex_device_input_writer",
-    "microdex_device_input_record_reader"};
 // The mirrored state topics (60 Hz, the latest sample is all a mirror needs) share one QoS.
 constexpr TopicSpec MirrorTopic(const char* name) {
   return {name, "microdex_topic_keep_last_1", "microdex_mirror_writer", "microdex_mirror_reader"};
@@ -42,5 +39,17 @@ inline constexpr TopicSpec kTaskEventTopic{"microdex/task_event", "microdex_topi
                                            "microdex_events_writer", "microdex_events_reader"};
 inline constexpr TopicSpec kScoreTopic{"microdex/score", "microdex_topic_keep_all",
                                        "microdex_events_writer", "microdex_events_reader"};
+
+// The reader a recording instructor uses for `spec`: the mirrored states and the telemetry
+// with a deep history (no sample replaced before it is taken); the others as they are.
+inline TopicSpec RecordingReaderSpec(TopicSpec spec) {
+  const std::string_view reader = spec.reader_profile;
+  if (reader == "microdex_mirror_reader") {
+    spec.reader_profile = "microdex_mirror_record_reader";
+  } else if (reader == "microdex_telemetry_reader") {
+    spec.reader_profile = "microdex_telemetry_record_reader";
+  }
+  return spec;
+}
 
 }  // namespace microdex::net

@@ -119,16 +119,17 @@ TEST_F(RecordReplayTest, EveryTrainingSceneReSimulatesAndAnAlteredSampleIsFound)
              file, "--cue", "all:convergent:150@1.5", "--cue", "all:tremor:3@2.5"},
             dir_ + "/instructor.log");
   pids_.push_back(console);
-  // Paced stations for 4 simulated seconds each (all of them at once): the recorder keeps up
-  // with 1 kHz, and the DeviceInput history (transient-local) covers discovery.
+  // Paced stations for 4 simulated seconds each (all of them at once), each waiting for the
+  // recorder's DeviceInput reader before its first step.
   std::vector<pid_t> stations;
   for (std::size_t i = 0; i < std::size(kTrainingScenes); ++i) {
     const std::string id = kTrainingScenes[i];
-    stations.push_back(Spawn("microdex-station",
-                             {"--scene", "assets/scenes/" + id + ".yaml", "--station-id", id,
-                              "--seed", std::to_string(40 + i), "--skill", "0.4", "--duration", "4",
-                              "--no-realtime", "--domain", std::to_string(kDomain)},
-                             dir_ + "/" + id + ".log"));
+    stations.push_back(
+        Spawn("microdex-station",
+              {"--scene", "assets/scenes/" + id + ".yaml", "--station-id", id, "--seed",
+               std::to_string(40 + i), "--skill", "0.4", "--duration", "4", "--no-realtime",
+               "--domain", std::to_string(kDomain), "--wait-for-recorder", "20"},
+              dir_ + "/" + id + ".log"));
     pids_.push_back(stations.back());
   }
   for (pid_t p : stations) {
@@ -226,7 +227,7 @@ TEST_F(RecordReplayTest, AKilledRecorderLeavesAReadableFileUpToTheLast200Ms) {
   const pid_t station =
       Spawn("microdex-station",
             {"--scene", "assets/scenes/needle_tube.yaml", "--station-id", "k1", "--duration", "30",
-             "--no-realtime", "--domain", std::to_string(kDomain)},
+             "--no-realtime", "--domain", std::to_string(kDomain), "--wait-for-recorder", "20"},
             dir_ + "/k1.log");
   pids_.push_back(station);
   const pid_t console = Spawn(
