@@ -226,6 +226,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   pc.device = o.device;
   pc.skill = o.skill;
   pc.seed = o.seed;
+  // A recorded station (--wait-for-recorder) leaves only once the recorder has every step.
+  if (o.wait_for_recorder_s > 0) pc.input_ack_wait_s = std::max(2.0, o.wait_for_recorder_s);
   pc.mirror_rate_hz = o.mirror_rate_hz;
   if (audio) pc.on_snapshot = [&audio](const TickSnapshot& s) { audio->Add(s); };
   StationPublisher publisher(pc, o.dds, scene, rings, loop);

@@ -525,6 +525,11 @@ void StationPublisher::Goodbye() {
   // Give the reliable topics a moment to deliver the final samples to a live instructor;
   // bounded so that a shutdown stays well within one second.
   const eprosima::fastrtps::Duration_t wait(0, 150'000'000);
+  // The DeviceInput backlog of a recorded session (the replay source) gets longer.
+  const auto input_wait_ns = static_cast<std::int64_t>(config_.input_ack_wait_s * 1e9);
+  w_->input->wait_for_acknowledgments(
+      eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(input_wait_ns / 1'000'000'000),
+                                     static_cast<std::uint32_t>(input_wait_ns % 1'000'000'000)));
   w_->events->wait_for_acknowledgments(wait);
   w_->score->wait_for_acknowledgments(wait);
   // Departure: dispose the station's instance, then unregister it.

@@ -43,6 +43,8 @@ struct PublisherConfig {
   std::string device = "sim";
   double skill = -1;
   std::uint64_t seed = 1;  // the simulation's seed (StationInfo)
+  // At the end, wait this long at most for the readers to acknowledge every DeviceInput.
+  double input_ack_wait_s = 0.15;
   double mirror_rate_hz = 60;
   double telemetry_rate_hz = 10;
   double score_period_s = 0.5;  // live scores at 2 Hz

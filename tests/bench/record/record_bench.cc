@@ -209,7 +209,7 @@ int RunRecord(int argc, char** argv) {
     }
     return true;
   });
-  double input_lost = 0, sequence_gaps = 0, station_steps = 0;
+  double input_lost = 0, sequence_gaps = 0, station_steps = 0, missing_first = 0, missing_last = 0;
   for (int i = 0; i < stations; ++i) {
     const std::string id = "bench-" + std::to_string(i + 1);
     std::ifstream f(dir + "/" + id + ".json");
@@ -218,6 +218,10 @@ int RunRecord(int argc, char** argv) {
     const double n = JsonNumber(ss.str(), "steps");
     station_steps += n;
     input_lost += n - static_cast<double>(steps[id].size());
+    if (!steps[id].empty()) {
+      missing_first += static_cast<double>(*steps[id].begin());
+      missing_last += n - 1 - static_cast<double>(*steps[id].rbegin());
+    }
   }
   std::string by_topic;
   std::map<int, double> gaps_by_topic;
@@ -238,7 +242,8 @@ int RunRecord(int argc, char** argv) {
   char out[2048];
   std::snprintf(out, sizeof out,
                 "{\n  \"stations\": %d,\n  \"seconds\": %.1f,\n  \"samples\": %llu,\n"
-                "  \"lost\": %.0f,\n  \"input_lost\": %.0f,\n  \"station_steps\": %.0f,\n"
+                "  \"lost\": %.0f,\n  \"input_lost\": %.0f,\n  \"input_missing_first\": %.0f,\n"
+                "  \"input_missing_last\": %.0f,\n  \"station_steps\": %.0f,\n"
                 "  \"sequence_gaps\": %.0f,\n  \"sequence_gaps_by_topic\": {%s},\n"
                 "  \"recorder_dropped\": %llu,\n  \"mb_per_min\": %.2f,\n"
                 "  \"recorder_cpu\": %.4f,\n  \"instructor_cpu\": %.4f,\n"
@@ -246,7 +251,7 @@ int RunRecord(int argc, char** argv) {
                 "  \"offered_msgs_per_s\": %.0f,\n  \"writer_capacity_msgs_per_s\": %.0f,\n"
                 "  \"capacity_over_offered\": %.1f\n}\n",
                 stations, wall, static_cast<unsigned long long>(samples), lost, input_lost,
-                station_steps, sequence_gaps, by_topic.c_str(),
+                missing_first, missing_last, station_steps, sequence_gaps, by_topic.c_str(),
                 static_cast<unsigned long long>(rs.dropped), bytes / 1e6 / (wall / 60),
                 recorder_cpu, instructor_cpu, static_cast<unsigned long long>(rs.commits),
                 rs.max_commit_gap_s * 1e3, offered, capacity, capacity / offered);
