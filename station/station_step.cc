@@ -388,7 +388,7 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
 }
 
 Eigen::Quaterniond CanonicalizeDeviceSample(DeviceSample& d) {
-  const Eigen::Quaterniond q(d.X_WT.linear());
+  Eigen::Quaterniond q(d.X_WT.linear());
   d.X_WT.linear() = q.toRotationMatrix();
   return q;
 }

@@ -131,7 +131,7 @@ int RunRecord(int argc, char** argv) {
     const std::string id = "bench-" + std::to_string(i + 1);
     const pid_t pid = fork();
     if (pid == 0) {
-      const std::string log = dir + "/" + id + ".log";
+      const std::string log = std::string(dir).append("/").append(id).append(".log");
       FILE* f = std::fopen(log.c_str(), "w");
       if (f) {
         dup2(fileno(f), 1);
@@ -141,7 +141,7 @@ int RunRecord(int argc, char** argv) {
       const std::string dur = std::to_string(seconds);
       const std::string dom = std::to_string(domain);
       const std::string seed = std::to_string(i + 1);
-      const std::string out = dir + "/" + id + ".json";
+      const std::string out = std::string(dir).append("/").append(id).append(".json");
       execl(bin.c_str(), bin.c_str(), "--scene", scene.c_str(), "--station-id", id.c_str(),
             "--duration", dur.c_str(), "--domain", dom.c_str(), "--seed", seed.c_str(),
             "--no-realtime", "--wait-for-recorder", "30", "--score-out", out.c_str(),
@@ -212,7 +212,7 @@ int RunRecord(int argc, char** argv) {
   double input_lost = 0, sequence_gaps = 0, station_steps = 0, missing_first = 0, missing_last = 0;
   for (int i = 0; i < stations; ++i) {
     const std::string id = "bench-" + std::to_string(i + 1);
-    std::ifstream f(dir + "/" + id + ".json");
+    std::ifstream f(std::string(dir).append("/").append(id).append(".json"));
     std::stringstream ss;
     ss << f.rdbuf();
     const double n = JsonNumber(ss.str(), "steps");

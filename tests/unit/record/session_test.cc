@@ -58,7 +58,7 @@ std::string OpenError(const std::string& file) {
 class SessionTest : public ::testing::Test {
  protected:
   std::string WriteSample(const std::string& name) {
-    const std::string file = dir_ + "/" + name;
+    std::string file = dir_ + "/" + name;
     SessionWriter w(file, {{"issuer", "unit"}});
     std::vector<RecordedMessage> batch;
     for (std::uint64_t s = 0; s < 10; ++s) {
@@ -158,6 +158,7 @@ TEST_F(SessionTest, TheRecorderWritesEverythingPushedFromSeveralThreads) {
   {
     Recorder rec(file, {});
     std::vector<std::thread> producers;
+    producers.reserve(kThreads);
     for (int t = 0; t < kThreads; ++t) {
       producers.emplace_back([&rec, t] {
         for (int i = 0; i < kPerThread; ++i) {
