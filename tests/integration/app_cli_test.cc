@@ -166,7 +166,8 @@ TEST(AppCli, InstructorRefusesBadInput) {
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:vortex:3"}, "vortex");
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:tremor"}, "STATION:KIND");
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:tremor:x"}, "PARAM");
-  ExpectBadInput("microdex-instructor", {"--headless", "--record", "a.db"}, "--record");
+  ExpectBadInput("microdex-instructor", {"--headless", "--record", "/nonexistent-dir/a.db"},
+                 "/nonexistent-dir/a.db: cannot create");
   ExpectBadInput("microdex-instructor", {}, "--headless");
   ExpectBadInput("microdex-instructor", {"--headless", "--partition", "a*"}, "partition");
 }
