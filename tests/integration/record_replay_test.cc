@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -259,6 +260,30 @@ TEST_F(RecordReplayTest, AKilledRecorderLeavesAReadableFileUpToTheLast200Ms) {
   EXPECT_EQ(gaps, 0u);
   EXPECT_GE(last_ns, killed_ns - 200'000'000)
       << "the last " << (killed_ns - last_ns) * 1e-6 << " ms before the kill are missing";
+}
+
+// microdex-replay on bad files: exit 2 and one line on stderr naming the file and the fault.
+TEST_F(RecordReplayTest, ReplayRefusesBadFilesWithOneLineNamingThem) {
+  const std::string text = dir_ + "/notes.db";
+  std::ofstream(text) << "not a recording, only text long enough for SQLite to read a header\n";
+  const std::string missing = dir_ + "/missing.db";
+  const struct {
+    std::vector<std::string> args;
+    std::string expected;
+  } cases[] = {
+      {{text, "--resimulate"}, text + ": not an SQLite database"},
+      {{text, "--export-csv", dir_ + "/csv"}, text + ": not an SQLite database"},
+      {{missing}, missing + ": no such file"},
+      {{missing, "--speed", "0"}, "--speed"},
+  };
+  for (const auto& c : cases) {
+    const std::string log = dir_ + "/bad.log";
+    EXPECT_EQ(RunReplay(c.args, log), 2) << c.expected;
+    const std::string out = ReadFile(log);
+    EXPECT_EQ(out, "microdex-replay: " + out.substr(17)) << out;
+    EXPECT_NE(out.find(c.expected), std::string::npos) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  }
 }
 
 }  // namespace
