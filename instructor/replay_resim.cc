@@ -134,9 +134,13 @@ void ResimulateRun(record::SessionReader& reader, const Run& run, const ResimOpt
     }
     if (m.step() < state.step) return true;  // delivered twice
     if (m.step() > state.step) {
-      out.problem = "DeviceInput missing for steps " + std::to_string(state.step) + ".." +
-                    std::to_string(m.step() - 1) + ": cannot re-simulate past step " +
-                    std::to_string(state.step);
+      const std::string missing =
+          m.step() == state.step + 1
+              ? "step " + std::to_string(state.step)
+              : "steps " + std::to_string(state.step) + ".." + std::to_string(m.step() - 1);
+      out.problem = "DeviceInput of " + missing + " not recorded: re-simulated up to step " +
+                    std::to_string(state.step) + " only (start its station with " +
+                    "--wait-for-recorder)";
       return false;
     }
     station::StationInput in;
