@@ -141,9 +141,10 @@ class Publishers {
 
 }  // namespace
 
-PlayerClock::PlayerClock(std::int64_t session_start_ns, double speed)
-    : anchor_session_ns_(session_start_ns),
-      anchor_wall_ns_(MonoNowNs()),
+PlayerClock::PlayerClock(std::int64_t session_start_ns, double speed, NowFn now)
+    : now_(now ? now : &MonoNowNs),
+      anchor_session_ns_(session_start_ns),
+      anchor_wall_ns_(now_()),
       speed_(std::clamp(speed, 1.0 / 64, 1024.0)) {}
 
 std::int64_t PlayerClock::SessionAtLocked(std::int64_t wall_ns) const {
@@ -154,13 +155,13 @@ std::int64_t PlayerClock::SessionAtLocked(std::int64_t wall_ns) const {
 
 std::int64_t PlayerClock::SessionNowNs() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return SessionAtLocked(MonoNowNs());
+  return SessionAtLocked(now_());
 }
 
 std::optional<std::int64_t> PlayerClock::WallTimeOf(std::int64_t session_ns) const {
   std::lock_guard<std::mutex> lock(mutex_);
   if (paused_) {
-    if (session_ns <= anchor_session_ns_) return MonoNowNs();
+    if (session_ns <= anchor_session_ns_) return now_();
     return std::nullopt;
   }
   return anchor_wall_ns_ +
@@ -169,12 +170,12 @@ std::optional<std::int64_t> PlayerClock::WallTimeOf(std::int64_t session_ns) con
 
 void PlayerClock::Restart() {
   std::lock_guard<std::mutex> lock(mutex_);
-  anchor_wall_ns_ = MonoNowNs();
+  anchor_wall_ns_ = now_();
 }
 
 void PlayerClock::SetSpeed(double speed) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::int64_t now = MonoNowNs();
+  const std::int64_t now = now_();
   anchor_session_ns_ = SessionAtLocked(now);
   anchor_wall_ns_ = now;
   speed_ = std::clamp(speed, 1.0 / 64, 1024.0);
@@ -187,7 +188,7 @@ double PlayerClock::speed() const {
 
 void PlayerClock::TogglePause() {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::int64_t now = MonoNowNs();
+  const std::int64_t now = now_();
   anchor_session_ns_ = SessionAtLocked(now);
   anchor_wall_ns_ = now;
   paused_ = !paused_;
@@ -240,7 +241,7 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
     for (;;) {
       if (stop.load()) return false;
       const std::optional<std::int64_t> wall = clock.WallTimeOf(m.receive_ns);
-      const std::int64_t now = MonoNowNs();
+      const std::int64_t now = clock.WallNowNs();
       if (wall && *wall <= now) break;
       const std::int64_t wait = wall ? std::min<std::int64_t>(*wall - now, 20'000'000) : 20'000'000;
       std::this_thread::sleep_for(std::chrono::nanoseconds(wait));

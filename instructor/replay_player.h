@@ -18,7 +18,11 @@ namespace microdex::instructor {
 // Thread-safe: the keys change it from another thread than the player's.
 class PlayerClock {
  public:
-  PlayerClock(std::int64_t session_start_ns, double speed);
+  using NowFn = std::int64_t (*)();  // monotonic wall time, ns
+  // `now`: the wall clock (CLOCK_MONOTONIC by default; tests inject their own).
+  PlayerClock(std::int64_t session_start_ns, double speed, NowFn now = nullptr);
+  // Wall time now (the clock's).
+  std::int64_t WallNowNs() const { return now_(); }
   // The session time reached now.
   std::int64_t SessionNowNs() const;
   // Wall time (monotonic) at which session time t is reached; nullopt while paused.
@@ -34,6 +38,7 @@ class PlayerClock {
 
  private:
   std::int64_t SessionAtLocked(std::int64_t wall_ns) const;
+  NowFn now_;
   mutable std::mutex mutex_;
   std::int64_t anchor_session_ns_;
   std::int64_t anchor_wall_ns_;

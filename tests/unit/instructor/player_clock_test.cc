@@ -1,0 +1,55 @@
+// The replay's PlayerClock on an injected wall clock: session time runs at the speed, stands
+// still while paused, steps only while paused, keeps its place when the speed changes, and
+// WallTimeOf answers when a session time is reached (never while paused and ahead).
+#include <gtest/gtest.h>
+
+#include "instructor/replay_player.h"
+
+namespace microdex::instructor {
+namespace {
+
+std::int64_t g_now_ns = 0;
+std::int64_t FakeNow() { return g_now_ns; }
+
+constexpr std::int64_t kStart = 1'000'000'000'000;  // session time of the first message
+constexpr std::int64_t kMs = 1'000'000;
+
+TEST(PlayerClock, RunsAtItsSpeedPausesStepsAndChangesSpeedInPlace) {
+  g_now_ns = 5'000 * kMs;
+  PlayerClock c(kStart, 2.0, &FakeNow);
+  EXPECT_EQ(c.SessionNowNs(), kStart);
+  g_now_ns += 100 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 200 * kMs);  // 2x
+  EXPECT_EQ(*c.WallTimeOf(kStart + 300 * kMs), g_now_ns + 50 * kMs);
+
+  c.TogglePause();
+  EXPECT_TRUE(c.paused());
+  g_now_ns += 1'000 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 200 * kMs);  // stands still
+  EXPECT_FALSE(c.WallTimeOf(kStart + 201 * kMs).has_value());
+  EXPECT_EQ(*c.WallTimeOf(kStart + 150 * kMs), g_now_ns);  // already reached: now
+  c.Step(100 * kMs);
+  EXPECT_EQ(c.SessionNowNs(), kStart + 300 * kMs);
+  c.TogglePause();
+  EXPECT_FALSE(c.paused());
+  g_now_ns += 50 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 400 * kMs);
+  c.Step(100 * kMs);  // ignored while playing
+  EXPECT_EQ(c.SessionNowNs(), kStart + 400 * kMs);
+
+  c.SetSpeed(0.5);
+  EXPECT_EQ(c.SessionNowNs(), kStart + 400 * kMs);  // no jump
+  g_now_ns += 100 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 450 * kMs);
+  c.SetSpeed(1e9);
+  EXPECT_EQ(c.speed(), 1024.0);  // clamped
+  c.SetSpeed(0);
+  EXPECT_EQ(c.speed(), 1.0 / 64);
+
+  c.Restart();  // the wall clock restarts; session time stays
+  g_now_ns += 64 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 451 * kMs);
+}
+
+}  // namespace
+}  // namespace microdex::instructor
