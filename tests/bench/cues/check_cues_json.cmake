@@ -1,0 +1,12 @@
+# Runs microdex-bench cues on a small set and checks that the JSON has every field.
+execute_process(COMMAND ${BENCH} cues --reaches 40 --seeds 1 --json ${JSON} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "microdex-bench cues exited with ${rc}")
+endif()
+file(READ ${JSON} text)
+foreach(field lead_ms_median hit_rate false_alarm_rate)
+  string(JSON value ERROR_VARIABLE err GET "${text}" predictive ${field})
+  if(err OR "${value}" STREQUAL "")
+    message(FATAL_ERROR "${JSON}: predictive.${field} missing (${err})")
+  endif()
+endforeach()
