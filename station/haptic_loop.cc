@@ -69,8 +69,18 @@ void HapticLoop::Run(const std::atomic<bool>& stop, std::uint64_t max_steps) {
   std::int64_t prev_start = -1;
   while (!stop.load(std::memory_order_relaxed) && state_.step < max_steps) {
     deadline += period_ns_;
-    clock_.SleepUntilNs(deadline);
+    bool sample = false;
+    if (device_.paces_loop()) {
+      // An external driver's servo loop paces the ticks: a tick follows each of its samples
+      // (not before half a period after the last tick), or comes half a period after its
+      // deadline when none arrives, so that the loop keeps its period through a fault.
+      clock_.SleepUntilNs(deadline - period_ns_ / 2);
+      sample = device_.WaitForSample(deadline + period_ns_ / 2);
+    } else {
+      clock_.SleepUntilNs(deadline);
+    }
     const std::int64_t start = clock_.NowNs();
+    if (sample) deadline = start;  // in phase with the driver
     const std::int64_t late = start - deadline;
     const bool overrun = late > period_ns_;
     if (overrun) ++overruns_;

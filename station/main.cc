@@ -31,8 +31,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
 
   CLI::App app{"microdex-station: one trainee station (haptic loop, physics modules, DDS)"};
   app.add_option("--scene", o.scene_path, "scene file (YAML)")->required();
-  app.add_option("--device", o.device,
-                 "input device: sim, page (the view page's keyboard and mouse; needs --view)");
+  std::vector<std::string> device_args;
+  app.add_option("--device", device_args,
+                 "input device: sim (simulated trainee), page (the view page's keyboard and mouse; "
+                 "needs --view), playback FILE (a recorded CSV), dds (an external driver over the "
+                 "DDS device bridge)")
+      ->expected(1, 2);
   app.add_option("--skill", o.skill, "simulated trainee skill, 0 novice .. 1 expert");
   app.add_option("--seed", o.seed, "seed of the simulated trainee");
   app.add_option("--duration", o.duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
@@ -68,6 +72,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 2;
   }
   o.realtime = !no_realtime;
+  if (!device_args.empty()) o.device = device_args[0];
+  if (device_args.size() > 1) o.device_file = device_args[1];
   if (std::string why = o.Validate(); !why.empty()) {
     std::fprintf(stderr, "microdex-station: %s\n", why.c_str());
     return 2;

@@ -120,6 +120,7 @@ struct TickSnapshot {
   double fault_value = 0;            // of the first module at fault (clearance, strain, force)
   std::int8_t contact_event = 0;     // +1 fault episode began, -1 ended
   std::uint32_t force_warnings = 0;  // running count of non-finite forces replaced by zero
+  std::uint8_t device_fault = 0;     // station::DeviceFault of this step
   std::uint64_t state_hash = 0;      // CalcStateHash after this step, when has_state_hash
   std::uint8_t has_state_hash = 0;
   std::uint64_t step_hash = 0;  // CalcStateHash after this step, every step (DeviceInput)

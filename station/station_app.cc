@@ -11,9 +11,11 @@
 #include "common/scene/scene.h"
 #include "common/state/state_hash.h"
 #include "station/audio_out.h"
+#include "station/dds_device.h"
 #include "station/haptic_loop.h"
 #include "station/module.h"
 #include "station/page_device.h"
+#include "station/playback_device.h"
 #include "station/rt/clock.h"
 #include "station/rt/realtime.h"
 #include "station/sim_trainee.h"
@@ -134,11 +136,17 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
 
 std::string StationOptions::Validate() const {
   if (scene_path.empty()) return "--scene: required";
-  if (device != "sim" && device != "page") {
-    if (device == "playback" || device == "dds" || device == "gui") {
-      return "--device " + device + ": not available in this build yet (only 'sim', 'page')";
-    }
-    return "--device: expected sim|page|playback|dds|gui";
+  if (device == "playback") {
+    if (device_file.empty()) return "--device playback: expected a FILE (CSV)";
+  } else if (device == "dds") {
+    if (unpaced) return "--unpaced: not with --device dds (the driver paces the loop)";
+  } else if (device == "gui") {
+    return "--device gui: not available in this build (sim, page, playback, dds)";
+  } else if (device != "sim" && device != "page") {
+    return "--device: expected sim|page|playback FILE|dds";
+  }
+  if (device != "playback" && !device_file.empty()) {
+    return "--device " + device + ": takes no FILE";
   }
   if (!(view_port >= -1 && view_port <= 65535)) return "--view: expected a port 0..65535";
   if (device == "page" && view_port < 0) return "--device page: needs --view PORT";
@@ -170,12 +178,24 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   trainee_def.skill = o.skill;
   trainee_def.seed = o.seed;
   trainee_def.Validate();
+  const std::string session_id = o.station_id + "-" +
+                                 std::to_string(rt::MonotonicClock().RealtimeNs() / 1'000'000) +
+                                 "-" + std::to_string(getpid());
   std::unique_ptr<Device> device_owner;
   PageDevice* page_device = nullptr;
   if (o.device == "page") {
     auto page = std::make_unique<PageDevice>(scene.CalcIdealToolPose(0));
     page_device = page.get();
     device_owner = std::move(page);
+  } else if (o.device == "playback") {
+    device_owner = std::make_unique<PlaybackDevice>(o.device_file);
+  } else if (o.device == "dds") {
+    // The driver's hand at the device origin puts the tool at the task's start.
+    DeviceMappingDef mapping;
+    mapping.p_W_centre = scene.CalcIdealToolPose(0).translation();
+    mapping.max_force_N = scene.haptic.max_force_N;
+    device_owner =
+        std::make_unique<DdsDevice>(o.dds, o.station_id, session_id.substr(0, 64), mapping);
   } else {
     device_owner = std::make_unique<SimTrainee>(scene, trainee_def);
   }
@@ -203,8 +223,9 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   lc.seed = o.seed;
   lc.frame_period_steps = frame_period_steps;
   lc.wait_for_ring = o.unpaced;
-  // A person at the page keeps the station (and its view) after the task ends.
-  lc.stop_at_task_end = page_device == nullptr;
+  // A trainee at a device or at the page goes on after the task ends (the scores freeze); a
+  // simulated one and a playback stop there.
+  lc.stop_at_task_end = o.device != "dds" && page_device == nullptr;
   HapticLoop loop(scene, device, rings, clock, lc);
   // --cue: from the first step, through the ring the instructor's cues take (the threads
   // start below, so this thread may stand in for the producer).
@@ -219,9 +240,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
 
   PublisherConfig pc;
   pc.station_id = o.station_id;
-  pc.session_id = o.station_id + "-" + std::to_string(wall_clock.RealtimeNs() / 1'000'000) + "-" +
-                  std::to_string(getpid());
-  pc.session_id = pc.session_id.substr(0, 64);
+  pc.session_id = session_id.substr(0, 64);
   pc.trainee = o.trainee;
   pc.device = o.device;
   pc.skill = o.skill;

@@ -13,7 +13,8 @@ namespace microdex::station {
 
 struct StationOptions {
   std::string scene_path;
-  std::string device = "sim";
+  std::string device = "sim";  // sim | playback (device_file) | dds
+  std::string device_file;     // --device playback FILE: the CSV (station/playback_device.h)
   double skill = 0.5;
   std::uint64_t seed = 1;
   double duration_s = 0;   // 0: until SIGINT/SIGTERM

@@ -298,6 +298,18 @@ void StationPublisher::Drain() {
     } else if (s.contact_event < 0) {
       PublishEvent(net::TaskEventKind::kContactEnd, s.step, 0, event_value, "");
     }
+    // Device faults: one event when a fault begins (or changes), one when it ends.
+    if (s.device_fault != last_device_fault_) {
+      if (s.device_fault != 0) {
+        PublishEvent(net::TaskEventKind::kDeviceFault, s.step, 0, s.device_fault,
+                     std::string("device: ") +
+                         DeviceFaultName(static_cast<DeviceFault>(s.device_fault)) +
+                         "; tool held, force ramped to zero");
+      } else {
+        PublishEvent(net::TaskEventKind::kDeviceOk, s.step, 0, 0, "device: valid samples again");
+      }
+      last_device_fault_ = s.device_fault;
+    }
     if (config_.on_snapshot) config_.on_snapshot(s);
     last_ = s;
     have_last_ = true;

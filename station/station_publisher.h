@@ -26,6 +26,7 @@
 #include "common/net/messages.h"
 #include "common/scene/scene.h"
 #include "common/view/view_frame.h"
+#include "station/device.h"
 #include "station/haptic_loop.h"
 #include "station/period_stats.h"
 #include "station/snapshot.h"
@@ -136,6 +137,7 @@ class StationPublisher {
   PublisherTotals totals_;
   TickSnapshot last_;
   bool have_last_ = false;
+  std::uint8_t last_device_fault_ = 0;
   std::string knot_;  // "" until the first recognition
   std::vector<std::pair<std::string, std::uint64_t>> seen_cues_;
   net::Score final_score_;

@@ -109,6 +109,7 @@ void CalcToolAfterCues(const cues::TremorFilterModel& filter, const DeviceSample
   s.tool.X_WT_device = d.X_WT;
   s.tool.gripper = d.gripper;
   s.tool.buttons = d.buttons;
+  s.tool.device_fault = static_cast<std::uint8_t>(d.fault);
   const Eigen::Vector3d p_device = d.X_WT.translation();
   s.cues.tremor_band_m = cues::StepTremorFilter(filter, p_device, s.cues.tremor_filter);
   s.tool.X_WT = d.X_WT;
@@ -376,6 +377,9 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
     }
   }
 
+  // A device fault: the device gave the last valid pose again (held); the force goes to zero,
+  // at the limiter's rate.
+  if (s.tool.device_fault != 0) f.setZero();
   LimitToolForce(f, scene.haptic.max_force_N, sim.dt_s_, s);
   if (s.score.outcome == 0) {  // the scores freeze when the task ends
     UpdateScore(scene, sim.dt_s_, s);
@@ -475,6 +479,7 @@ void ProjectSnapshot(const Simulation& sim, const state::StationState& s, TickSn
   out.fault_value = s.score.fault_value;
   out.contact_event = s.score.contact_event;
   out.force_warnings = s.tool.force_warnings;
+  out.device_fault = s.tool.device_fault;
   out.score = s.score;
 }
 

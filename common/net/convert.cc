@@ -182,6 +182,10 @@ msg::TaskEventKind TaskEventKindToMsg(TaskEventKind kind) {
       return msg::EVENT_CONTACT_BEGIN;
     case TaskEventKind::kContactEnd:
       return msg::EVENT_CONTACT_END;
+    case TaskEventKind::kDeviceFault:
+      return msg::EVENT_DEVICE_FAULT;
+    case TaskEventKind::kDeviceOk:
+      return msg::EVENT_DEVICE_OK;
   }
   MICRODEX_CHECK(false);
   return msg::EVENT_TASK_START;
@@ -207,6 +211,12 @@ bool TaskEventKindFromMsg(msg::TaskEventKind in, TaskEventKind* kind) {
     case msg::EVENT_CONTACT_END:
       *kind = TaskEventKind::kContactEnd;
       return true;
+    case msg::EVENT_DEVICE_FAULT:
+      *kind = TaskEventKind::kDeviceFault;
+      return true;
+    case msg::EVENT_DEVICE_OK:
+      *kind = TaskEventKind::kDeviceOk;
+      return true;
   }
   return false;
 }
@@ -227,6 +237,10 @@ const char* TaskEventKindName(TaskEventKind kind) {
       return "contact-begin";
     case TaskEventKind::kContactEnd:
       return "contact-end";
+    case TaskEventKind::kDeviceFault:
+      return "device-fault";
+    case TaskEventKind::kDeviceOk:
+      return "device-ok";
   }
   return "unknown";
 }

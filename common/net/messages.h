@@ -152,6 +152,8 @@ enum class TaskEventKind : std::uint32_t {
   kCueRejected = 3,
   kContactBegin = 4,
   kContactEnd = 5,
+  kDeviceFault = 6,
+  kDeviceOk = 7,
 };
 const char* TaskEventKindName(TaskEventKind kind);
 

@@ -21,6 +21,14 @@ inline constexpr TopicSpec kStationInfoTopic{"microdex/station_info", "microdex_
 inline constexpr TopicSpec kDeviceInputTopic{"microdex/device_input", "microdex_topic_keep_all",
                                              "microdex_device_input_writer",
                                              "microdex_device_input_reader"};
+// The DDS device bridge: an external driver's samples (type DeviceInput, keyed by the station
+// it drives) and the station's force back (DeviceForce), latest-only.
+inline constexpr TopicSpec kDeviceSampleTopic{
+    "microdex/device_sample", "microdex_topic_keep_last_1", "microdex_device_bridge_writer",
+    "microdex_device_bridge_reader"};
+inline constexpr TopicSpec kDeviceForceTopic{"microdex/device_force", "microdex_topic_keep_last_1",
+                                             "microdex_device_bridge_writer",
+                                             "microdex_device_bridge_reader"};
 // The mirrored state topics (60 Hz, the latest sample is all a mirror needs) share one QoS.
 constexpr TopicSpec MirrorTopic(const char* name) {
   return {name, "microdex_topic_keep_last_1", "microdex_mirror_writer", "microdex_mirror_reader"};

@@ -59,6 +59,9 @@ struct ToolState {
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  // tool after cues (what modules see)
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // force sent to the device: finite, saturated
   std::uint32_t force_warnings = 0;  // non-finite forces replaced by zero, running count
+  // The device's fault this step (station::DeviceFault: 0 none; 1 timeout, 2 non-finite,
+  // 3 jump): the pose is the last valid one, held, and the force is ramped to zero.
+  std::uint8_t device_fault = 0;
 };
 
 // The end-point predictor of the current sub-movement (common/cues/end_point_predictor.h).

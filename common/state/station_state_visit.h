@@ -55,6 +55,7 @@ void Tool(S& t, V& v) {
   Pose("tool.X_WT", t.X_WT, v);
   Matrix("tool.f_T_W", t.f_T_W, v);
   v("tool.force_warnings", &t.force_warnings, 1);
+  v("tool.device_fault", &t.device_fault, 1);
 }
 
 template <typename S, typename V>

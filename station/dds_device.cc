@@ -1,0 +1,148 @@
+#include "station/dds_device.h"
+
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+
+#include "common/net/topics.h"
+#include "device_forcePubSubTypes.h"
+#include "device_inputPubSubTypes.h"
+
+namespace microdex::station {
+
+namespace dds = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+// Runs on the DDS listener thread: takes every sample addressed to this station and hands the
+// latest to the haptic thread. Numbers are passed as they came (a NaN is the guard's to judge).
+class DdsDevice::Listener final : public dds::DataReaderListener {
+ public:
+  explicit Listener(DdsDevice& device) : device_(device) {}
+  void on_data_available(dds::DataReader* reader) override {
+    dds::SampleInfo info;
+    while (reader->take_next_sample(&msg_, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data || msg_.station_id().to_string() != device_.station_id_) continue;
+      BridgeSample s{};
+      for (int i = 0; i < 3; ++i) s.p[i] = msg_.p_WT()[i];
+      for (int i = 0; i < 4; ++i) s.q[i] = msg_.q_WT()[i];
+      s.gripper = msg_.gripper();
+      s.buttons = msg_.buttons();
+      s.step = msg_.step();
+      s.stamp_ns = msg_.stamp_ns();
+      device_.OnSample(s);
+    }
+  }
+
+ private:
+  DdsDevice& device_;
+  msg::DeviceInput msg_;
+};
+
+DdsDevice::DdsDevice(const net::DdsOptions& dds_options, const std::string& station_id,
+                     const std::string& session_id, const DeviceMappingDef& mapping,
+                     const DeviceGuardDef& guard)
+    : station_id_(station_id),
+      session_id_(session_id),
+      dds_(std::make_unique<net::DdsContext>(dds_options)),
+      listener_(std::make_unique<Listener>(*this)),
+      guard_(guard),
+      mapping_(mapping) {
+  auto* writer = dds_->CreateWriter<msg::DeviceForcePubSubType>(net::kDeviceForceTopic);
+  auto* reader = dds_->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic);
+  writer_ = writer;
+  reader_ = reader;
+  publisher_ = std::thread([this] { RunPublisher(); });
+  reader->set_listener(listener_.get(), dds::StatusMask::data_available());
+}
+
+DdsDevice::~DdsDevice() {
+  static_cast<dds::DataReader*>(reader_)->set_listener(nullptr);
+  stop_.store(true);
+  force_event_.Notify();
+  publisher_.join();
+  dds_.reset();
+}
+
+void DdsDevice::OnSample(const BridgeSample& s) {
+  latest_.back() = s;
+  latest_.Publish();
+  received_.fetch_add(1, std::memory_order_relaxed);
+  sample_event_.Notify();
+}
+
+bool DdsDevice::WaitForSample(std::int64_t until_ns) {
+  for (;;) {
+    const std::uint32_t count = sample_event_.count();
+    if (count != sample_seen_) {
+      sample_seen_ = count;
+      return true;
+    }
+    const std::int64_t now = clock_.NowNs();
+    if (now >= until_ns) return false;
+    sample_event_.WaitWhile(count, until_ns - now);
+  }
+}
+
+DeviceSample DdsDevice::Read(std::uint64_t step) {
+  step_ = step;
+  RawDeviceSample fresh;
+  const bool got = latest_.Update();
+  if (got) {
+    const BridgeSample& b = latest_.front();
+    fresh.p_D = Eigen::Vector3d(b.p[0], b.p[1], b.p[2]);
+    fresh.q_D = Eigen::Quaterniond(b.q[0], b.q[1], b.q[2], b.q[3]);
+    fresh.gripper = b.gripper;
+    fresh.buttons = b.buttons;
+    fresh.sample_step = b.step;
+    fresh.sample_stamp_ns = b.stamp_ns;
+  }
+  bool resumed = false;
+  raw_ = guard_.Step(got ? &fresh : nullptr, &fault_, &resumed);
+  if (got) {  // the echo names the sample this step read, valid or not
+    raw_.sample_step = fresh.sample_step;
+    raw_.sample_stamp_ns = fresh.sample_stamp_ns;
+  }
+  if (resumed) mapping_.Recentre();
+  DeviceSample out;
+  out.X_WT = mapping_.Map(raw_);
+  out.gripper = raw_.gripper;
+  out.buttons = raw_.buttons;
+  out.fault = fault_;
+  return out;
+}
+
+void DdsDevice::WriteForce(const Eigen::Vector3d& f_T_W) {
+  const Eigen::Vector3d f_D = mapping_.ForceToDevice(f_T_W);
+  ForceOut f{step_,
+             raw_.sample_step,
+             raw_.sample_stamp_ns,
+             {f_D.x(), f_D.y(), f_D.z()},
+             static_cast<std::uint8_t>(fault_)};
+  if (!forces_.TryPush(f)) dropped_.fetch_add(1, std::memory_order_relaxed);
+  force_event_.Notify();
+}
+
+void DdsDevice::RunPublisher() {
+  auto* writer = static_cast<dds::DataWriter*>(writer_);
+  msg::DeviceForce m;
+  m.station_id(station_id_);
+  m.session_id(session_id_.substr(0, 64));
+  ForceOut f{};
+  while (!stop_.load()) {
+    const std::uint32_t seen = force_event_.count();
+    while (forces_.TryPop(f)) {
+      m.step(f.step);
+      m.stamp_ns(clock_.RealtimeNs());
+      m.sample_step(f.sample_step);
+      m.sample_stamp_ns(f.sample_stamp_ns);
+      m.f_D({f.f_D[0], f.f_D[1], f.f_D[2]});
+      m.tau_D({0, 0, 0});
+      m.fault(f.fault);
+      writer->write(&m);
+    }
+    force_event_.WaitWhile(seen, 100'000'000);
+  }
+}
+
+}  // namespace microdex::station
