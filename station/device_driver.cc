@@ -16,6 +16,7 @@
 #include "device_inputPubSubTypes.h"
 #include "station/playback_device.h"
 #include "station/rt/clock.h"
+#include "station/rt/realtime.h"
 
 namespace microdex::station {
 namespace {
@@ -111,6 +112,10 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  // A driver's servo loop runs at real-time priority where it may (as the station's haptic
+  // thread does); otherwise at normal priority.
+  std::string why;
+  const bool fifo = rt::MakeThisThreadFifo(70, &why);
   msg::DeviceInput m;
   m.station_id(def.station_id);
   m.session_id("driver");
@@ -154,6 +159,7 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
   reader->set_listener(nullptr);
   DriverStats stats = listener.Take();
   stats.matched = matched;
+  stats.realtime = fifo;
   stats.sent = sent;
   stats.lost = sent - std::min(sent, stats.answered);
   return stats;

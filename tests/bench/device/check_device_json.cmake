@@ -1,0 +1,17 @@
+# Runs microdex-bench device briefly with one other station and checks the JSON's fields.
+execute_process(COMMAND ${BENCH} device --duration 2 --others 1 --domain 92 --json ${JSON}
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "microdex-bench device exited with ${rc}")
+endif()
+file(READ ${JSON} text)
+foreach(path "round_trip_us;p50" "round_trip_us;p99" "lost" "sent")
+  string(JSON value ERROR_VARIABLE err GET "${text}" ${path})
+  if(err OR "${value}" STREQUAL "")
+    message(FATAL_ERROR "${JSON}: ${path} missing (${err})")
+  endif()
+endforeach()
+string(JSON sent GET "${text}" sent)
+if(sent LESS 1000)
+  message(FATAL_ERROR "${JSON}: only ${sent} samples sent in 2 s")
+endif()
