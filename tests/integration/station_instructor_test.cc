@@ -108,7 +108,9 @@ TEST_F(StationInstructorTest, DiscoveryCuesLivelinessRestartAndShutdown) {
         return v->tool.latest && (v->tool.latest->active_cues >> 1) & 1u;
       },
       3s));
-  EXPECT_EQ(console.Station("st-1")->tool.latest->active_cues, 0u);
+  // (The wall is a cue too, on by default: st-1 shows it and nothing else.)
+  EXPECT_EQ(console.Station("st-1")->tool.latest->active_cues,
+            cues::CueBit(cues::CueKind::kWall));
 
   // 3. SIGKILL st-3: reported lost within 2 s by the liveliness path (the 1 s participant
   // lease drops its StationInfo writer), not by the instructor's silence watchdog.
