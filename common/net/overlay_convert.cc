@@ -46,7 +46,7 @@ void ToMsg(const Header& header, std::uint32_t active, const cues::CueOverlay& i
     m.role(static_cast<std::uint8_t>(p.role));
     ColourToMsg(p.colour, m.rgba());
     m.width_m(p.width_m);
-    m.p_W().resize(static_cast<std::size_t>(3 * p.count));
+    m.p_W().resize(3 * static_cast<std::size_t>(p.count));
     for (int k = 0; k < p.count; ++k) {
       for (int j = 0; j < 3; ++j) m.p_W()[3 * k + j] = p.p_W[k][j];
     }
