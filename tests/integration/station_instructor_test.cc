@@ -109,8 +109,7 @@ TEST_F(StationInstructorTest, DiscoveryCuesLivelinessRestartAndShutdown) {
       },
       3s));
   // (The wall is a cue too, on by default: st-1 shows it and nothing else.)
-  EXPECT_EQ(console.Station("st-1")->tool.latest->active_cues,
-            cues::CueBit(cues::CueKind::kWall));
+  EXPECT_EQ(console.Station("st-1")->tool.latest->active_cues, cues::CueBit(cues::CueKind::kWall));
 
   // 3. SIGKILL st-3: reported lost within 2 s by the liveliness path (the 1 s participant
   // lease drops its StationInfo writer), not by the instructor's silence watchdog.
