@@ -41,11 +41,7 @@ state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
   state::SeedStationState(seed, s);
   s.score.min_clearance_m = std::numeric_limits<double>::infinity();
   for (const auto& m : modules_) m->InitState(s);
-  // Every kind's default parameter; the wall on as the scene has it.
-  for (std::uint32_t k = 0; k < cues::kCueKindCount; ++k) {
-    s.cues.param[k] = cues::CueParamLimits(static_cast<cues::CueKind>(k)).default_value;
-  }
-  s.cues.active = cues::CueBit(cues::CueKind::kWall);
+  // (Every kind's default parameter and the wall on: CueState's defaults.)
   s.cues.clearance_m = std::numeric_limits<double>::infinity();
   // The scene's cues on from the first step (cue id 0: the scene's own).
   for (const auto& [kind, param] : scene_.cues.on) {

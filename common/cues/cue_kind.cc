@@ -30,6 +30,14 @@ constexpr KindInfo kKinds[kCueKindCount] = {
     {"predictive", {1e-6, kMaxCueDistance_m, 0.5e-3, "error_m"}},
 };
 
+constexpr bool DefaultsAgree() {
+  for (std::uint32_t i = 0; i < kCueKindCount; ++i) {
+    if (kKinds[i].range.default_value != kCueParamDefaults[i]) return false;
+  }
+  return true;
+}
+static_assert(DefaultsAgree(), "kCueParamDefaults and the table of kinds agree");
+
 }  // namespace
 
 const char* CueKindName(CueKind kind) {

@@ -4,6 +4,7 @@
 // enum (idl/cue_command.idl); common/net converts between them enumerator by enumerator.
 // README.md in this folder describes every cue and its formula.
 
+#include <array>
 #include <cstdint>
 #include <string>
 
@@ -26,6 +27,11 @@ enum class CueKind : std::uint32_t {
   kPredictive = 13,      // param: end-point error that raises the warning, m
 };
 inline constexpr std::uint32_t kCueKindCount = 14;
+
+// Each kind's default parameter, in CueKind order (CueParamLimits(kind).default_value): what a
+// fresh state holds and what `--cue KIND` without a parameter means.
+inline constexpr std::array<double, kCueKindCount> kCueParamDefaults = {
+    0, 200, 100, 3, 50e-6, 0, 0, 1e-3, 0.8, 0.5, 1e-3, 1e-3, 1, 0.5e-3};
 
 // The command-line name of a kind: clear, convergent, divergent, amplified_tremor,
 // visual_path, visual_limits, visual_deviation, visual_clearance, audio_click, audio_error,

@@ -74,9 +74,10 @@ struct PredictorState {
 
 // The learning cues in force and the ones waiting for their step.
 struct CueState {
-  std::uint32_t active = 0;  // bit cues::CueBit(kind) per kind switched on
+  // Bit cues::CueBit(kind) per kind switched on: the wall, as the scene has it, at first.
+  std::uint32_t active = cues::CueBit(cues::CueKind::kWall);
   // The parameter of each kind (CueParamLimits; kept when the kind is switched off).
-  std::array<double, cues::kCueKindCount> param{};
+  std::array<double, cues::kCueKindCount> param = cues::kCueParamDefaults;
   // The 8–12 Hz band of the raw device motion, filtered every step (so that switching the
   // amplification on is seamless); the tremor module's RMS reads the same band.
   cues::TremorFilterState tremor_filter;
