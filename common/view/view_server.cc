@@ -233,7 +233,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       auto ws = std::make_shared<WsSession>(stream_.release_socket(), server_);
       ws->GrantInitialCredit();
       server_.sessions.push_back(ws);
-      ws->Run(std::move(req));
+      ws->Run(req);
       return;
     }
     if (req.method() != http::verb::get && req.method() != http::verb::head) {
