@@ -8,6 +8,9 @@ let sab: SharedArrayBuffer | null = null;
 let url = '';
 let delayMs = 250;
 let received = 0; // frames since the page last drew
+// Counters for diagnosis (a test can read them from the worker).
+const stats = { frames: 0, credited: 0, drew: 0, texts: 0, refused: 0, error: '' };
+(self as any).microdexWorker = stats;
 
 function connect(): void {
   const socket = new WebSocket(url);
@@ -15,6 +18,7 @@ function connect(): void {
   socket.onopen = () => { delayMs = 250; postMessage({ type: 'status', open: true }); };
   socket.onmessage = (e: MessageEvent) => {
     if (typeof e.data === 'string') {
+      ++stats.texts;
       try {
         postMessage({ type: 'text', message: JSON.parse(e.data) });
       } catch {
@@ -22,8 +26,15 @@ function connect(): void {
       }
       return;
     }
-    writeSlot(sab!, e.data as ArrayBuffer, performance.timeOrigin + performance.now());
+    try {
+      if (!writeSlot(sab!, e.data as ArrayBuffer, performance.timeOrigin + performance.now())) {
+        ++stats.refused;
+      }
+    } catch (err) {
+      stats.error = String(err);
+    }
     ++received;
+    ++stats.frames;
   };
   socket.onclose = () => {
     postMessage({ type: 'status', open: false });
@@ -41,10 +52,14 @@ self.onmessage = (e: MessageEvent) => {
     connect();
   } else if (m.type === 'send' && ws && ws.readyState === WebSocket.OPEN) {
     ws.send(m.text);
-  } else if (m.type === 'drew' && ws && ws.readyState === WebSocket.OPEN && received > 0) {
+  } else if (m.type === 'drew') {
+    ++stats.drew;
+  }
+  if (m.type === 'drew' && ws && ws.readyState === WebSocket.OPEN && received > 0) {
     // The page has drawn: the frames taken since may be replaced (view_server.h credits), so
     // the app sends about as many frames as the page draws, each the newest.
     ws.send(`credit ${Math.min(received, 1024)}`);
+    stats.credited += received;
     received = 0;
   }
 };
