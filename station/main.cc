@@ -25,7 +25,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   o.station_id = "station-" + std::to_string(getpid());
   o.dds.profile_file = microdex::net::DefaultDdsProfileFile();
   o.dds.participant_name = "microdex-station";
-  std::string window_unused, screenshot_unused, security_unused;
+  std::string window_unused, security_unused;
   bool window = false;
   bool no_realtime = false;
 
@@ -59,16 +59,16 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_flag("--unpaced", o.unpaced,
                "step as fast as possible in simulated time (same results as paced)");
   app.add_flag("--window", window, "open a view window (not available in this build)");
-  app.add_option("--screenshot", screenshot_unused, "(not available in this build)");
+  app.add_option("--screenshot", o.screenshot,
+                 "render the view page headless to FILE.png once it has drawn, then stop");
   app.add_option("--security", security_unused, "(not available in this build)");
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-station")) {
     return *status;
   }
-  if (window || !screenshot_unused.empty() || !security_unused.empty()) {
-    std::fprintf(
-        stderr, "microdex-station: %s: not available in this build yet\n",
-        window ? "--window" : (!screenshot_unused.empty() ? "--screenshot" : "--security"));
+  if (window || !security_unused.empty()) {
+    std::fprintf(stderr, "microdex-station: %s: not available in this build yet\n",
+                 window ? "--window" : "--security");
     return 2;
   }
   o.realtime = !no_realtime;

@@ -1,12 +1,17 @@
 #include "station/station_app.h"
 
+#include <spawn.h>
 #include <spdlog/spdlog.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 #include "common/scene/scene.h"
 #include "common/state/state_hash.h"
@@ -132,6 +137,23 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
   f << "  \"state_hash_version\": " << state::kStateHashVersion << "\n}\n";
 }
 
+// Starts node on station/page/screenshot.mjs against this station's view; -1 when it cannot.
+pid_t StartScreenshot(std::uint16_t port, const std::string& out) {
+  const std::string script = std::string(MICRODEX_SOURCE_DIR) + "/station/page/screenshot.mjs";
+  const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
+  std::vector<std::string> args = {"node", script, "--url", url, "--out", out};
+  std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  if (posix_spawnp(&pid, "node", nullptr, nullptr, argv.data(), environ) != 0) {
+    spdlog::error("--screenshot: cannot run node");
+    return -1;
+  }
+  return pid;
+}
+
 }  // namespace
 
 std::string StationOptions::Validate() const {
@@ -149,7 +171,12 @@ std::string StationOptions::Validate() const {
     return "--device " + device + ": takes no FILE";
   }
   if (!(view_port >= -1 && view_port <= 65535)) return "--view: expected a port 0..65535";
-  if (device == "page" && view_port < 0) return "--device page: needs --view PORT";
+  if (device == "page" && view_port < 0 && screenshot.empty()) {
+    return "--device page: needs --view PORT";
+  }
+  if (!screenshot.empty() && (screenshot.size() < 5 || !screenshot.ends_with(".png"))) {
+    return "--screenshot: expected a FILE.png";
+  }
   if (device == "page" && unpaced) return "--device page: cannot run --unpaced";
   if (!(skill >= 0 && skill <= 1)) return "--skill: expected 0..1";
   if (!(duration_s >= 0) || !std::isfinite(duration_s)) return "--duration: expected >= 0 s";
@@ -251,8 +278,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   if (audio) pc.on_snapshot = [&audio](const TickSnapshot& s) { audio->Add(s); };
   StationPublisher publisher(pc, o.dds, scene, rings, loop);
   std::unique_ptr<StationView> view;
-  if (o.view_port >= 0) {
-    view = std::make_unique<StationView>(scene, o.view_port,
+  if (o.view_port >= 0 || !o.screenshot.empty()) {
+    view = std::make_unique<StationView>(scene, std::max(o.view_port, 0),
                                          o.web_dir.empty() ? DefaultWebDir() : o.web_dir,
                                          o.station_id, page_device);
     publisher.SetViewFrames(&view->frames());
@@ -290,8 +317,24 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     publisher.Run();
   });
 
+  pid_t shot = -1;
+  if (!o.screenshot.empty()) shot = StartScreenshot(view->port(), o.screenshot);
+  int shot_status = 0;
   while (!stop.load() && !haptic_done.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (shot > 0) {
+      int status = 0;
+      if (waitpid(shot, &status, WNOHANG) == shot) {
+        shot = -1;
+        shot_status = WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : 2;
+        break;
+      }
+    }
+  }
+  if (shot > 0) {  // the station ended first: the page is gone, so is the picture
+    kill(shot, SIGTERM);
+    waitpid(shot, nullptr, 0);
+    shot_status = 2;
   }
   haptic_stop = true;
   haptic.join();
@@ -310,7 +353,11 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     WriteScoreJson(o.score_out, o, pc.session_id, scene, publisher, loop, rt_ok);
   }
   if (audio) audio->Write(o.audio_out);
-  return 0;
+  if (shot_status != 0) {
+    std::fprintf(stderr, "microdex-station: --screenshot %s: not written (see above)\n",
+                 o.screenshot.c_str());
+  }
+  return shot_status;
 }
 
 }  // namespace microdex::station

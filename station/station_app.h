@@ -38,6 +38,9 @@ struct StationOptions {
   // The microscope view (station_view.h) on 127.0.0.1:view_port; -1: none, 0: any free port.
   int view_port = -1;
   std::string web_dir;  // the bundled pages ("" : DefaultWebDir())
+  // Render the view page in headless Chromium once it has drawn a few frames, save it here
+  // (PNG), then stop (station/page/screenshot.mjs; needs node and chromium).
+  std::string screenshot;
   // Empty when valid; otherwise a one-line reason naming the option.
   std::string Validate() const;
 };

@@ -2,7 +2,8 @@
 // needle's colour appears where the needle's projection lies; the frames decode; stereo modes
 // draw; malformed WebSocket messages get an error and the station keeps running.
 // node station_view_test.mjs --bin BUILD/bin --out DIR --source SRC
-import { writeFileSync } from 'node:fs';
+import { readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
 import { launchBrowser, sourceDir } from './browser.mjs';
 import { args, check, decodePng, hsv, startProcess, stopProcess, waitFor } from './harness.mjs';
@@ -132,4 +133,22 @@ try {
   await close();
   const code = await stopProcess(station.child);
   check(code === 0, `the station exits cleanly on SIGTERM (status ${code})`);
+}
+
+// --screenshot: the same page rendered headless by the station itself, then it stops.
+{
+  const out = join(a.out, 'station_screenshot.png');
+  rmSync(out, { force: true });
+  const r = spawnSync(join(a.bin, 'microdex-station'), [
+    '--scene', join(sourceDir, 'assets/scenes/needle_tube.yaml'), '--screenshot', out,
+    '--no-realtime', '--partition', `web-shot-${process.pid}`], { timeout: 120000 });
+  check(r.status === 0, `--screenshot exits 0 (${r.status}; ${String(r.stderr).split('\n').slice(-2).join(' ')})`);
+  const shot = decodePng(readFileSync(out));
+  let needle = 0;
+  for (let i = 0; i < shot.rgba.length; i += 4) {
+    const c = hsv(shot.rgba[i], shot.rgba[i + 1], shot.rgba[i + 2]);
+    if (c.h >= 170 && c.h <= 205 && c.s >= 0.35 && c.v >= 0.3) ++needle;
+  }
+  check(shot.width === 1280 && shot.height === 720 && needle > 100,
+        `--screenshot wrote a 1280 x 720 view with the needle in it (${needle} px)`);
 }
