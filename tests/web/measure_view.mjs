@@ -3,12 +3,17 @@
 // state-to-screen latency (the tick stamp of the state → the page drawing it, both
 // CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
 // node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N]
-import { writeFileSync } from 'node:fs';
+import { readFileSync, writeFileSync } from 'node:fs';
+import { spawnSync } from 'node:child_process';
+import { dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { startReplay } from './replay_console.mjs';
 import { join } from 'node:path';
 import { launchBrowser, sourceDir } from './browser.mjs';
 import { args, startProcess, stopProcess, waitFor } from './harness.mjs';
 
-const a = args({ bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
+const here = dirname(fileURLToPath(import.meta.url));
+const a = args({ web: join(sourceDir, 'build/web'), bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
                  seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0',
                  width: '1280', height: '720', only: '', query: '' });
 const seconds = Number(a.seconds);
@@ -87,8 +92,25 @@ try {
   report.console = { stations: n, width: W, height: H, fps: c.fps, latency: summary(c.latency),
                     received: summary(c.received) };
   await cpage.screenshot({ path: join(a.out, 'console_8_stations.png') });
+  await cpage.close();
+  // A recording of the same console, replayed without the stations: the page's own cost.
+  const recFile = join(a.out, 'console_recording.json');
+  spawnSync(process.execPath, ['--experimental-websocket', join(here, 'replay_console.mjs'), 'record',
+                               '--url', `http://127.0.0.1:${instructor.match[1]}/`, '--seconds', '30',
+                               '--out', recFile], { stdio: 'ignore', timeout: 90000 });
   for (const st of stations) await stopProcess(st.child);
   await stopProcess(instructor.child);
+  const rec = JSON.parse(readFileSync(recFile, 'utf8'));
+  const replay = await startReplay(rec, a.web);
+  const rpage = await context.newPage();
+  await rpage.goto(`http://127.0.0.1:${replay.port}/`);
+  await waitFor(() => rpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
+                `${n} replayed tiles drawn`, 60000);
+  const r = await measurePage(rpage, 'microdexConsole');
+  report.console_replayed = { stations: n, width: W, height: H, fps: r.fps, latency: summary(r.latency),
+                              received: summary(r.received), recorded_frames: rec.frames.length };
+  await rpage.screenshot({ path: join(a.out, 'console_8_stations_replayed.png') });
+  replay.close();
   }
 } finally {
   await close();
@@ -98,7 +120,8 @@ writeFileSync(join(a.out, 'view_speed.json'), JSON.stringify(report, null, 1));
 const f = (v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
 console.log(`| view | fps (goal) | state → drawn p50 / p99 ms (goal 25 / 60) | state → received by the page p50 / p99 ms |`);
 for (const [name, r, goal] of [[`station, ${a.scene}, ${W}x${H}`, report.station, 30],
-                               [`console, ${report.console?.stations} stations, ${W}x${H}`, report.console, 15]]) {
+                               [`console, ${report.console?.stations} live stations, ${W}x${H}`, report.console, 15],
+                               [`console, ${report.console_replayed?.stations} stations replayed, ${W}x${H}`, report.console_replayed, 15]]) {
   if (!r) continue;
   console.log(`| ${name} | ${f(r.fps)} (${goal}) | ${f(r.latency.p50_ms)} / ${f(r.latency.p99_ms)} | ${f(r.received.p50_ms)} / ${f(r.received.p99_ms)} |`);
 }
