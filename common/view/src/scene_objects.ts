@@ -205,6 +205,18 @@ export class PolylineTube {
   }
 }
 
+// The tissue's colour by how deep it is pressed (seen from above, the microscope's light shows
+// a dimple poorly): skin tone at rest, darkening to deep red at TISSUE_DEPTH_SCALE_M.
+export const TISSUE_REST: V3 = [0.91, 0.66, 0.56];
+export const TISSUE_PRESSED: V3 = [0.55, 0.12, 0.12];
+export const TISSUE_DEPTH_SCALE_M = 0.5e-3;
+export function tissueColours(positions: Float32Array, colours: Float32Array): void {
+  for (let v = 0; v < positions.length; v += 3) {
+    const t = Math.min(Math.max(-positions[v + 2] / TISSUE_DEPTH_SCALE_M, 0), 1);
+    for (let k = 0; k < 3; ++k) colours[v + k] = TISSUE_REST[k] + (TISSUE_PRESSED[k] - TISSUE_REST[k]) * t;
+  }
+}
+
 // One station's scene as three.js objects.
 export class SceneView {
   readonly root = new THREE.Group();
@@ -308,6 +320,14 @@ export class SceneView {
     const tip = new THREE.Mesh(new THREE.SphereGeometry(shaftRadius * 0.6, d.radial, d.radial / 2),
                                material(0xffd040));
     this.tool.add(tip);
+    if (scene.tissue && scene.tissue.bar > 0) {
+      // The bar tool pressing the tissue: along the tool's x axis, centred at the tip.
+      const bar = new THREE.Mesh(
+          new THREE.CylinderGeometry(shaftRadius * 0.5, shaftRadius * 0.5, scene.tissue.bar, d.radial),
+          material(TOOL_COLOR, { metal: true }));
+      bar.rotateZ(Math.PI / 2);
+      this.tool.add(bar);
+    }
     if (scene.loop) {
       const loop = new THREE.Mesh(
           new THREE.TorusGeometry(scene.loop.radius, scene.loop.wire_radius, d.radial / 2, d.along),
@@ -337,7 +357,8 @@ export class SceneView {
     this.root.add(new THREE.HemisphereLight(0xffffff, 0x303040, 1.2));
     const key = new THREE.DirectionalLight(0xffffff, 2.0);
     const dir = scene.microscope.view_dir;
-    key.position.set(-dir[0] + 0.3, -dir[1] + 0.2, -dir[2]);
+    // Oblique enough to shade a dimple in the tissue.
+    key.position.set(-dir[0] + 0.7, -dir[1] + 0.4, -dir[2]);
     this.root.add(key);
   }
 
@@ -370,8 +391,12 @@ export class SceneView {
       const geom = new THREE.BufferGeometry();
       geom.setAttribute('position',
                         new THREE.BufferAttribute(new Float32Array(size.nx * size.ny * 3), 3));
+      geom.setAttribute('color',
+                        new THREE.BufferAttribute(new Float32Array(size.nx * size.ny * 3), 3));
       geom.setIndex(new THREE.BufferAttribute(gridIndices(size.nx, size.ny), 1));
-      this.tissue = new THREE.Mesh(geom, material(0xe8a890, { side: THREE.DoubleSide }));
+      const m = material(0xffffff, { side: THREE.DoubleSide });
+      m.vertexColors = true;
+      this.tissue = new THREE.Mesh(geom, m);
       this.tissue.frustumCulled = false;
       this.tissueKey = key;
       this.root.add(this.tissue);
@@ -381,6 +406,9 @@ export class SceneView {
     sampleTissue(f.tissue, f.tissueNodesX, f.tissueNodesY, stride, lx, ly,
                  attr.array as Float32Array);
     attr.needsUpdate = true;
+    const colour = this.tissue.geometry.getAttribute('color') as THREE.BufferAttribute;
+    tissueColours(attr.array as Float32Array, colour.array as Float32Array);
+    colour.needsUpdate = true;
     this.tissue.geometry.computeVertexNormals();
   }
 

@@ -6,7 +6,7 @@ import * as THREE from 'three';
 import { HAS_NEEDLE, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame } from '../../../common/view/src/frame';
 import {
   SceneJson, SceneView, HIGH_DETAIL, LOW_DETAIL, NEEDLE_COLOR, CONTACT_COLOR, gridIndices,
-  needleCurve, polylineCurve, sampleTissue, fieldOfView,
+  needleCurve, polylineCurve, sampleTissue, fieldOfView, TISSUE_REST,
 } from '../../../common/view/src/scene_objects';
 import { microscopeCamera } from '../../../common/view/src/microscope';
 
@@ -113,6 +113,9 @@ test('tissue grid: indices, sub-sampling, heights from the field', () => {
   assert.equal(pos.count, 9);
   assert.equal(pos.getZ(4), Math.fround(-1e-3)); // float32, as in the frame
   assert.ok(Math.abs(pos.getX(4) - 0.01) < 1e-9);
+  const colour = v.tissue!.geometry.getAttribute('color');
+  assert.ok(colour.getX(4) < colour.getX(0) - 0.3, 'the pressed node is drawn darker');
+  assert.ok(Math.abs(colour.getX(0) - TISSUE_REST[0]) < 1e-6);
   const mesh = v.tissue;
   v.apply(frame(HAS_TISSUE, { [S.tissueLx]: 0.02, [S.tissueLy]: 0.02 }, [], field.map(() => 0), 3, 3));
   assert.equal(v.tissue, mesh, 'same grid size: the mesh is updated, not rebuilt');
