@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -95,14 +96,13 @@ std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_
 
 std::string ConsoleServer::HandleMessage(const std::string& message) {
   std::istringstream in(message);
-  std::string verb, station, kind_name;
-  double param = 0;
+  std::string verb, station, kind_name, param_text;
   in >> verb;
   if (verb != "cue") {
     throw std::invalid_argument("unknown message '" + verb.substr(0, 32) + "' (expected cue)");
   }
-  if (!(in >> station >> kind_name >> param) || !std::isfinite(param)) {
-    throw std::invalid_argument("cue: expected 'cue STATION KIND PARAM'");
+  if (!(in >> station >> kind_name >> param_text)) {
+    throw std::invalid_argument("cue: expected 'cue STATION KIND PARAM|off'");
   }
   std::string extra;
   if (in >> extra) throw std::invalid_argument("cue: unexpected '" + extra.substr(0, 32) + "'");
@@ -111,27 +111,58 @@ std::string ConsoleServer::HandleMessage(const std::string& message) {
     throw std::invalid_argument("cue: unknown kind '" + kind_name.substr(0, 32) + "' (" +
                                 cues::CueKindNames() + ")");
   }
-  if (const std::string why = cues::CheckCue(kind, param); !why.empty()) {
+  const bool off = param_text == "off";
+  double param = 0;
+  if (!off) {
+    char* end = nullptr;
+    param = std::strtod(param_text.c_str(), &end);
+    if (end == param_text.c_str() || *end != '\0' || !std::isfinite(param)) {
+      throw std::invalid_argument("cue: PARAM '" + param_text.substr(0, 32) +
+                                  "' is neither a number nor off");
+    }
+  }
+  if (const std::string why = cues::CheckCue(kind, param, off); !why.empty()) {
     throw std::invalid_argument("cue: " + why);
   }
   if (!instructor_.Station(station)) {
     throw std::invalid_argument("cue: no station '" + station.substr(0, 64) + "'");
   }
-  const std::uint64_t id = instructor_.SendCue(station, kind, param);
+  const std::uint64_t id = instructor_.SendCue(station, kind, param, 0, off);
   std::vector<SentCue>& sent = sent_[station];
-  sent.push_back({id, cues::CueKindName(kind), param, RealtimeNowNs()});
+  sent.push_back({id, cues::CueKindName(kind), param, off, RealtimeNowNs()});
   if (sent.size() > kCuesShown) sent.erase(sent.begin());
   next_status_ns_ = 0;  // show it at once
   return "{\"type\":\"cue_sent\",\"station\":" + view::JsonQuote(station) +
          ",\"cue_id\":" + std::to_string(id) +
-         ",\"kind\":" + view::JsonQuote(cues::CueKindName(kind)) + ",\"param\":" + Num(param) + "}";
+         ",\"kind\":" + view::JsonQuote(cues::CueKindName(kind)) + ",\"param\":" + Num(param) +
+         ",\"off\":" + (off ? "true" : "false") + "}";
 }
+
+namespace {
+
+// The cue kinds the panel offers (all but clear), with their parameter's limits.
+std::string CueKindsJson() {
+  std::string out = "[";
+  for (std::uint32_t k = 1; k < cues::kCueKindCount; ++k) {
+    const auto kind = static_cast<cues::CueKind>(k);
+    const cues::CueParamRange r = cues::CueParamLimits(kind);
+    if (k > 1) out += ',';
+    out += "{\"kind\":";
+    out += view::JsonQuote(cues::CueKindName(kind));
+    out += ",\"bit\":" + std::to_string(k) + ",\"param\":" + view::JsonQuote(r.name);
+    out += ",\"min\":" + Num(r.min) + ",\"max\":" + Num(r.max);
+    out += ",\"default\":" + Num(r.default_value) + "}";
+  }
+  return out + "]";
+}
+
+}  // namespace
 
 std::string ConsoleServer::StatusJson(const std::vector<StationView>& stations,
                                       std::int64_t now_ns) const {
   std::ostringstream j;
   j << "{\"type\":\"stations\",\"issuer_session\":" << view::JsonQuote(instructor_.session_id())
-    << ",\"stations\":[";
+    << ",\"cue_kinds\":" << CueKindsJson() << ",\"stations\":[";
   for (std::size_t i = 0; i < stations.size(); ++i) {
     const StationView& v = stations[i];
     const std::string& id = v.info.header.station_id;
@@ -171,7 +202,7 @@ std::string ConsoleServer::StatusJson(const std::vector<StationView>& stations,
       for (std::size_t k = 0; k < it->second.size(); ++k) {
         const SentCue& c = it->second[k];
         j << (k ? "," : "") << "{\"cue_id\":" << c.cue_id << ",\"kind\":" << view::JsonQuote(c.kind)
-          << ",\"param\":" << Num(c.param)
+          << ",\"param\":" << Num(c.param) << ",\"off\":" << (c.off ? "true" : "false")
           << ",\"sent_ms\":" << Num(static_cast<double>(c.sent_realtime_ns) * 1e-6) << ",\"ack\":";
         const net::TaskEvent* ack = nullptr;
         for (const net::TaskEvent& e : v.events) {

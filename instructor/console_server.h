@@ -2,10 +2,11 @@
 // The instructor's live console (`microdex-instructor --http PORT`): serves the console page
 // (instructor/page, with the shared front-end of common/view) and, over its WebSocket, one
 // binary state frame per station whenever its mirrored tool state is new (at most
-// kFrameRate_hz per station), and a JSON station list at kStatusRate_hz: trainee, scene,
-// presence, loop health, live score, and the cues this console sent with the station's
-// acknowledgement (applied at step N, or rejected and why). The page sends
-// "cue STATION KIND PARAM" (KIND: clear, convergent, divergent, tremor). The scene of a station
+// kFrameRate_hz per station), and a JSON station list at kStatusRate_hz: the cue kinds with
+// their parameter limits, and per station trainee, scene, presence, loop health, live score,
+// and the cues this console sent with the station's acknowledgement (applied at step N, or
+// rejected and why). The page sends "cue STATION KIND PARAM|off" (every kind of
+// common/cues/cue_kind.h). The scene of a station
 // is read from the path its StationInfo names, when this machine has it (/scene/ID.json).
 //
 // Threads: everything here runs on the view server's thread; it reads the Instructor's
@@ -49,6 +50,7 @@ class ConsoleServer {
     std::uint64_t cue_id = 0;
     std::string kind;
     double param = 0;
+    bool off = false;
     std::int64_t sent_realtime_ns = 0;
   };
   void Poll();

@@ -12,15 +12,15 @@ import { FrameLink, MAX_SLOTS } from '../../common/view/src/frame_link';
 
 const MAX_TILES = 8;
 const OUTCOMES = ['running', 'completed', 'time limit'];
-const CUE_CONTROLS = [
-  { kind: 'convergent', label: 'guidance N/m', value: 300, min: 1, max: 2000 },
-  { kind: 'divergent', label: 'push-off N/m', value: 300, min: 1, max: 2000 },
-  { kind: 'tremor', label: 'tremor gain', value: 3, min: 1, max: 20 },
-];
-const CUE_BIT: Record<string, number> = { convergent: 1, divergent: 2, tremor: 3 };
+// The cue kinds as the console server lists them (every kind of common/cues/cue_kind.h but
+// clear, with its parameter's name and limits). The haptic ones are shown, the visual and
+// audio ones under "more cues".
+interface CueKindJson { kind: string; bit: number; param: string; min: number; max: number; default: number }
+const SHOWN = ['convergent', 'divergent', 'amplified_tremor', 'wall'];
+const PARAM_DEFAULTS: Record<string, number> = { convergent: 300, divergent: 300 };
 
 interface CueJson {
-  cue_id: number; kind: string; param: number; sent_ms: number;
+  cue_id: number; kind: string; param: number; off: boolean; sent_ms: number;
   ack: null | { applied: boolean; step: number; text: string };
 }
 interface StationJson {
@@ -35,7 +35,8 @@ class Tile {
   readonly viewport: HTMLDivElement;
   readonly label: HTMLDivElement;
   readonly acks: HTMLDivElement;
-  readonly inForce = new Map<string, HTMLElement>();
+  readonly inForce = new Map<number, HTMLElement>(); // by cue bit
+  readonly touched = new Set<string>(); // kinds this console has switched
   world = new THREE.Scene();
   view: SceneView | null = null;
   camera: THREE.PerspectiveCamera | null = null;
@@ -43,7 +44,7 @@ class Tile {
   frames = 0;
   station: StationJson;
 
-  constructor(station: StationJson, send: (m: string) => boolean) {
+  constructor(station: StationJson, kinds: CueKindJson[], send: (m: string) => boolean) {
     this.station = station;
     this.el = document.createElement('div');
     this.el.className = 'tile';
@@ -57,39 +58,33 @@ class Tile {
     this.el.appendChild(this.viewport);
     const panel = document.createElement('div');
     panel.className = 'panel';
-    for (const c of CUE_CONTROLS) {
+    const more = document.createElement('details');
+    more.innerHTML = '<summary>more cues</summary>';
+    for (const c of kinds) {
       const row = document.createElement('div');
       row.className = 'cue';
+      const value = PARAM_DEFAULTS[c.kind] ?? c.default;
+      const unit = c.param.split('_').slice(1).join(' ') || c.param;
       row.innerHTML = `<span class="inforce" title="in force at the station"></span>` +
-          `<label><input type="checkbox" data-cue="${c.kind}"> ${c.kind}</label>` +
-          `<input type="number" data-strength="${c.kind}" value="${c.value}" min="${c.min}" max="${c.max}" title="${c.label}">` +
-          `<span>${c.label.split(' ').slice(-1)[0]}</span>`;
-      this.inForce.set(c.kind, row.querySelector('.inforce') as HTMLElement);
-      panel.appendChild(row);
+          `<label><input type="checkbox" data-cue="${c.kind}"> ${c.kind.replace(/_/g, ' ')}</label>` +
+          `<input type="number" data-strength="${c.kind}" value="${value}" min="${c.min}" max="${c.max}" step="any" title="${c.param}">` +
+          `<span>${unit}</span>`;
+      this.inForce.set(c.bit, row.querySelector('.inforce') as HTMLElement);
+      (SHOWN.includes(c.kind) ? panel : more).appendChild(row);
     }
+    panel.appendChild(more);
     this.acks = document.createElement('div');
     this.acks.className = 'acks';
     panel.appendChild(this.acks);
     this.el.appendChild(panel);
-    // A toggle sends the kind with its strength; turning one off clears the station's cues
-    // and sends again those still on (a station has no per-kind "off").
-    const sendOn = () => {
-      for (const c of CUE_CONTROLS) {
-        const box = panel.querySelector(`input[data-cue="${c.kind}"]`) as HTMLInputElement;
-        const strength = panel.querySelector(`input[data-strength="${c.kind}"]`) as HTMLInputElement;
-        if (box.checked) send(`cue ${this.station.id} ${c.kind} ${Number(strength.value)}`);
-      }
-    };
+    // A toggle sends the kind with its strength, or switches that kind off; a new strength of
+    // a kind that is on is sent at once.
     panel.addEventListener('change', (e) => {
       const t = e.target as HTMLInputElement;
       if (t.dataset.cue) {
-        if (t.checked) {
-          const strength = panel.querySelector(`input[data-strength="${t.dataset.cue}"]`) as HTMLInputElement;
-          send(`cue ${this.station.id} ${t.dataset.cue} ${Number(strength.value)}`);
-        } else {
-          send(`cue ${this.station.id} clear 0`);
-          sendOn();
-        }
+        this.touched.add(t.dataset.cue);
+        const strength = panel.querySelector(`input[data-strength="${t.dataset.cue}"]`) as HTMLInputElement;
+        send(`cue ${this.station.id} ${t.dataset.cue} ${t.checked ? Number(strength.value) : 'off'}`);
       } else if (t.dataset.strength) {
         const box = panel.querySelector(`input[data-cue="${t.dataset.strength}"]`) as HTMLInputElement;
         if (box.checked) send(`cue ${this.station.id} ${t.dataset.strength} ${Number(t.value)}`);
@@ -129,7 +124,7 @@ class Tile {
     this.acks.innerHTML = station.cues.slice().reverse().map((c) => {
       const ack = c.ack === null ? 'waiting for the station…'
           : c.ack.applied ? `applied at step ${c.ack.step}` : `rejected: ${esc(c.ack.text)}`;
-      return `<div class="ack" data-cue-id="${c.cue_id}">#${c.cue_id} ${c.kind} ${c.param} → ${ack}</div>`;
+      return `<div class="ack" data-cue-id="${c.cue_id}">#${c.cue_id} ${c.kind} ${c.off ? 'off' : c.param} → ${ack}</div>`;
     }).join('');
   }
 
@@ -137,7 +132,14 @@ class Tile {
     if (!this.pending || !this.view) return;
     this.view.apply(this.pending);
     const mask = this.pending.scalars[S.activeCues];
-    for (const [kind, el] of this.inForce) el.classList.toggle('on', (mask & (1 << CUE_BIT[kind])) !== 0);
+    for (const [bit, el] of this.inForce) {
+      const on = (mask & (1 << bit)) !== 0;
+      el.classList.toggle('on', on);
+      // Until the instructor touches a kind, its switch shows the station's own state (a
+      // scene may start with cues on).
+      const box = el.parentElement!.querySelector('input[data-cue]') as HTMLInputElement;
+      if (!this.touched.has(box.dataset.cue!)) box.checked = on;
+    }
     this.pending = null;
   }
 }
@@ -172,7 +174,7 @@ function main(): void {
         for (const s of list.slice(0, MAX_TILES)) {
           let tile = tiles.get(s.id);
           if (!tile) {
-            tile = new Tile(s, (text) => link.send(text));
+            tile = new Tile(s, m.cue_kinds as CueKindJson[], (text) => link.send(text));
             tiles.set(s.id, tile);
             grid.appendChild(tile.el);
           }

@@ -82,19 +82,24 @@ try {
     return t && /applied at step \d+/.test(t) ? t : null;
   }, 'the acknowledgement of the cue', 20000);
   check(/convergent 450 → applied at step \d+/.test(ack), `acknowledgement shown: "${ack}"`);
-  await waitFor(() => tile.locator('.inforce.on').count().then((n) => n === 1),
+  const convergentDot = (t) => t.locator('.cue:has(input[data-cue="convergent"]) .inforce.on');
+  await waitFor(() => convergentDot(tile).count().then((n) => n === 1),
                 'the station reporting the cue in force', 10000);
   check(true, 'the station reports the guidance cue in force');
   for (const other of [ids[0], ids[2]]) {
     const n = await page.locator(`.tile[data-station="${other}"] .ack`).count();
-    const on = await page.locator(`.tile[data-station="${other}"] .inforce.on`).count();
+    const on = await convergentDot(page.locator(`.tile[data-station="${other}"]`)).count();
     check(n === 0 && on === 0, `station ${other}: no cue sent, none in force`);
   }
-  // Off: the station clears it.
+  // Off: the station switches that kind off.
   await tile.locator('input[data-cue="convergent"]').uncheck();
-  await waitFor(() => tile.locator('.inforce.on').count().then((n) => n === 0),
+  await waitFor(() => convergentDot(tile).count().then((n) => n === 0),
                 'the cue cleared at the station', 10000);
-  check(true, 'switching the cue off clears it at the station');
+  const offAck = await waitFor(async () => {
+    const t = await tile.locator('.ack').first().textContent().catch(() => null);
+    return t && /convergent off → applied at step \d+/.test(t) ? t : null;
+  }, 'the acknowledgement of switching it off', 20000);
+  check(true, `switching the cue off clears it at the station ("${offAck}")`);
   await page.screenshot({ path: join(a.out, 'console_cue_ack.png') });
 
   // A bad cue from a page: an error reply naming the reason.
@@ -109,6 +114,8 @@ try {
     setTimeout(() => resolve(null), 5000);
   }), target);
   check(reply && reply.includes('stiffness'), `an out-of-range cue is refused: "${reply}"`);
+  const kinds = await tile.locator('input[data-cue]').count();
+  check(kinds === 13, `the panel offers every cue kind but clear (${kinds})`);
 
   // Enlarge a tile by clicking it.
   const before = await tile.locator('.viewport').boundingBox();

@@ -102,8 +102,12 @@ export function decodeFrame(buffer: ArrayBuffer): Frame {
   return { flags, slot, scalars, threadNodes, tissue, tissueNodesX, tissueNodesY };
 }
 
-// Bits of the active cues (cues::CueKind): 0 clear, 1 convergent, 2 divergent, 3 tremor.
-export const CUE_KINDS = ['clear', 'convergent', 'divergent', 'tremor'] as const;
+// Bits of the active cues: bit k is cues::CueKind k (common/cues/cue_kind.h, same order).
+export const CUE_KINDS = [
+  'clear', 'convergent', 'divergent', 'amplified_tremor', 'visual_path', 'visual_limits',
+  'visual_deviation', 'visual_clearance', 'audio_click', 'audio_error', 'audio_proximity',
+  'audio_geiger', 'wall', 'predictive',
+] as const;
 export function activeCueNames(mask: number): string[] {
   return CUE_KINDS.filter((_, i) => i > 0 && (mask & (1 << i)) !== 0);
 }

@@ -207,8 +207,13 @@ export class PolylineTube {
 
 // The tissue's colour by how deep it is pressed (seen from above, the microscope's light shows
 // a dimple poorly): skin tone at rest, darkening to deep red at TISSUE_DEPTH_SCALE_M.
-export const TISSUE_REST: V3 = [0.91, 0.66, 0.56];
-export const TISSUE_PRESSED: V3 = [0.55, 0.12, 0.12];
+// sRGB colours, turned into the linear values vertex colours are read as.
+function linear(hex: number): V3 {
+  const c = new THREE.Color(hex); // hex is sRGB; three keeps it linear
+  return [c.r, c.g, c.b];
+}
+export const TISSUE_REST: V3 = linear(0xe8a890);
+export const TISSUE_PRESSED: V3 = linear(0x8c1f1f);
 export const TISSUE_DEPTH_SCALE_M = 0.5e-3;
 export function tissueColours(positions: Float32Array, colours: Float32Array): void {
   for (let v = 0; v < positions.length; v += 3) {
@@ -354,8 +359,8 @@ export class SceneView {
     this.placeShadow();
 
     // Lighting: the microscope's coaxial light plus a hemisphere fill.
-    this.root.add(new THREE.HemisphereLight(0xffffff, 0x303040, 1.2));
-    const key = new THREE.DirectionalLight(0xffffff, 2.0);
+    this.root.add(new THREE.HemisphereLight(0xffffff, 0x303040, 0.8));
+    const key = new THREE.DirectionalLight(0xffffff, 1.4);
     const dir = scene.microscope.view_dir;
     // Oblique enough to shade a dimple in the tissue.
     key.position.set(-dir[0] + 0.7, -dir[1] + 0.4, -dir[2]);

@@ -82,6 +82,7 @@ test('bad frames are refused with a reason', () => {
 
 test('active cue names from the bit mask', () => {
   assert.deepEqual(activeCueNames(0), []);
-  assert.deepEqual(activeCueNames((1 << 1) | (1 << 3)), ['convergent', 'tremor']);
+  assert.deepEqual(activeCueNames((1 << 1) | (1 << 3)), ['convergent', 'amplified_tremor']);
+  assert.deepEqual(activeCueNames(1 << 13), ['predictive']);
   assert.deepEqual(activeCueNames(1 << 0), []); // "clear" is a command, never in force
 });
