@@ -174,7 +174,7 @@ function main(): void {
         for (const s of list.slice(0, MAX_TILES)) {
           let tile = tiles.get(s.id);
           if (!tile) {
-            tile = new Tile(s, m.cue_kinds as CueKindJson[], (text) => link.send(text));
+            tile = new Tile(s, (m.cue_kinds ?? []) as CueKindJson[], (text) => link.send(text));
             tiles.set(s.id, tile);
             grid.appendChild(tile.el);
           }

@@ -3,7 +3,7 @@
 // state-to-screen latency (the tick stamp of the state → the page drawing it, both
 // CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
 // node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N]
-import { readFileSync, writeFileSync } from 'node:fs';
+import { readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -95,9 +95,11 @@ try {
   await cpage.close();
   // A recording of the same console, replayed without the stations: the page's own cost.
   const recFile = join(a.out, 'console_recording.json');
-  spawnSync(process.execPath, ['--experimental-websocket', join(here, 'replay_console.mjs'), 'record',
+  rmSync(recFile, { force: true });
+  const recorder = spawnSync(process.execPath, ['--experimental-websocket', join(here, 'replay_console.mjs'), 'record',
                                '--url', `http://127.0.0.1:${instructor.match[1]}/`, '--seconds', '30',
-                               '--out', recFile], { stdio: 'ignore', timeout: 90000 });
+                               '--out', recFile], { encoding: 'utf8', timeout: 90000 });
+  if (recorder.status !== 0) throw new Error(`recording the console failed: ${recorder.stderr}`);
   for (const st of stations) await stopProcess(st.child);
   await stopProcess(instructor.child);
   const rec = JSON.parse(readFileSync(recFile, 'utf8'));
