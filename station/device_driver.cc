@@ -80,7 +80,8 @@ std::string DeviceDriverDef::Validate() const {
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
   std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * (v.size() - 1) + 0.5);
+  const auto i = static_cast<std::size_t>(
+      std::llround(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1)));
   return v[i];
 }
 
