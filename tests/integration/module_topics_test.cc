@@ -139,9 +139,11 @@ TEST(ModuleTopics, StationsPublishOnlyTheirModulesTopics) {
                       << tissues["mt-tissue"].size();
 
   // Writers per station: the common topics, plus exactly the scene's module states.
+  // (CueOverlay: every station, empty while no visual cue is on.)
   const std::set<std::string> common = {"microdex/station_info", "microdex/device_input",
-                                        "microdex/tool_state",   "microdex/telemetry",
-                                        "microdex/task_event",   "microdex/score"};
+                                        "microdex/cue_overlay",  "microdex/tool_state",
+                                        "microdex/telemetry",    "microdex/task_event",
+                                        "microdex/score"};
   const std::map<std::string, std::set<std::string>> modules = {
       {"mt-needle", {"microdex/needle_state"}},
       {"mt-thread", {"microdex/thread_state"}},
