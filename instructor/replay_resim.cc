@@ -71,11 +71,15 @@ std::map<std::pair<std::string, std::string>, Run> CollectRuns(record::SessionRe
   reader.ForEach({Index(TopicIndex::kTaskEvent)}, [&](const record::MessageView& m) {
     if (!DecodeSample<msg::TaskEventPubSubType>(m.cdr, event)) return true;
     if (event.kind() != msg::EVENT_CUE_APPLIED) return true;
+    // The acknowledgement names the kind, and " off" when the cue was switched off.
+    std::string text = event.text().to_string();
+    const bool off = text.size() > 4 && text.compare(text.size() - 4, 4, " off") == 0;
+    if (off) text.resize(text.size() - 4);
     cues::CueKind kind{};
-    if (!cues::ParseCueKind(event.text().to_string(), &kind)) return true;
+    if (!cues::ParseCueKind(text, &kind)) return true;
     run_for(m.station, m.session)
         .cues_at_step[event.step()]
-        .push_back({event.cue_id(), kind, event.value(), event.step()});
+        .push_back({event.cue_id(), kind, event.value(), event.step(), off});
     return true;
   });
   msg::Telemetry tel;
