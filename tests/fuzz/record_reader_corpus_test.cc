@@ -47,7 +47,7 @@ std::string TmpDir() {
 // The valid seed as this build writes it (the committed one carries the IDL hashes of the
 // build that wrote it; after an IDL change its topics read as unknown until regenerated).
 std::string FreshValidSeed(const std::string& dir) {
-  const std::string path = dir + "/valid.db";
+  std::string path = dir + "/valid.db";
   std::remove(path.c_str());
   WriteSeedRecording(path);
   return path;
