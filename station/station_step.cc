@@ -132,14 +132,28 @@ Eigen::Vector3d CalcCueForce(const cues::IdealPath& path, double max_force_N,
   return cues::CalcPathFieldForce(path, p_WT, k, max_force_N);
 }
 
-// Reads the tool; writes state.tool.f_T_W: finite, saturated and rate-limited, always
-// (common/cues/force_limits.h).
+// The cue's force, limited (common/cues/force_limits.h): finite, saturated and rate-limited,
+// so that no cue parameter can make the device unstable (state.cues.f_cue_W). The modules'
+// contact forces are not rate-limited: a stiff contact rendered through a rate limit lags
+// behind the motion and makes the hand–tool loop ring (the thread's grasp force, for one).
+Eigen::Vector3d LimitCueForce(const Eigen::Vector3d& f_cue, double max_force_N, double dt_s,
+                              state::StationState& s) {
+  const cues::ForceLimitResult r =
+      cues::LimitForce(f_cue, s.cues.f_cue_W, max_force_N, cues::kMaxForceRate_N_per_s, dt_s);
+  if (r.rate_limited) ++s.cues.force_rate_limited;
+  s.cues.f_cue_W = r.f_N;
+  return r.f_N;
+}
+
+// Reads the tool; writes state.tool.f_T_W: finite and saturated, always; during a device
+// fault it ramps to zero at the limiter's rate.
 void LimitToolForce(const Eigen::Vector3d& f, double max_force_N, double dt_s,
                     state::StationState& s) {
+  const bool fault = s.tool.device_fault != 0;
+  const double rate = fault ? cues::kMaxForceRate_N_per_s : std::numeric_limits<double>::infinity();
   const cues::ForceLimitResult r =
-      cues::LimitForce(f, s.tool.f_T_W, max_force_N, cues::kMaxForceRate_N_per_s, dt_s);
+      cues::LimitForce(fault ? Eigen::Vector3d::Zero() : f, s.tool.f_T_W, max_force_N, rate, dt_s);
   if (r.non_finite) ++s.tool.force_warnings;
-  if (r.rate_limited) ++s.cues.force_rate_limited;
   s.tool.f_T_W = r.f_N;
 }
 
@@ -347,7 +361,8 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
   const scene::SceneModel& scene = sim.scene_;
   TakeCues(in.cues, s.step, s.cues);
   CalcToolAfterCues(sim.tremor_filter_, in.device, s);
-  Eigen::Vector3d f = CalcCueForce(sim.path_, scene.haptic.max_force_N, s);
+  Eigen::Vector3d f = LimitCueForce(CalcCueForce(sim.path_, scene.haptic.max_force_N, s),
+                                    scene.haptic.max_force_N, sim.dt_s_, s);
 
   // StepModules: reads the tool, writes each module's section and its force.
   ToolInput tool;
@@ -375,7 +390,6 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
 
   // A device fault: the device gave the last valid pose again (held); the force goes to zero,
   // at the limiter's rate.
-  if (s.tool.device_fault != 0) f.setZero();
   LimitToolForce(f, scene.haptic.max_force_N, sim.dt_s_, s);
   if (s.score.outcome == 0) {  // the scores freeze when the task ends
     UpdateScore(scene, sim.dt_s_, s);

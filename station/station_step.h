@@ -9,10 +9,12 @@
 //   StepStation
 //     TakeCues         queue the cue requests of this input; apply those due (state.cues)
 //     CalcToolAfterCues  tremor band of the raw device motion, amplified tremor → tool pose
-//     CalcCueForce     guidance / destabilising field on the tool
+//     CalcCueForce     guidance / destabilising field on the tool; LimitCueForce: finite,
+//                      saturated and rate-limited (state.cues.f_cue_W)
 //     StepModules      each module of the scene, in the scene's order (module sections; the
 //                      wall forces scaled by the wall cue)
-//     LimitToolForce   finite, saturated and rate-limited, always (state.tool)
+//     LimitToolForce   finite and saturated, always; ramped to zero at the limiter's rate
+//                      during a device fault (state.tool)
 //     UpdateScore      running totals and fault episodes (state.score)
 //     UpdateTask       deviation from the path or target, passes, the task's outcome
 //                      (state.score; both frozen once the task has ended)

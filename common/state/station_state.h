@@ -92,6 +92,7 @@ struct CueState {
   PredictorState prediction;
   // The force limiter (common/cues/force_limits.h): steps its rate limit clipped, running count.
   std::uint32_t force_rate_limited = 0;
+  Eigen::Vector3d f_cue_W = Eigen::Vector3d::Zero();  // the cue's force as limited, last step
   std::array<CueRequest, kMaxPendingCues> pending{};
   int pending_count = 0;
   std::array<CueAck, kMaxAcksPerStep> acks{};  // applied during this step

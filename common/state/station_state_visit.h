@@ -89,6 +89,7 @@ void Cues(S& c, V& v) {
   v("cues.prediction.error_m", &c.prediction.error_m, 1);
   v("cues.prediction.valid", &c.prediction.valid, 1);
   v("cues.force_rate_limited", &c.force_rate_limited, 1);
+  Matrix("cues.f_cue_W", c.f_cue_W, v);
   v("cues.pending_count", &c.pending_count, 1);
   Counted(c.pending, c.pending_count, [&](auto& r) {
     v("cues.pending[].cue_id", &r.cue_id, 1);
