@@ -20,19 +20,12 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "bench_util.h"
 #include "common/net/dds_context.h"
 #include "station/device_driver.h"
 
 namespace microdex::bench {
 namespace {
-
-std::string SelfDir() {
-  char buf[4096];
-  const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n <= 0) return ".";
-  std::string p(buf, static_cast<std::size_t>(n));
-  return p.substr(0, p.rfind('/'));
-}
 
 pid_t StartStation(const std::string& dir, const std::string& id, const std::string& scene,
                    double duration_s, int domain, bool dds_device) {
@@ -60,14 +53,6 @@ pid_t StartStation(const std::string& dir, const std::string& id, const std::str
     _exit(127);
   }
   return pid;
-}
-
-double JsonNumber(const std::string& path, const std::string& key) {
-  std::ifstream f(path);
-  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  const auto at = text.find("\"" + key + "\": ");
-  if (at == std::string::npos) return NAN;
-  return std::atof(text.c_str() + at + key.size() + 4);
 }
 
 int RunDevice(int argc, char** argv) {
@@ -142,7 +127,7 @@ int RunDevice(int argc, char** argv) {
   const double p50 = station::Quantile(s.round_trip_us, 0.5);
   const double p99 = station::Quantile(s.round_trip_us, 0.99);
   const double pmax = station::Quantile(s.round_trip_us, 1.0);
-  const double period_p99_ms = JsonNumber(dir + "/" + id + ".json", "period_p99_ms");
+  const double period_p99_ms = JsonNumber(ReadText(dir + "/" + id + ".json"), "period_p99_ms");
   std::printf(
       "device bridge, %d other stations, %.0f s: round trip p50 %.0f us (goal <= 150), "
       "p99 %.0f us (goal <= 500), max %.0f us; sent %llu, lost %llu; station period "

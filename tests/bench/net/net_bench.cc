@@ -21,24 +21,11 @@
 #include <thread>
 
 #include "bench_registry.h"
+#include "bench_util.h"
 #include "instructor/instructor.h"
 
 namespace microdex::bench {
 namespace {
-
-std::string SelfDir() {
-  char buf[4096];
-  const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n <= 0) return ".";
-  std::string p(buf, static_cast<std::size_t>(n));
-  return p.substr(0, p.rfind('/'));
-}
-
-double JsonNumber(const std::string& json, const std::string& key) {
-  const auto at = json.find("\"" + key + "\":");
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
-}
 
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return std::nan("");
