@@ -45,7 +45,7 @@ state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
   s.cues.clearance_m = std::numeric_limits<double>::infinity();
   // The scene's cues on from the first step (cue id 0: the scene's own).
   for (const auto& [kind, param] : scene_.cues.on) {
-    if (s.cues.pending_count < state::kMaxPendingCues && cues::CheckCue(kind, param).empty()) {
+    if (s.cues.pending_count < state::kMaxPendingCues && cues::IsCueValid(kind, param)) {
       s.cues.pending[s.cues.pending_count++] = {0, kind, param, 0, false};
     }
   }
@@ -88,7 +88,7 @@ void TakeCues(std::span<const state::CueRequest> arrived, std::uint64_t step, st
     if (c.pending[i].apply_at_step <= step && c.ack_count < state::kMaxAcksPerStep) {
       // Checked where it entered (publisher, command line, scene); checked again here so that
       // no path can put an out-of-limits parameter into the state.
-      if (cues::CheckCue(c.pending[i].kind, c.pending[i].param, c.pending[i].off).empty()) {
+      if (cues::IsCueValid(c.pending[i].kind, c.pending[i].param, c.pending[i].off)) {
         ApplyCue(c.pending[i], c);
       }
     } else {

@@ -70,18 +70,23 @@ CueParamRange CueParamLimits(CueKind kind) {
   return i < kCueKindCount ? kKinds[i].range : CueParamRange{};
 }
 
+bool IsCueValid(CueKind kind, double param, bool off) {
+  const auto i = static_cast<std::uint32_t>(kind);
+  if (i >= kCueKindCount) return false;
+  if (off || kind == CueKind::kClear) return true;
+  const CueParamRange& r = kKinds[i].range;
+  return std::isfinite(param) && param >= r.min && param <= r.max;
+}
+
 std::string CheckCue(CueKind kind, double param, bool off) {
+  if (IsCueValid(kind, param, off)) return {};
   const auto i = static_cast<std::uint32_t>(kind);
   if (i >= kCueKindCount) return "kind: unknown cue kind " + std::to_string(i);
-  if (off || kind == CueKind::kClear) return {};
   const CueParamRange& r = kKinds[i].range;
-  if (!std::isfinite(param) || param < r.min || param > r.max) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "%s: expected a finite number in [%g, %g] for %s, got %g",
-                  r.name, r.min, r.max, kKinds[i].name, param);
-    return buf;
-  }
-  return {};
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%s: expected a finite number in [%g, %g] for %s, got %g", r.name,
+                r.min, r.max, kKinds[i].name, param);
+  return buf;
 }
 
 CueArg ParseCueArg(const std::string& text) {

@@ -64,6 +64,9 @@ inline constexpr double kMaxCueDistance_m = 0.05;  // visual and audio ranges, w
 // Empty when the cue can be applied (switching a cue off is always possible); otherwise why
 // not, naming the parameter: "stiffness_N_per_m: expected a finite number in [0, 1e+06]".
 std::string CheckCue(CueKind kind, double param, bool off = false);
+// The same rule as a yes/no, without building a message: allocation-free, for the haptic
+// thread (CheckCue(k, p, off).empty() == IsCueValid(k, p, off)).
+bool IsCueValid(CueKind kind, double param, bool off = false);
 
 // A cue as written on a command line: KIND, KIND:PARAM or KIND:off.
 struct CueArg {

@@ -59,6 +59,28 @@ TEST(CueKind, ParametersAtAndBeyondTheirLimits) {
   EXPECT_NE(CheckCue(static_cast<CueKind>(kCueKindCount), 1), "");
 }
 
+// The haptic thread's yes/no check is the same rule as the message-building one, over every
+// kind (and one past the last), on and off, at, inside and beyond each limit.
+TEST(CueKind, TheAllocationFreeCheckAgreesWithTheMessage) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  int valid = 0, invalid = 0;
+  for (std::uint32_t k = 0; k <= kCueKindCount; ++k) {
+    const auto kind = static_cast<CueKind>(k);
+    const CueParamRange r = k < kCueKindCount ? CueParamLimits(kind) : CueParamRange{};
+    for (double p : {nan, inf, -inf, r.min, r.max, 0.5 * (r.min + r.max), r.max * 1.001 + 1e-9,
+                     r.min - 1e-3 - std::abs(r.min)}) {
+      for (bool off : {false, true}) {
+        const bool ok = IsCueValid(kind, p, off);
+        EXPECT_EQ(ok, CheckCue(kind, p, off).empty()) << k << " " << p << " " << off;
+        (ok ? valid : invalid) += 1;
+      }
+    }
+  }
+  EXPECT_GT(valid, 0);
+  EXPECT_GT(invalid, 0);
+}
+
 TEST(CueKind, CommandLineArgument) {
   const CueArg a = ParseCueArg("convergent:350");
   EXPECT_EQ(a.kind, CueKind::kConvergentField);
