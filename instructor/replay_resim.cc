@@ -153,6 +153,11 @@ void ResimulateRun(record::SessionReader& reader, const Run& run, const ResimOpt
     in.device = station::DeviceSampleFromRecord(Eigen::Vector3d(p[0], p[1], p[2]),
                                                 Eigen::Quaterniond(q[0], q[1], q[2], q[3]),
                                                 m.gripper(), m.buttons());
+    const auto& p2 = m.p_WT2();
+    const auto& q2 = m.q_WT2();
+    in.second = station::DeviceSampleFromRecord(Eigen::Vector3d(p2[0], p2[1], p2[2]),
+                                                Eigen::Quaterniond(q2[0], q2[1], q2[2], q2[3]),
+                                                m.gripper2(), m.buttons2());
     const auto cues = run.cues_at_step.find(state.step);
     if (cues != run.cues_at_step.end()) in.cues = cues->second;
     const std::uint64_t step = state.step;

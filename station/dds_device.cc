@@ -4,6 +4,7 @@
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <stdexcept>
 
 #include "common/net/topics.h"
 #include "device_forcePubSubTypes.h"
@@ -40,6 +41,15 @@ class DdsDevice::Listener final : public dds::DataReaderListener {
   DdsDevice& device_;
   msg::DeviceInput msg_;
 };
+
+std::string SecondDeviceKey(const std::string& station_id) {
+  if (station_id.size() > 62) {
+    throw std::invalid_argument(
+        "--station-id: a bimanual station over the DDS bridge: expected "
+        "1..62 chars (its second device's key is STATION/2)");
+  }
+  return station_id + "/2";
+}
 
 DdsDevice::DdsDevice(const net::DdsOptions& dds_options, const std::string& station_id,
                      const std::string& session_id, const DeviceMappingDef& mapping,

@@ -30,6 +30,11 @@
 
 namespace microdex::station {
 
+// The instance key of a bimanual station's second device on the bridge's topics: STATION/2
+// (the first device's key is the station id). A driver of two devices publishes each under
+// its key and reads each one's force under the same key.
+std::string SecondDeviceKey(const std::string& station_id);
+
 class DdsDevice final : public Device {
  public:
   // Creates the bridge's participant, reader, writer and publisher thread (throws

@@ -39,4 +39,16 @@ class Device {
   virtual bool WaitForSample(std::int64_t /*until_ns*/) { return false; }
 };
 
+// A tool held still at a pose with its gripper closed: the second tool of a bimanual scene
+// when the first is driven from the view page (keyboard and mouse drive one tool).
+class HeldDevice final : public Device {
+ public:
+  explicit HeldDevice(const Eigen::Isometry3d& X_WT) { sample_.X_WT = X_WT, sample_.gripper = 1; }
+  DeviceSample Read(std::uint64_t /*step*/) override { return sample_; }
+  void WriteForce(const Eigen::Vector3d& /*f_T_W*/) override {}
+
+ private:
+  DeviceSample sample_;
+};
+
 }  // namespace microdex::station

@@ -1,6 +1,8 @@
 #include "station/haptic_loop.h"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "common/base/check.h"
@@ -9,14 +11,20 @@
 namespace microdex::station {
 
 HapticLoop::HapticLoop(const scene::SceneModel& scene, Device& device, StationRings& rings,
-                       rt::Clock& clock, const HapticLoopConfig& config)
+                       rt::Clock& clock, const HapticLoopConfig& config, Device* second_device)
     : sim_(scene),
       device_(device),
+      second_device_(second_device),
       rings_(rings),
       clock_(clock),
       config_(config),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / scene.haptic.rate_hz))),
       state_(sim_.MakeInitialState(config.seed)) {
+  if ((second_device_ != nullptr) != (scene.hands() == 2)) {
+    throw std::invalid_argument(scene.path + ": the scene's trainee holds " +
+                                std::to_string(scene.hands()) + " tool(s); the station was given " +
+                                (second_device_ != nullptr ? "2 devices" : "1 device"));
+  }
   MICRODEX_CHECK(config_.frame_period_steps >= 1);
   MICRODEX_CHECK(config_.hash_period_steps >= 0);
   sim_.set_step_clock(&clock_);
@@ -30,6 +38,11 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
   StationInput in;
   in.device = device_.Read(step);
   const Eigen::Quaterniond q_device = CanonicalizeDeviceSample(in.device);
+  Eigen::Quaterniond q_second = Eigen::Quaterniond::Identity();
+  if (second_device_ != nullptr) {
+    in.second = second_device_->Read(step);
+    q_second = CanonicalizeDeviceSample(in.second);
+  }
   int n = 0;
   const int room = state::kMaxPendingCues - state_.cues.pending_count;
   while (n < room && rings_.cues.TryPop(arrived_[n])) ++n;
@@ -37,6 +50,7 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
 
   StepStation(sim_, in, state_);
   device_.WriteForce(state_.tool.f_T_W);
+  if (second_device_ != nullptr) second_device_->WriteForce(state_.second_tool->f_T_W);
 
   if (step % static_cast<std::uint64_t>(config_.frame_period_steps) == 0) {
     for (std::size_t i = 0; i < sim_.module_count(); ++i) {
@@ -46,6 +60,7 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
   TickSnapshot& s = snap_;
   ProjectSnapshot(sim_, state_, s);
   s.q_WT_device = {q_device.w(), q_device.x(), q_device.y(), q_device.z()};  // as stepped
+  s.second.q_WT_device = {q_second.w(), q_second.x(), q_second.y(), q_second.z()};
   s.tick_start_ns = tick_start_ns;
   s.stamp_ns = stamp_ns;
   s.period_ns = period_ns;

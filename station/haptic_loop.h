@@ -50,8 +50,12 @@ struct HapticLoopConfig {
 
 class HapticLoop {
  public:
+  // A bimanual scene (scene.hands() == 2) takes the second tool's device as second_device
+  // (throws std::invalid_argument when the number of devices does not match the scene's
+  // hands). The first device paces the loop when it is the pacing kind; the second is read as
+  // it is at each tick.
   HapticLoop(const scene::SceneModel& scene, Device& device, StationRings& rings, rt::Clock& clock,
-             const HapticLoopConfig& config = {});
+             const HapticLoopConfig& config = {}, Device* second_device = nullptr);
 
   // One step, started at tick_start_ns (monotonic) with the given period since the previous
   // start; stamp_ns is the CLOCK_REALTIME source stamp.
@@ -80,6 +84,7 @@ class HapticLoop {
  private:
   Simulation sim_;
   Device& device_;
+  Device* second_device_;
   StationRings& rings_;
   rt::Clock& clock_;
   HapticLoopConfig config_;

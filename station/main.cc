@@ -34,9 +34,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   std::vector<std::string> device_args;
   app.add_option("--device", device_args,
                  "input device: sim (simulated trainee), page (the view page's keyboard and mouse; "
-                 "needs --view), playback FILE (a recorded CSV), dds (an external driver over the "
-                 "DDS device bridge)")
-      ->expected(1, 2);
+                 "needs --view), playback FILE [FILE2] (a recorded CSV; FILE2 the second tool's "
+                 "in a bimanual scene), dds (an external driver over the DDS device bridge)")
+      ->expected(1, 3);
   app.add_option("--skill", o.skill, "simulated trainee skill, 0 novice .. 1 expert");
   app.add_option("--seed", o.seed, "seed of the simulated trainee");
   app.add_option("--duration", o.duration_s, "stop after S seconds (0: until SIGINT/SIGTERM)");
@@ -74,6 +74,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   o.realtime = !no_realtime;
   if (!device_args.empty()) o.device = device_args[0];
   if (device_args.size() > 1) o.device_file = device_args[1];
+  if (device_args.size() > 2) o.device_file2 = device_args[2];
   if (std::string why = o.Validate(); !why.empty()) {
     std::fprintf(stderr, "microdex-station: %s\n", why.c_str());
     return 2;

@@ -27,6 +27,8 @@ struct ToolInput {
   double dt_s = 1e-3;
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  // the tool after cues
   Eigen::Vector3d p_WT_device = Eigen::Vector3d::Zero();   // the raw device position
+  // Bimanual scenes: the second tool (state.second_tool); null with one hand.
+  const state::ToolState* second_tool = nullptr;
 };
 
 // A module's report after a step, read from the state.
@@ -53,6 +55,11 @@ class Module {
   // trouble is counted in the section's warnings.
   virtual void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) = 0;
   virtual ModuleStatus Status(const state::StationState& state) const = 0;
+  // Bimanual scenes: this module's force on the second tool after its last Step, read from
+  // its section of the state (zero for a module the second tool does not touch).
+  virtual Eigen::Vector3d SecondToolForce(const state::StationState& /*state*/) const {
+    return Eigen::Vector3d::Zero();
+  }
   // Every mirror period: fills and publishes its large frame (thread nodes, tissue field), if
   // it has one. Same rules as Step.
   virtual void WriteFrame(const state::StationState& /*state*/, std::uint64_t /*step*/,

@@ -24,6 +24,9 @@ SceneRunResult RunSceneWithTrainee(const scene::SceneModel& scene, const SimTrai
   rt::MonotonicClock clock;
   sim.set_step_clock(&clock);
   SimTrainee device(scene, trainee);
+  SimTraineeDef other_hand = trainee;
+  other_hand.hand = 1;
+  SimTrainee second(scene, other_hand);  // read only in bimanual scenes
   state::StationState state = sim.MakeInitialState(seed);
   const double duration_s = max_duration_s > 0 ? max_duration_s : scene.task.time_limit_s;
   const auto max_steps = static_cast<std::uint64_t>(std::llround(duration_s / sim.dt_s()));
@@ -33,8 +36,13 @@ SceneRunResult RunSceneWithTrainee(const scene::SceneModel& scene, const SimTrai
     StationInput in;
     in.device = device.Read(state.step);
     CanonicalizeDeviceSample(in.device);
+    if (state.second_tool) {
+      in.second = second.Read(state.step);
+      CanonicalizeDeviceSample(in.second);
+    }
     StepStation(sim, in, state);
     device.WriteForce(state.tool.f_T_W);
+    if (state.second_tool) second.WriteForce(state.second_tool->f_T_W);
     for (std::size_t i = 0; i < sim.module_count(); ++i)
       times[i].push_back(sim.last_step_time_s(i));
   }

@@ -38,6 +38,7 @@ void SimTraineeDef::Validate() const {
     throw std::invalid_argument("hand_stiffness_N_per_m: expected > 0");
   if (!(hand_time_constant_s > 0))
     throw std::invalid_argument("hand_time_constant_s: expected > 0");
+  if (hand != 0 && hand != 1) throw std::invalid_argument("hand: expected 0 or 1");
 }
 
 SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
@@ -53,11 +54,13 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
       correction_threshold_m_(
           Lerp(def.correction_threshold_novice_m, def.correction_threshold_expert_m, def.skill)),
       correction_duration_s_(def.correction_duration_s),
-      close_duration_s_(def.close_duration_s) {
+      close_duration_s_(def.close_duration_s),
+      hand_(def.hand) {
   // All randomness is drawn here, from the seed; Read() is a pure function of the step and
   // the previous force. SplitMix64 rather than <random> distributions, whose algorithms the
   // standard leaves to the library: the samples are then the same on every platform.
-  std::uint64_t state = def.seed;
+  // The second hand: a stream of its own (the golden-ratio increment's odd multiple away).
+  std::uint64_t state = def.seed + (hand_ == 1 ? 0xD1B54A32D192ED03ULL : 0);
   auto uniform = [&state](double lo, double hi) {
     std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
@@ -87,6 +90,7 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
   };
   jaw_yaw_rad_ = either_way(yaw);
   jaw_offset_m_ = either_way(offset);
+  if (hand_ == 1) return;  // the task's buttons and stitches belong to the first hand
   if (scene.task.kind == scene::TaskKind::kKnotPlacement && scene.placement) {
     const scene::PlacementSceneDef& p = *scene.placement;
     const double angle_sd =
@@ -168,6 +172,10 @@ Eigen::Vector3d SimTrainee::CalcCorrection(double t_s) const {
 
 Eigen::Isometry3d SimTrainee::CalcPlannedPose(double t_s, double* gripper) const {
   *gripper = 0;
+  if (hand_ == 1) {
+    *gripper = 1;
+    return scene_.CalcIdealSecondToolPose(t_s);
+  }
   if (!stitch_azimuth_rad_.empty()) {
     // Stitch k: at rest over [k T, k T + 0.3 T], then on to stitch k + 1 by (k + 1) T.
     const double T = scene_.placement->move_s / pace_;

@@ -51,6 +51,10 @@ namespace microdex::station {
 struct SimTraineeDef {
   double skill = 0.5;  // 0 novice .. 1 expert
   std::uint64_t seed = 1;
+  // Which of the trainee's hands this device is: 0 the first tool (the task's), 1 the second
+  // tool of a bimanual scene (it follows the scene's second-hand pose, gripper closed, with
+  // its own tremor and drift drawn from a seed of its own).
+  int hand = 0;
   double tremor_rms_novice_m = 60e-6;
   double tremor_rms_expert_m = 10e-6;
   double drift_std_novice_m = 300e-6;
@@ -127,6 +131,7 @@ class SimTrainee final : public Device {
   Eigen::Vector3d CalcCorrection(double t_s) const;
   Eigen::Vector3d f_prev_W_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d hand_offset_m_ = Eigen::Vector3d::Zero();
+  int hand_ = 0;
 };
 
 }  // namespace microdex::station

@@ -86,6 +86,17 @@ struct CueSnapshot {
   Vec3 p_W_wall{};
 };
 
+// Bimanual scenes: the second tool after a step (state.second_tool; no cue acts on it, so the
+// tool is the device's pose).
+struct SecondToolSnapshot {
+  Vec3 p_WT_device{};
+  Quat q_WT_device{1, 0, 0, 0};
+  double gripper = 0;
+  std::uint32_t buttons = 0;
+  Vec3 f_T_W{};
+  std::uint8_t device_fault = 0;
+};
+
 struct TickSnapshot {
   std::uint64_t step = 0;
   std::int64_t tick_start_ns = 0;  // monotonic
@@ -103,6 +114,8 @@ struct TickSnapshot {
   Vec3 f_T_W{};
   std::uint32_t active_cues = 0;  // bit cues::CueBit(kind) per cue on
   CueSnapshot cue;
+  std::uint8_t has_second_tool = 0;
+  SecondToolSnapshot second;
   // Modules (filled by the modules present).
   std::uint8_t has_needle = 0;
   NeedleSnapshot needle;

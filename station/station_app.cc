@@ -170,6 +170,9 @@ std::string StationOptions::Validate() const {
   if (device != "playback" && !device_file.empty()) {
     return "--device " + device + ": takes no FILE";
   }
+  if (device != "playback" && !device_file2.empty()) {
+    return "--device " + device + ": takes no FILE2";
+  }
   if (!(view_port >= -1 && view_port <= 65535)) return "--view: expected a port 0..65535";
   if (device == "page" && view_port < 0 && screenshot.empty()) {
     return "--device page: needs --view PORT";
@@ -227,6 +230,34 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     device_owner = std::make_unique<SimTrainee>(scene, trainee_def);
   }
   Device& device = *device_owner;
+  // A bimanual scene: the second tool's device, of the same kind as the first.
+  std::unique_ptr<Device> second_device;
+  if (scene.hands() == 2) {
+    const Eigen::Isometry3d X_WT2_start = scene.CalcIdealSecondToolPose(0);
+    if (o.device == "page") {
+      second_device = std::make_unique<HeldDevice>(X_WT2_start);
+    } else if (o.device == "playback") {
+      if (o.device_file2.empty()) {
+        throw std::runtime_error(scene.path + ": the trainee holds two tools: --device playback " +
+                                 "FILE FILE2 (FILE2: the second tool's CSV)");
+      }
+      second_device = std::make_unique<PlaybackDevice>(o.device_file2);
+    } else if (o.device == "dds") {
+      // The second device's driver publishes and reads under the key STATION/2.
+      DeviceMappingDef mapping;
+      mapping.p_W_centre = X_WT2_start.translation();
+      mapping.max_force_N = scene.haptic.max_force_N;
+      second_device = std::make_unique<DdsDevice>(o.dds, SecondDeviceKey(o.station_id),
+                                                  session_id.substr(0, 64), mapping);
+    } else {
+      SimTraineeDef other_hand = trainee_def;
+      other_hand.hand = 1;
+      second_device = std::make_unique<SimTrainee>(scene, other_hand);
+    }
+  } else if (!o.device_file2.empty()) {
+    throw std::runtime_error(scene.path + ": the trainee holds one tool: --device playback " +
+                             "takes one FILE");
+  }
 
   bool realtime = false;
   if (o.realtime) {
@@ -253,7 +284,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   // A trainee at a device or at the page goes on after the task ends (the scores freeze); a
   // simulated one and a playback stop there.
   lc.stop_at_task_end = o.device != "dds" && page_device == nullptr;
-  HapticLoop loop(scene, device, rings, clock, lc);
+  HapticLoop loop(scene, device, rings, clock, lc, second_device.get());
   // --cue: from the first step, through the ring the instructor's cues take (the threads
   // start below, so this thread may stand in for the producer).
   for (const std::string& text : o.cues) {

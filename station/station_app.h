@@ -15,6 +15,8 @@ struct StationOptions {
   std::string scene_path;
   std::string device = "sim";  // sim | playback (device_file) | dds
   std::string device_file;     // --device playback FILE: the CSV (station/playback_device.h)
+  // --device playback FILE FILE2: the second tool's CSV (bimanual scenes).
+  std::string device_file2;
   double skill = 0.5;
   std::uint64_t seed = 1;
   double duration_s = 0;   // 0: until SIGINT/SIGTERM

@@ -279,6 +279,12 @@ void StationPublisher::Drain() {
     w_->input_plain.gripper = s.gripper;
     w_->input_plain.buttons = s.buttons;
     w_->input_plain.state_hash = s.step_hash;
+    if (s.has_second_tool) {
+      w_->input_plain.p_WT2 = E(s.second.p_WT_device);
+      w_->input_plain.q_WT2 = Q(s.second.q_WT_device);
+      w_->input_plain.gripper2 = s.second.gripper;
+      w_->input_plain.buttons2 = s.second.buttons;
+    }
     net::ToMsg(w_->input_plain, w_->input_msg);
     if (w_->input->write(&w_->input_msg)) {
       ++totals_.input_published;

@@ -40,6 +40,10 @@ state::StationState Simulation::MakeInitialState(std::uint64_t seed) const {
   state::StationState s;
   state::SeedStationState(seed, s);
   s.score.min_clearance_m = std::numeric_limits<double>::infinity();
+  if (scene_.second_hand) {
+    s.second_tool.emplace();
+    s.second_tool->X_WT_device = s.second_tool->X_WT = scene_.CalcIdealSecondToolPose(0);
+  }
   for (const auto& m : modules_) m->InitState(s);
   // (Every kind's default parameter and the wall on: CueState's defaults.)
   s.cues.clearance_m = std::numeric_limits<double>::infinity();
@@ -115,6 +119,15 @@ void CalcToolAfterCues(const cues::TremorFilterModel& filter, const DeviceSample
   }
 }
 
+// Bimanual scenes: the second device's sample is the second tool (the cues act on the first).
+void SetSecondTool(const DeviceSample& d, state::ToolState& t) {
+  t.X_WT_device = d.X_WT;
+  t.gripper = d.gripper;
+  t.buttons = d.buttons;
+  t.device_fault = static_cast<std::uint8_t>(d.fault);
+  t.X_WT = d.X_WT;
+}
+
 // Reads state.cues, the tool (and the loop module's nearest wire point); returns the field's
 // force on the tool: convergent (a spring to the path) or divergent (across the path only).
 Eigen::Vector3d CalcCueForce(const cues::IdealPath& path, double max_force_N,
@@ -145,16 +158,16 @@ Eigen::Vector3d LimitCueForce(const Eigen::Vector3d& f_cue, double max_force_N, 
   return r.f_N;
 }
 
-// Reads the tool; writes state.tool.f_T_W: finite and saturated, always; during a device
-// fault it ramps to zero at the limiter's rate.
+// Reads a tool; writes its f_T_W: finite and saturated, always; during a device fault it ramps
+// to zero at the limiter's rate.
 void LimitToolForce(const Eigen::Vector3d& f, double max_force_N, double dt_s,
-                    state::StationState& s) {
-  const bool fault = s.tool.device_fault != 0;
+                    state::ToolState& tool) {
+  const bool fault = tool.device_fault != 0;
   const double rate = fault ? cues::kMaxForceRate_N_per_s : std::numeric_limits<double>::infinity();
   const cues::ForceLimitResult r =
-      cues::LimitForce(fault ? Eigen::Vector3d::Zero() : f, s.tool.f_T_W, max_force_N, rate, dt_s);
-  if (r.non_finite) ++s.tool.force_warnings;
-  s.tool.f_T_W = r.f_N;
+      cues::LimitForce(fault ? Eigen::Vector3d::Zero() : f, tool.f_T_W, max_force_N, rate, dt_s);
+  if (r.non_finite) ++tool.force_warnings;
+  tool.f_T_W = r.f_N;
 }
 
 // Reads the tool, the needle and tremor sections and this step's fault; writes state.score.
@@ -361,6 +374,7 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
   const scene::SceneModel& scene = sim.scene_;
   TakeCues(in.cues, s.step, s.cues);
   CalcToolAfterCues(sim.tremor_filter_, in.device, s);
+  if (s.second_tool) SetSecondTool(in.second, *s.second_tool);
   Eigen::Vector3d f = LimitCueForce(CalcCueForce(sim.path_, scene.haptic.max_force_N, s),
                                     scene.haptic.max_force_N, sim.dt_s_, s);
 
@@ -370,6 +384,7 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
   tool.dt_s = sim.dt_s_;
   tool.X_WT = s.tool.X_WT;
   tool.p_WT_device = s.tool.X_WT_device.translation();
+  tool.second_tool = s.second_tool ? &*s.second_tool : nullptr;
   s.score.fault = 0;
   s.score.fault_value = 0;
   for (std::size_t i = 0; i < sim.modules_.size(); ++i) {
@@ -390,7 +405,12 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
 
   // A device fault: the device gave the last valid pose again (held); the force goes to zero,
   // at the limiter's rate.
-  LimitToolForce(f, scene.haptic.max_force_N, sim.dt_s_, s);
+  LimitToolForce(f, scene.haptic.max_force_N, sim.dt_s_, s.tool);
+  if (s.second_tool) {
+    Eigen::Vector3d f2 = Eigen::Vector3d::Zero();
+    for (const auto& m : sim.modules_) f2 += m->SecondToolForce(s);
+    LimitToolForce(f2, scene.haptic.max_force_N, sim.dt_s_, *s.second_tool);
+  }
   if (s.score.outcome == 0) {  // the scores freeze when the task ends
     UpdateScore(scene, sim.dt_s_, s);
     UpdateTask(scene, sim.path_, sim.dt_s_, s);
@@ -436,6 +456,16 @@ void ProjectSnapshot(const Simulation& sim, const state::StationState& s, TickSn
   out.p_WT = ToVec3(s.tool.X_WT.translation());
   out.q_WT = ToQuat(s.tool.X_WT);
   out.f_T_W = ToVec3(s.tool.f_T_W);
+  out.has_second_tool = s.second_tool ? 1 : 0;
+  if (s.second_tool) {
+    const state::ToolState& t2 = *s.second_tool;
+    out.second.p_WT_device = ToVec3(t2.X_WT_device.translation());
+    out.second.q_WT_device = ToQuat(t2.X_WT_device);
+    out.second.gripper = t2.gripper;
+    out.second.buttons = t2.buttons;
+    out.second.f_T_W = ToVec3(t2.f_T_W);
+    out.second.device_fault = t2.device_fault;
+  }
   out.active_cues = s.cues.active;
   CueSnapshot& cs = out.cue;
   cs.param = s.cues.param;

@@ -14,7 +14,8 @@
 //     StepModules      each module of the scene, in the scene's order (module sections; the
 //                      wall forces scaled by the wall cue)
 //     LimitToolForce   finite and saturated, always; ramped to zero at the limiter's rate
-//                      during a device fault (state.tool)
+//                      during a device fault (state.tool; bimanual: state.second_tool too,
+//                      from the modules' SecondToolForce)
 //     UpdateScore      running totals and fault episodes (state.score)
 //     UpdateTask       deviation from the path or target, passes, the task's outcome
 //                      (state.score; both frozen once the task has ended)
@@ -47,6 +48,8 @@ namespace microdex::station {
 struct StationInput {
   DeviceSample device;
   std::span<const state::CueRequest> cues;
+  // Bimanual scenes (scene.hands() == 2): the second device's sample; ignored otherwise.
+  DeviceSample second;
 };
 
 class Simulation {

@@ -75,7 +75,9 @@ double CalcAlignedRmsDistance(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd&
 }
 
 ThreadModule::ThreadModule(const scene::SceneModel& scene)
-    : max_force_N_(scene.haptic.max_force_N), max_strain_(scene.thread->max_strain) {
+    : second_hand_(scene.second_hand.has_value()),
+      max_force_N_(scene.haptic.max_force_N),
+      max_strain_(scene.thread->max_strain) {
   const scene::ThreadSceneDef& d = *scene.thread;
   if (d.def.num_nodes > static_cast<int>(kMaxFrameThreadNodes)) {
     throw std::runtime_error(scene.path + ": thread.params: " + d.params_path +
@@ -92,10 +94,10 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
         thread::Collider::Plane(Eigen::Vector3d(0, 0, d.floor_height_m), Eigen::Vector3d::UnitZ());
     num_colliders_ = 1;
   }
-  const int anchor_slot = thread::GraspNode(model_, 0, initial_);
+  anchor_slot_ = thread::GraspNode(model_, 0, initial_);
   tool_node_ = model_.num_nodes - 1;
   tool_slot_ = thread::GraspNode(model_, tool_node_, initial_);
-  MICRODEX_CHECK(anchor_slot >= 0 && tool_slot_ >= 0);  // max_grasps >= 2 (scene validation)
+  MICRODEX_CHECK(anchor_slot_ >= 0 && tool_slot_ >= 0);  // max_grasps >= 2 (scene validation)
   if (scene.task.kind == scene::TaskKind::kNylonLoop) {
     thread::ThreadState t = initial_;
     const double dt_s = 1.0 / scene.haptic.rate_hz;
@@ -112,7 +114,7 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
 }
 
 void ThreadModule::InitState(state::StationState& s) const {
-  s.thread = state::ThreadModuleState{initial_, Eigen::Vector3d::Zero()};
+  s.thread = state::ThreadModuleState{initial_};
 }
 
 void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& f_T_W) {
@@ -121,10 +123,17 @@ void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
   const Eigen::Matrix3d& R = in.X_WT.linear();
   const double roll_rad = std::atan2(R(2, 1), R(2, 2));
   thread::SetGraspTarget(t.thread, tool_slot_, in.X_WT.translation(), roll_rad);
+  if (second_hand_ && in.second_tool != nullptr) {
+    const Eigen::Isometry3d& X_WT2 = in.second_tool->X_WT;
+    const Eigen::Matrix3d& R2 = X_WT2.linear();
+    thread::SetGraspTarget(t.thread, anchor_slot_, X_WT2.translation(),
+                           std::atan2(R2(2, 1), R2(2, 2)));
+  }
   thread::StepThread(model_, std::span<const thread::Collider>(colliders_.data(), num_colliders_),
                      ws_, t.thread);
   t.f_T_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
   f_T_W += t.f_T_W;
+  if (second_hand_) t.f_T2_W = thread::GraspForce(t.thread, anchor_slot_, max_force_N_);
   if (target_W_.cols() > 0) t.shape_error_m = CalcAlignedRmsDistance(t.thread.x_W, target_W_);
 }
 
@@ -137,6 +146,10 @@ ModuleStatus ThreadModule::Status(const state::StationState& s) const {
   out.warnings = static_cast<std::uint32_t>(st.nonfinite_resets + st.factorization_failures +
                                             st.contact_overflows);
   return out;
+}
+
+Eigen::Vector3d ThreadModule::SecondToolForce(const state::StationState& s) const {
+  return s.thread->f_T2_W;
 }
 
 void ThreadModule::WriteFrame(const state::StationState& s, std::uint64_t step,

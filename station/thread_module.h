@@ -1,6 +1,8 @@
 #pragma once
 // The suture-thread module (thesis chapter 5, common/thread): node 0 is held at the scene's
-// anchor (the stitch), the last node is grasped by the tool tip and follows it (it starts at
+// anchor (the stitch) — in a bimanual scene by the second tool, whose tip it follows, with the
+// thread's pull on that node rendered to the second device —, the last node is grasped by the
+// tool tip and follows it (it starts at
 // the tool's ideal start point, the slack bowed as an arc: CalcSlackThreadNodes); each tick
 // runs one StepThread (the linearly-implicit integrator of the parameter file at the haptic
 // period) and renders the force of the thread on the grasped node (§5.4) to the device.
@@ -41,6 +43,7 @@ class ThreadModule final : public Module {
   void InitState(state::StationState& state) const override;
   void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) override;
   ModuleStatus Status(const state::StationState& state) const override;
+  Eigen::Vector3d SecondToolForce(const state::StationState& state) const override;
   void WriteFrame(const state::StationState& state, std::uint64_t step, std::int64_t stamp_ns,
                   LargeFrames& frames) override;
 
@@ -57,6 +60,8 @@ class ThreadModule final : public Module {
   int num_colliders_ = 0;
   int tool_slot_ = -1;
   int tool_node_ = -1;
+  int anchor_slot_ = -1;
+  bool second_hand_ = false;  // bimanual: the second tool holds node 0 (else it is anchored)
   double max_force_N_;
   double max_strain_;
   // Nylon control: the target, computed at construction by running the task's ideal tool

@@ -297,6 +297,10 @@ void ToMsg(const DeviceInput& in, msg::DeviceInput& out) {
   out.gripper(in.gripper);
   out.buttons(in.buttons);
   out.state_hash(in.state_hash);
+  out.p_WT2(V(in.p_WT2));
+  out.q_WT2(Q(in.q_WT2));
+  out.gripper2(in.gripper2);
+  out.buttons2(in.buttons2);
 }
 
 bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
@@ -310,6 +314,16 @@ bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
   out.gripper = in.gripper();
   out.buttons = in.buttons();
   out.state_hash = in.state_hash();
+  // A one-handed sender may leave the second hand all zero: the identity rotation then.
+  const auto& q2 = in.q_WT2();
+  const bool no_second = q2[0] == 0 && q2[1] == 0 && q2[2] == 0 && q2[3] == 0;
+  c.Finite(in.p_WT2(), "p_WT2");
+  if (!no_second) c.Unit(q2, "q_WT2");
+  c.Finite(in.gripper2(), "gripper2");
+  out.p_WT2 = V(in.p_WT2());
+  out.q_WT2 = no_second ? Eigen::Quaterniond::Identity() : Q(q2);
+  out.gripper2 = in.gripper2();
+  out.buttons2 = in.buttons2();
   return c.ok();
 }
 

@@ -48,6 +48,11 @@ struct DeviceInput {
   double gripper = 0;
   std::uint32_t buttons = 0;
   std::uint64_t state_hash = 0;  // of the station's state after this step
+  // Bimanual scenes: the second tool's device sample (idl/device_input.idl).
+  Eigen::Vector3d p_WT2 = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_WT2 = Eigen::Quaterniond::Identity();
+  double gripper2 = 0;
+  std::uint32_t buttons2 = 0;
 };
 
 struct ToolState {

@@ -141,7 +141,7 @@ SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
                            "tissue", "puncture", "grasp", "loop", "knots", "placement", "scoring",
-                           "microscope", "visuals", "cues"});
+                           "microscope", "visuals", "cues", "second_hand"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -347,6 +347,14 @@ SceneModel ReadScene(const YamlReader& reader) {
     }
     sc->CheckNoUnknownKeys(known);
   }
+  if (const std::optional<YamlSection> h = root.OptionalMap("second_hand")) {
+    h->CheckNoUnknownKeys({"position_m", "rpy_rad"});
+    h->Required("position_m");
+    SecondHandDef d;
+    d.X_WT_start.translate(h->Vec3("position_m", Eigen::Vector3d::Zero()));
+    d.X_WT_start.rotate(RotationFromRpy(h->Vec3("rpy_rad", Eigen::Vector3d::Zero())));
+    s.second_hand = d;
+  }
   if (const std::optional<YamlSection> m = root.OptionalMap("microscope")) {
     m->CheckNoUnknownKeys({"magnification", "look_at_m", "view_dir"});
     s.microscope.magnification = m->FiniteDouble("magnification", s.microscope.magnification);
@@ -532,6 +540,10 @@ Eigen::Isometry3d SceneModel::CalcIdealToolPose(double t_s) const {
   return X;
 }
 
+Eigen::Isometry3d SceneModel::CalcIdealSecondToolPose(double /*t_s*/) const {
+  return second_hand ? second_hand->X_WT_start : Eigen::Isometry3d::Identity();
+}
+
 Eigen::Isometry3d SceneModel::X_TN() const {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.translate(Eigen::Vector3d(-needle.radius_m, 0, 0));
@@ -618,6 +630,11 @@ void ValidateScene(const SceneModel& s) {
               "tool's start point");
     }
     if (!(th.max_strain > 0 && th.max_strain <= 1)) Invalid("thread.max_strain", "expected (0, 1]");
+    if (s.second_hand &&
+        !((s.second_hand->X_WT_start.translation() - th.p_W_anchor).norm() <= 1e-12)) {
+      Invalid("second_hand.position_m",
+              "expected thread.anchor_m: the second tool holds the thread's node 0 there");
+    }
   }
   if (s.HasModule("grasp") != s.grasp.has_value()) {
     Invalid("grasp", s.grasp ? "section given but 'grasp' is not in modules"

@@ -219,6 +219,15 @@ struct VisualDef {
   Eigen::Isometry3d X_PM = Eigen::Isometry3d::Identity();  // P: world, or T when held
 };
 
+// A second tool, held in the trainee's other hand (bimanual tasks: the forceps beside the
+// needle holder). Its device is the station's second device; its scripted ideal pose (what the
+// simulated trainee's other hand follows) is a hold at X_WT_start. With the thread module, the
+// second tool holds the thread's node 0 (instead of the fixed anchor), starting at
+// thread.anchor_m, which must then be the second tool's position.
+struct SecondHandDef {
+  Eigen::Isometry3d X_WT_start = Eigen::Isometry3d::Identity();
+};
+
 // The cues a scene offers and those on from its first step.
 struct CueSetDef {
   std::vector<cues::CueKind> available;              // empty: every kind
@@ -246,6 +255,7 @@ struct SceneModel {
   MicroscopeDef microscope;
   std::vector<VisualDef> visuals;
   CueSetDef cues;
+  std::optional<SecondHandDef> second_hand;  // present in bimanual scenes
 
   bool HasModule(const std::string& module) const;
   // The scripted ideal tool pose at azimuth theta: the needle tail on its path circle (radius
@@ -259,6 +269,10 @@ struct SceneModel {
   // The scripted ideal tool pose at time t along the task's path (a hold: the target; the loop
   // along a wire: the loop centred on the wire's axis, its plane across the wire).
   Eigen::Isometry3d CalcIdealToolPose(double t_s) const;
+  // Bimanual scenes: the scripted ideal pose of the second tool at time t.
+  Eigen::Isometry3d CalcIdealSecondToolPose(double t_s) const;
+  // The number of tools (devices) the scene's trainee holds: 1, or 2 with a second_hand.
+  int hands() const { return second_hand ? 2 : 1; }
   // The needle frame N from the tool frame T (the tail point, s = 0): X_WN = X_WT * X_TN.
   Eigen::Isometry3d X_TN() const;
 };

@@ -180,6 +180,8 @@ struct TremorState {
 struct ThreadModuleState {
   thread::ThreadState thread;
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // thread on the tool, saturated, N
+  // Bimanual scenes: the thread on the second tool (which holds node 0), saturated, N.
+  Eigen::Vector3d f_T2_W = Eigen::Vector3d::Zero();
   // Nylon control: the RMS distance of the nodes from the target shape after rigid alignment.
   double shape_error_m = 0;
 };
@@ -232,6 +234,9 @@ struct StationState {
   std::uint64_t seed = 0;
   std::uint64_t rng = 0;
   ToolState tool;
+  // The second tool, in the trainee's other hand: present exactly in bimanual scenes
+  // (scene::SceneModel::second_hand). The cues act on the first tool only.
+  std::optional<ToolState> second_tool;
   CueState cues;
   ScoreState score;
   // One section per module of the scene; empty when the scene does not name the module.

@@ -47,15 +47,23 @@ void Counted(C& c, int count, F f) {
   for (std::size_t i = 0; i < n; ++i) f(c[i]);
 }
 
+// A tool's fields under the names of the first tool ("tool.…") or of the second ("second_tool.…").
+inline constexpr const char* kToolNames[2][7] = {
+    {"tool.X_WT_device", "tool.gripper", "tool.buttons", "tool.X_WT", "tool.f_T_W",
+     "tool.force_warnings", "tool.device_fault"},
+    {"second_tool.X_WT_device", "second_tool.gripper", "second_tool.buttons", "second_tool.X_WT",
+     "second_tool.f_T_W", "second_tool.force_warnings", "second_tool.device_fault"}};
+
 template <typename S, typename V>
-void Tool(S& t, V& v) {
-  Pose("tool.X_WT_device", t.X_WT_device, v);
-  v("tool.gripper", &t.gripper, 1);
-  v("tool.buttons", &t.buttons, 1);
-  Pose("tool.X_WT", t.X_WT, v);
-  Matrix("tool.f_T_W", t.f_T_W, v);
-  v("tool.force_warnings", &t.force_warnings, 1);
-  v("tool.device_fault", &t.device_fault, 1);
+void Tool(S& t, V& v, int hand = 0) {
+  const char* const* n = kToolNames[hand];
+  Pose(n[0], t.X_WT_device, v);
+  v(n[1], &t.gripper, 1);
+  v(n[2], &t.buttons, 1);
+  Pose(n[3], t.X_WT, v);
+  Matrix(n[4], t.f_T_W, v);
+  v(n[5], &t.force_warnings, 1);
+  v(n[6], &t.device_fault, 1);
 }
 
 template <typename S, typename V>
@@ -206,6 +214,7 @@ void Thread(S& m, V& v) {
   v("thread.status.num_sliding_contacts", &s.num_sliding_contacts, 1);
   v("thread.status.max_strain", &s.max_strain, 1);
   Matrix("thread.f_T_W", m.f_T_W, v);
+  Matrix("thread.f_T2_W", m.f_T2_W, v);
   v("thread.shape_error_m", &m.shape_error_m, 1);
 }
 
@@ -379,6 +388,7 @@ void VisitStationState(S& s, V& v) {
   vi::Tool(s.tool, v);
   vi::Cues(s.cues, v);
   vi::Score(s.score, v);
+  vi::Section("second_tool", s.second_tool, v, [](auto& t, V& w) { vi::Tool(t, w, 1); });
   vi::Section("needle", s.needle, v, [](auto& n, V& w) { vi::Needle(n, w); });
   vi::Section("tremor", s.tremor, v, [](auto& t, V& w) { vi::Tremor(t, w); });
   vi::Section("thread", s.thread, v, [](auto& t, V& w) { vi::Thread(t, w); });

@@ -42,16 +42,21 @@ struct BusyState {
     scene.knots = scene::KnotQuizSceneDef{{knot::StitchKnotType::kSquare}, 30e-6};
     scene.modules.push_back("placement");
     scene.placement = scene::PlacementSceneDef{};
+    // A second tool, holding the thread's node 0.
+    scene.second_hand = scene::SecondHandDef{};
+    scene.second_hand->X_WT_start.translation() = scene.thread->p_W_anchor;
     station::Simulation sim(scene);
     s = sim.MakeInitialState(3);
     station::SimTraineeDef def;
     def.skill = 0.0;
     station::SimTrainee trainee(scene, def);
+    def.hand = 1;
+    station::SimTrainee other_hand(scene, def);
     const CueRequest requests[] = {{1, cues::CueKind::kAmplifiedTremor, 3, 0},
                                    {2, cues::CueKind::kConvergentField, 100, 100000},
                                    {3, cues::CueKind::kDivergentField, 50, 200000}};
     for (int k = 0; k < 400; ++k) {
-      station::StationInput in{trainee.Read(s.step), {}};
+      station::StationInput in{trainee.Read(s.step), {}, other_hand.Read(s.step)};
       if (k == 399) in.cues = requests;  // one applied at once, two left pending
       station::StepStation(sim, in, s);
       trainee.WriteForce(s.tool.f_T_W);
@@ -87,9 +92,9 @@ struct PerturbSpreadElements {
   void operator()(const char* name, T* p, std::size_t n) {
     // Presence flags and the grasp count are read from the containers, not stored: changing
     // the visited copy changes nothing.
-    static const std::set<std::string> kDerived = {"needle", "tremor",    "thread",
-                                                   "tissue", "grasp",     "loop",
-                                                   "knots",  "placement", "thread.grasps.size"};
+    static const std::set<std::string> kDerived = {
+        "second_tool", "needle", "tremor", "thread",    "tissue",
+        "grasp",       "loop",   "knots",  "placement", "thread.grasps.size"};
     if (kDerived.count(name)) return;
     names.insert(name);
     const std::size_t count = std::min<std::size_t>(n, 64);
@@ -124,10 +129,11 @@ TEST(StateHash, ChangingAnyFieldAnywhereChangesHashAndEquality) {
   EXPECT_TRUE(s == reference) << "every element was restored";
   EXPECT_EQ(CalcStateHash(s), p.base_hash);
   // Every section was present and visited.
-  for (const char* field : {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step",
-                            "cues.acks[].cue_id", "score.contacts", "needle.X_WN",
-                            "tremor.mean_square_m2", "thread.x_W", "thread.grasps[].p_WT",
-                            "tissue.field_w_m", "tissue.leaves[].ci", "tissue.contact_force_N"}) {
+  for (const char* field :
+       {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step", "cues.acks[].cue_id",
+        "score.contacts", "needle.X_WN", "tremor.mean_square_m2", "thread.x_W",
+        "thread.grasps[].p_WT", "tissue.field_w_m", "tissue.leaves[].ci", "tissue.contact_force_N",
+        "second_tool.X_WT", "second_tool.f_T_W", "thread.f_T2_W"}) {
     EXPECT_TRUE(p.names.count(field)) << field;
   }
   EXPECT_GT(p.elements, 500u);
