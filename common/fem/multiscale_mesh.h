@@ -38,7 +38,23 @@ struct EndZones {
   std::array<double, kMaxToolPoints> y_m{};
   int level = 0;   // nominal level of the selection
   int finest = 0;  // the end level, or level when there is no zone
+  // Edge grading (TissueDef::edge_resolution): the tool's vertices (planar), and the level
+  // below which cells near the tool's parts closer than edge_resolution · h_l to a clamped
+  // edge are refined (edge_finest == level: no edge grading).
+  int edge_finest = 0;
+  int num_tool_points = 0;
+  std::array<double, kMaxToolPoints> tool_x_m{};
+  std::array<double, kMaxToolPoints> tool_y_m{};
 };
+
+// Liang–Barsky: the parameter range [t0, t1] ⊂ [0, 1] of a + t (b − a) inside the box
+// [x0, x1] × [y0, y1]; false when the segment misses it.
+bool ClipSegmentToBox(double ax, double ay, double bx, double by, double x0, double y0, double x1,
+                      double y1, double* t0, double* t1);
+
+// The edge rule: a level-l cell (zones.level ≤ l < zones.edge_finest) is refined when it is
+// closer than grading · h_l to a part of the tool within edge_resolution · h_l of an edge.
+bool EdgeRefine(const TissueModel& model, const EndZones& zones, int l, int ci, int cj);
 
 // Per-step mesh buffers, sized once to the model's capacities.
 struct MeshSelection {

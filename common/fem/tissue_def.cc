@@ -78,6 +78,11 @@ void TissueDef::Validate() const {
   Require(std::isfinite(end_resolution) && end_resolution >= 0 && end_resolution <= 1e4,
           "end_resolution", "0 (off) or end-zone cells per tool length in (0, 1e4]");
   Require(end_levels >= 0 && end_levels <= 6, "end_levels", "an integer in [0, 6]");
+  Require(std::isfinite(edge_resolution) && edge_resolution >= 0 && edge_resolution <= 16,
+          "edge_resolution", "0 (off) or cells between the tool and an edge in (0, 16]");
+  Require(edge_levels >= 0 && edge_levels <= 6, "edge_levels", "an integer in [0, 6]");
+  Require(edge_max_leaves >= 0 && edge_max_leaves <= (1 << 20), "edge_max_leaves",
+          "a count of leaves in [0, 2^20]");
   Require(std::isfinite(tool_kink_factor) && tool_kink_factor >= 0.25 && tool_kink_factor <= 4,
           "tool_kink_factor", "a factor in [0.25, 4]");
   Require(std::isfinite(tool_penalty) && tool_penalty >= 1 && tool_penalty <= 1e8, "tool_penalty",
@@ -117,6 +122,9 @@ TissueDef LoadTissueDef(const std::string& path) {
                              "grading",
                              "end_resolution",
                              "end_levels",
+                             "edge_resolution",
+                             "edge_levels",
+                             "edge_max_leaves",
                              "tool_constraint",
                              "tool_kink_factor",
                              "tool_penalty",
@@ -139,6 +147,9 @@ TissueDef LoadTissueDef(const std::string& path) {
   def.grading = tissue.FiniteDouble("grading", def.grading);
   def.end_resolution = tissue.FiniteDouble("end_resolution", def.end_resolution);
   def.end_levels = tissue.Int("end_levels", def.end_levels);
+  def.edge_resolution = tissue.FiniteDouble("edge_resolution", def.edge_resolution);
+  def.edge_levels = tissue.Int("edge_levels", def.edge_levels);
+  def.edge_max_leaves = tissue.Int("edge_max_leaves", def.edge_max_leaves);
   def.tool_constraint =
       ReadEnum(tissue, "tool_constraint", &ParseToolConstraint, def.tool_constraint);
   def.tool_kink_factor = tissue.FiniteDouble("tool_kink_factor", def.tool_kink_factor);

@@ -80,6 +80,15 @@ struct TissueDef {
   // ends are rounded). 0 disables.
   double end_resolution = 64;
   int end_levels = 2;
+  // Multi-scale mesh with penalty points only, "edge grading": where the tool runs within
+  // edge_resolution · h_l of a clamped edge, the level-l cells within grading · h_l of that part
+  // of the tool are refined (l from `level` on, at most edge_levels beyond it and up to
+  // max_level), so the strip between the tool and the edge, where w falls from U to 0, is at
+  // least about edge_resolution cells wide. 0 disables. edge_max_leaves bounds the leaves the
+  // rule may add (the model's capacity): a level whose refinement would exceed it is skipped.
+  double edge_resolution = 3;
+  int edge_levels = 3;
+  int edge_max_leaves = 6144;
   // Bars and polylines of zero contact radius; a point tool and a tool with a contact radius
   // are always held at their nodes (kNearestNodes).
   ToolConstraint tool_constraint = ToolConstraint::kPenaltyPoints;

@@ -84,14 +84,25 @@ TissueModel BuildTissueModel(const TissueDef& def) {
     const std::int64_t span = 2 * static_cast<std::int64_t>(std::ceil(def.grading * aspect)) + 2;
     extra = std::int64_t{kMaxToolPoints} * end_levels * 4 * span * span;
   }
+  // Edge grading: FindEndZones refines a level only while its bound on the leaves the edge rule
+  // adds stays within edge_max_leaves.
+  // Each refined cell makes 4 leaves and at most 5 new nodes (side midpoints, centre); a leaf
+  // cut as a fan adds its centre, and so may each of the ≤ 4 neighbours of a refined cell:
+  // ≤ 5/4 + 1 + 1 < 4 nodes per counted leaf; ≤ 8 triangles per leaf and 6 more per fan
+  // neighbour: 14.
+  std::int64_t edge = 0;
+  if (def.mesh == MeshKind::kMultiscale && def.edge_resolution > 0 &&
+      std::min(def.edge_levels, def.max_level - def.level) > 0)
+    edge = def.edge_max_leaves;
   // A zone leaf gives at most 8 triangles; a level-`level` leaf next to a zone becomes a fan
   // (up to 6 more triangles and a centre node), and there are fewer such leaves than zone
   // leaves. A zone leaf adds at most its 4 corners and its centre.
   const std::int64_t all_cells = std::int64_t{model.cells_per_side} * model.cells_per_side;
-  model.max_leaves = static_cast<int>(std::min(all_cells, cells + extra));
-  model.max_triangles = static_cast<int>(std::min(2 * all_cells, 2 * cells + 14 * extra));
-  model.max_mesh_nodes =
-      static_cast<int>(std::min<std::int64_t>(model.num_grid_nodes, level_nodes + 6 * extra));
+  model.max_leaves = static_cast<int>(std::min(all_cells, cells + extra + edge));
+  model.max_triangles =
+      static_cast<int>(std::min(2 * all_cells, 2 * cells + 14 * extra + 14 * edge));
+  model.max_mesh_nodes = static_cast<int>(
+      std::min<std::int64_t>(model.num_grid_nodes, level_nodes + 6 * extra + 4 * edge));
   return model;
 }
 

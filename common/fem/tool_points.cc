@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "common/base/check.h"
 
@@ -69,7 +70,6 @@ struct PointWriter {
 int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
                     const ToolContact& tool, double spacing, std::span<ToolPoint> out) {
   const double h_m = std::max(model.CellSizeX_m(level), model.CellSizeY_m(level));
-  const double h_end_m = std::max(model.CellSizeX_m(zones.finest), model.CellSizeY_m(zones.finest));
   const double reach_m = model.def.grading * h_m;  // the end rule's reach at the nominal level
   PointWriter writer{model, out};
   if (tool.num_points < 2) return 0;
@@ -81,6 +81,7 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
                      len > 0 ? (b.y() - a.y()) / len : 0.0, 0.0))
       return -1;
   }
+  const double lx = model.def.length_x_m, ly = model.def.length_y_m;
   for (int k = 0; k + 1 < tool.num_points; ++k) {
     const Eigen::Vector3d& a = tool.p_SP[k];
     const Eigen::Vector3d& b = tool.p_SP[k + 1];
@@ -88,10 +89,48 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
     if (!(len > 0)) continue;  // a vertical or repeated vertex: its point is already there
     const double d0 = IsZoneVertex(zones, a) ? std::min(reach_m, 0.5 * len) : 0.0;
     const double d1 = IsZoneVertex(zones, b) ? std::min(reach_m, 0.5 * len) : 0.0;
-    if (!writer.Stretch(a, b, len, 0, d0, spacing * h_end_m) ||
-        !writer.Stretch(a, b, len, d0, len - d1, spacing * h_m) ||
-        !writer.Stretch(a, b, len, len - d1, len, spacing * h_end_m))
-      return -1;
+    // Stretches of constant spacing: the end zones, and for each edge-graded level l the
+    // parts of the segment within edge_resolution · h_l of an edge (the edge rule's S_l),
+    // extended along the segment by the reach of the refined cells, (grading + √2) · h_l:
+    // the leaves there may be at level l + 1 (beyond it they are not).
+    constexpr int kMaxEdgeLevels = 8;
+    std::array<double, kMaxEdgeLevels> lo{}, hi{};  // outside [lo, hi]: in the extended S_l
+    std::array<double, 4 + 2 * kMaxEdgeLevels> breaks{};
+    int num_breaks = 0;
+    breaks[num_breaks++] = 0;
+    breaks[num_breaks++] = d0;
+    breaks[num_breaks++] = len - d1;
+    breaks[num_breaks++] = len;
+    const int edge_levels = std::min(zones.edge_finest - zones.level, kMaxEdgeLevels);
+    for (int j = 0; j < edge_levels; ++j) {
+      const int l = zones.level + j;
+      const double h_l = std::max(model.CellSizeX_m(l), model.CellSizeY_m(l));
+      const double m = model.def.edge_resolution * h_l;
+      const double ext = (model.def.grading + std::numbers::sqrt2) * h_l;
+      double u0 = 0, u1 = 0;
+      if (2 * m < std::min(lx, ly) &&
+          ClipSegmentToBox(a.x(), a.y(), b.x(), b.y(), m, m, lx - m, ly - m, &u0, &u1)) {
+        lo[j] = u0 > 0 ? u0 * len + ext : -1.0;
+        hi[j] = u1 < 1 ? u1 * len - ext : 2 * len;
+      } else {  // the whole segment is near an edge
+        lo[j] = 2 * len;
+        hi[j] = -1.0;
+      }
+      breaks[num_breaks++] = std::clamp(lo[j], 0.0, len);
+      breaks[num_breaks++] = std::clamp(hi[j], 0.0, len);
+    }
+    std::sort(breaks.begin(), breaks.begin() + num_breaks);
+    for (int i = 0; i + 1 < num_breaks; ++i) {
+      const double s0 = breaks[i], s1 = breaks[i + 1];
+      if (!(s1 > s0)) continue;
+      const double mid = 0.5 * (s0 + s1);
+      int l = mid < d0 || mid > len - d1 ? zones.finest : level;
+      for (int j = 0; j < edge_levels; ++j) {
+        if (mid < lo[j] || mid > hi[j]) l = std::max(l, zones.level + j + 1);
+      }
+      const double h_l = std::max(model.CellSizeX_m(l), model.CellSizeY_m(l));
+      if (!writer.Stretch(a, b, len, s0, s1, spacing * h_l)) return -1;
+    }
   }
   return writer.count;
 }
