@@ -80,6 +80,17 @@ void OrderNestedDissection(const TissueModel& model, TissueWorkspace& ws, int n)
   for (int i = 0; i < n; ++i) ws.dof_node[i] = static_cast<int>(ws.order_keys[i] & 0xffffffffu);
 }
 
+// Reorders ws.dof_node[0, n) by grid-node id (row-major on the finest grid; ids < 2^22 for
+// max_level ≤ 10).
+void OrderRowMajor(TissueWorkspace& ws, int n) {
+  for (int i = 0; i < n; ++i) {
+    const auto node = static_cast<std::uint32_t>(ws.dof_node[i]);
+    ws.order_keys[i] = (static_cast<std::uint64_t>(node) << 32) | node;
+  }
+  RadixSortKeys(ws.order_keys.data(), ws.order_scratch.data(), n);
+  for (int i = 0; i < n; ++i) ws.dof_node[i] = static_cast<int>(ws.order_keys[i] & 0xffffffffu);
+}
+
 std::uint64_t MixKey(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
   return h * 1099511628211ull;
@@ -500,6 +511,10 @@ int TakePatternSlot(const TissueModel& model, TissueWorkspace& ws, std::uint64_t
     // so that a new pattern needs no ordering work (a sort of n keys instead of AMD).
     if (def.solver == SolverKind::kCholmod && def.ordering == Ordering::kNestedDissection)
       OrderNestedDissection(model, ws, n);
+    // IC(0) and Jacobi take the unknowns in the grid's row-major order: measured against the
+    // mesh's first-use (quadtree) order on the moving bar at level 7, IC(0)-PCG needs 22
+    // iterations instead of 28 (−14 % instructions, −20 % L1 misses per step).
+    if (def.solver != SolverKind::kCholmod) OrderRowMajor(ws, n);
     std::copy_n(ws.dof_node.begin(), n, ws.patterns[slot].dof_order.begin());
   } else {
     std::copy_n(ws.patterns[slot].dof_order.begin(), n, ws.dof_node.begin());
@@ -528,10 +543,41 @@ TissueStatus SolveCholmod(TissueWorkspace& ws, const CsrView& a, int slot, bool 
   return TissueStatus::kOk;
 }
 
-// The starting point of (P)CG: the last good field where the new mesh has the same nodes
-// (warm start, for the preconditioned solvers), else 0.
-void StartFromLastField(const TissueModel& model, const TissueState& state, TissueWorkspace& ws,
-                        int n) {
+// The last good field at the point (x, y): bilinear on the finest grid cell around it whose
+// four corners were nodes of that field's mesh (0 outside the domain).
+double LastFieldAt(const TissueModel& model, const TissueWorkspace& ws, double x_m, double y_m) {
+  if (!(x_m > 0 && x_m < model.def.length_x_m && y_m > 0 && y_m < model.def.length_y_m)) return 0;
+  for (int l = model.def.max_level; l >= 1; --l) {
+    const double u = x_m / model.CellSizeX_m(l), v = y_m / model.CellSizeY_m(l);
+    const int cells = 1 << l;
+    const int ci = std::min(static_cast<int>(u), cells - 1);
+    const int cj = std::min(static_cast<int>(v), cells - 1);
+    const int stride = model.Stride(l);
+    const int n00 = (cj * model.nodes_per_side + ci) * stride;
+    const int n10 = n00 + stride, n01 = n00 + stride * model.nodes_per_side, n11 = n01 + stride;
+    if (ws.grid_stamp[n00] != ws.field_stamp || ws.grid_stamp[n10] != ws.field_stamp ||
+        ws.grid_stamp[n01] != ws.field_stamp || ws.grid_stamp[n11] != ws.field_stamp)
+      continue;
+    const double fu = u - ci, fv = v - cj;
+    return (1 - fv) * ((1 - fu) * ws.grid_w_m[n00] + fu * ws.grid_w_m[n10]) +
+           fv * ((1 - fu) * ws.grid_w_m[n01] + fu * ws.grid_w_m[n11]);
+  }
+  return 0;
+}
+
+ToolPose PoseOf(const ToolContact& tool) {
+  ToolPose pose{tool.p_SP[0].x(), tool.p_SP[0].y(), 0};
+  if (tool.num_points >= 2)
+    pose.angle_rad =
+        std::atan2(tool.p_SP[1].y() - tool.p_SP[0].y(), tool.p_SP[1].x() - tool.p_SP[0].x());
+  return pose;
+}
+
+// The starting point of (P)CG: the last good field carried along with the tool's rigid motion
+// since that field's step (the field under a moving tool moves with it; where the tool holds
+// still this is the last field itself), for the preconditioned solvers; else 0.
+void StartFromLastField(const TissueModel& model, const TissueState& state, const ToolContact& tool,
+                        TissueWorkspace& ws, int n) {
   const bool warm = model.def.solver != SolverKind::kCg && state.step > 0;
   if (warm) {
     ++ws.field_stamp;
@@ -540,6 +586,24 @@ void StartFromLastField(const TissueModel& model, const TissueState& state, Tiss
       ws.grid_w_m[node] = state.field_w_m[k];
       ws.grid_stamp[node] = ws.field_stamp;
     }
+  }
+  const ToolPose now = PoseOf(tool), then = ws.field_tool_pose;
+  const double turn = now.angle_rad - then.angle_rad;
+  // Below a nanometre the carried field is the last one (a tool held still keeps its values).
+  constexpr double kStill_m = 1e-9;
+  const bool moved =
+      warm && ws.field_tool_pose_valid &&
+      (std::abs(now.x_m - then.x_m) > kStill_m || std::abs(now.y_m - then.y_m) > kStill_m ||
+       std::abs(turn) * model.def.length_x_m > kStill_m);
+  if (moved) {
+    const double c = std::cos(turn), s = std::sin(turn);
+    for (int i = 0; i < n; ++i) {
+      const int node = ws.dof_node[i];
+      // The point that was at this node's place relative to the tool: R⁻¹ (x − now) + then.
+      const double dx = model.NodeX_m(node) - now.x_m, dy = model.NodeY_m(node) - now.y_m;
+      ws.x[i] = LastFieldAt(model, ws, then.x_m + c * dx + s * dy, then.y_m - s * dx + c * dy);
+    }
+    return;
   }
   int missing = 0;
   for (int i = 0; i < n; ++i) {
@@ -550,9 +614,9 @@ void StartFromLastField(const TissueModel& model, const TissueState& state, Tiss
     missing += known ? 0 : 1;
   }
   if (!warm || missing == 0) return;
-  // Nodes new to this mesh (the tool moved into finer cells, a fan gained a centre): the mean
-  // of their known neighbours, over two sweeps of the triangles, instead of 0. Edge nodes and
-  // the tool's prescribed nodes count as known.
+  // Nodes new to this mesh (a fan gained a centre): the mean of their known neighbours, over
+  // two sweeps of the triangles, instead of 0. Edge nodes and the tool's prescribed nodes
+  // count as known.
   const MeshSelection& mesh = ws.mesh;
   for (int sweep = 0; sweep < 2; ++sweep) {
     std::fill_n(ws.residual.begin(), n, 0.0);
@@ -579,10 +643,11 @@ void StartFromLastField(const TissueModel& model, const TissueState& state, Tiss
 }
 
 // Solve with CG, Jacobi-PCG or IC(0)-PCG; the preconditioner is factored once per key.
-TissueStatus SolveIterative(const TissueModel& model, const TissueState& state, TissueWorkspace& ws,
-                            const CsrView& a, std::uint64_t key, TissueStepStats& stats) {
+TissueStatus SolveIterative(const TissueModel& model, const TissueState& state,
+                            const ToolContact& tool, TissueWorkspace& ws, const CsrView& a,
+                            std::uint64_t key, TissueStepStats& stats) {
   const TissueDef& def = model.def;
-  StartFromLastField(model, state, ws, a.n);
+  StartFromLastField(model, state, tool, ws, a.n);
   Preconditioner preconditioner = Preconditioner::kNone;
   if (def.solver != SolverKind::kCg) {
     preconditioner =
@@ -614,9 +679,10 @@ double RelativeResidual(const CsrView& a, TissueWorkspace& ws, double b_norm2) {
 }
 
 // Solve the reduced system (3.9)–(3.11) for the free nodes.
-TissueStatus SolveReduced(const TissueModel& model, const TissueState& state, TissueWorkspace& ws,
-                          const CsrView& a, std::uint64_t key, int slot, bool new_pattern,
-                          PatternEntry& entry, TissueStepStats& stats) {
+TissueStatus SolveReduced(const TissueModel& model, const TissueState& state,
+                          const ToolContact& tool, TissueWorkspace& ws, const CsrView& a,
+                          std::uint64_t key, int slot, bool new_pattern, PatternEntry& entry,
+                          TissueStepStats& stats) {
   const int n = a.n;
   const bool in_contact = ws.use_tool_points ? ws.num_tool_points > 0 : ws.num_contacts > 0;
   TissueStatus status = in_contact ? TissueStatus::kOk : TissueStatus::kNoContact;
@@ -629,7 +695,7 @@ TissueStatus SolveReduced(const TissueModel& model, const TissueState& state, Ti
   }
   const TissueStatus solved = model.def.solver == SolverKind::kCholmod
                                   ? SolveCholmod(ws, a, slot, new_pattern, entry, stats)
-                                  : SolveIterative(model, state, ws, a, key, stats);
+                                  : SolveIterative(model, state, tool, ws, a, key, stats);
   if (!IsGood(solved)) return solved;
   stats.relative_residual = RelativeResidual(a, ws, b_norm2);
   if (!std::isfinite(stats.relative_residual)) return TissueStatus::kNonFinite;
@@ -811,7 +877,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
 
   // 3. Solve.
   const TissueStatus status =
-      SolveReduced(model, state, ws, a, key, slot, new_pattern, entry, stats);
+      SolveReduced(model, state, tool, ws, a, key, slot, new_pattern, entry, stats);
   const Clock::time_point t_solved = Clock::now();
   stats.solve_us = Microseconds(t_assembled, t_solved);
   if (!IsGood(status)) return fail(status);
@@ -825,6 +891,8 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   }
   if (!f_T_S.allFinite() || !tau_T_S.allFinite()) return fail(TissueStatus::kNonFinite);
   Commit(ws, f_T_S, tau_T_S, status, state);
+  ws.field_tool_pose = PoseOf(tool);
+  ws.field_tool_pose_valid = true;
   const Clock::time_point t_end = Clock::now();
   stats.forces_us = Microseconds(t_solved, t_end);
   stats.total_us = Microseconds(t_begin, t_end);

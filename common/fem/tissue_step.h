@@ -93,6 +93,13 @@ struct PatternEntry {
 
 inline constexpr int kMaxRowEntries = 16;
 
+// A tool's planar pose: its first vertex and the direction to its second.
+struct ToolPose {
+  double x_m = 0;
+  double y_m = 0;
+  double angle_rad = 0;
+};
+
 // Scratch of the step: buffers, pattern cache, solver state. Not copyable; one per model.
 struct TissueWorkspace {
   explicit TissueWorkspace(const TissueModel& model);
@@ -128,6 +135,10 @@ struct TissueWorkspace {
   std::vector<double> grid_w_m;           // [num_grid_nodes]
   std::vector<std::uint64_t> grid_stamp;  // [num_grid_nodes] == field_stamp: grid_w_m valid
   std::uint64_t field_stamp = 0;
+  // The tool's planar pose (first vertex, direction to the second) at the state's last good
+  // step: the warm start carries that field along with the tool's motion since.
+  ToolPose field_tool_pose;
+  bool field_tool_pose_valid = false;
   // The last step's cost and solver report (wall-clock timings: telemetry, not state).
   TissueStepStats stats;
   // When false every step re-assembles the values and re-factorises even if the pattern is

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "common/base/check.h"
 
@@ -91,8 +90,9 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
     const double d1 = IsZoneVertex(zones, b) ? std::min(reach_m, 0.5 * len) : 0.0;
     // Stretches of constant spacing: the end zones, and for each edge-graded level l the
     // parts of the segment within edge_resolution · h_l of an edge (the edge rule's S_l),
-    // extended along the segment by the reach of the refined cells, (grading + √2) · h_l:
-    // the leaves there may be at level l + 1 (beyond it they are not).
+    // whose leaves are at level l + 1 at least. The refined cells reach on along the tool
+    // (up to (grading + √2) · h_l) but spacing the points by them there was measured to
+    // stiffen the bar (locking: +0.3 % for a bar ending 4 mm from an edge), so not.
     constexpr int kMaxEdgeLevels = 8;
     std::array<double, kMaxEdgeLevels> lo{}, hi{};  // outside [lo, hi]: in the extended S_l
     std::array<double, 4 + 2 * kMaxEdgeLevels> breaks{};
@@ -106,12 +106,11 @@ int PlaceToolPoints(const TissueModel& model, const EndZones& zones, int level,
       const int l = zones.level + j;
       const double h_l = std::max(model.CellSizeX_m(l), model.CellSizeY_m(l));
       const double m = model.def.edge_resolution * h_l;
-      const double ext = (model.def.grading + std::numbers::sqrt2) * h_l;
       double u0 = 0, u1 = 0;
       if (2 * m < std::min(lx, ly) &&
           ClipSegmentToBox(a.x(), a.y(), b.x(), b.y(), m, m, lx - m, ly - m, &u0, &u1)) {
-        lo[j] = u0 > 0 ? u0 * len + ext : -1.0;
-        hi[j] = u1 < 1 ? u1 * len - ext : 2 * len;
+        lo[j] = u0 > 0 ? u0 * len : -1.0;
+        hi[j] = u1 < 1 ? u1 * len : 2 * len;
       } else {  // the whole segment is near an edge
         lo[j] = 2 * len;
         hi[j] = -1.0;
