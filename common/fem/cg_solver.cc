@@ -24,16 +24,19 @@ void ApplyPreconditioner(const CsrView& a, Preconditioner preconditioner, const 
     case Preconditioner::kIc0: {
       // Multiplies by 1/L_ii (FactorIc0 keeps them): a division on the substitutions' critical
       // path cost several times a multiplication.
-      const double* l = ws.ic_vals.data();
+      const int* ptr = ws.l_ptr.data();
+      const int* cols = ws.l_cols.data();
+      const float* l = ws.l_vals.data();
       const double* inv = ws.inv_diag.data();
       for (int i = 0; i < n; ++i) {  // L y = r
         double s = r[i];
-        for (int k = a.row_ptr[i]; k < a.diag[i]; ++k) s -= l[k] * z[a.cols[k]];
+        for (int k = ptr[i]; k < ptr[i + 1]; ++k) s -= static_cast<double>(l[k]) * z[cols[k]];
         z[i] = s * inv[i];
       }
       for (int i = n - 1; i >= 0; --i) {  // Lᵀ z = y, column i of Lᵀ is row i of L
         z[i] *= inv[i];
-        for (int k = a.row_ptr[i]; k < a.diag[i]; ++k) z[a.cols[k]] -= l[k] * z[i];
+        const double zi = z[i];
+        for (int k = ptr[i]; k < ptr[i + 1]; ++k) z[cols[k]] -= static_cast<double>(l[k]) * zi;
       }
       return;
     }
@@ -58,6 +61,9 @@ CgWorkspace MakeCgWorkspace(int max_n, int max_nnz) {
   ws.q.resize(max_n);
   ws.inv_diag.resize(max_n);
   ws.ic_vals.resize(max_nnz);
+  ws.l_ptr.resize(max_n + 1);
+  ws.l_cols.resize(max_nnz);
+  ws.l_vals.resize(max_nnz);
   return ws;
 }
 
@@ -96,6 +102,15 @@ bool FactorIc0(const CsrView& a, CgWorkspace& ws) {
     l[a.diag[i]] = std::sqrt(d);
     ws.inv_diag[i] = 1.0 / l[a.diag[i]];
   }
+  int packed = 0;
+  for (int i = 0; i < a.n; ++i) {
+    ws.l_ptr[i] = packed;
+    for (int k = a.row_ptr[i]; k < a.diag[i]; ++k) {
+      ws.l_cols[packed] = a.cols[k];
+      ws.l_vals[packed++] = static_cast<float>(l[k]);
+    }
+  }
+  ws.l_ptr[a.n] = packed;
   return true;
 }
 

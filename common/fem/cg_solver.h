@@ -26,6 +26,12 @@ struct CgWorkspace {
   std::vector<double> r, z, p, q;  // [max_n]
   std::vector<double> ic_vals;     // [max_nnz] IC(0) factor L on A's lower pattern
   std::vector<double> inv_diag;    // [max_n] Jacobi: 1 / A_ii; IC(0): 1 / L_ii
+  // L's strictly lower entries packed row by row for the substitutions, in single precision:
+  // half the bytes streamed per application (the preconditioner need not be exact; it stays
+  // a fixed symmetric operator, so PCG is unchanged in kind).
+  std::vector<int> l_ptr;     // [max_n + 1]
+  std::vector<int> l_cols;    // [max_nnz]
+  std::vector<float> l_vals;  // [max_nnz]
 };
 CgWorkspace MakeCgWorkspace(int max_n, int max_nnz);
 
