@@ -11,6 +11,7 @@
 #include "instructor/console_server.h"
 #include "instructor/cue_spec.h"
 #include "instructor/instructor.h"
+#include "instructor/scores_writer.h"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -48,6 +49,16 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--record", o.record_file,
                  "record the session (every station's topics, the cues sent) to this new SQLite "
                  "file; see microdex-replay");
+  std::string db_url, course, experiment_file;
+  app.add_option("--db", db_url,
+                 "scores database: an SQLite file (one per course; created when missing) or "
+                 "postgresql://USER@HOST:PORT/DBNAME");
+  app.add_option("--course", course,
+                 "course name of the sessions in the scores database (default: the DDS "
+                 "partition, else 'default')");
+  app.add_option("--experiment", experiment_file,
+                 "run the cue experiment of this YAML file (needs --db): assigns the trainees "
+                 "to conditions, sends each trial's cues; stops when every trial is scored");
   app.add_option("--security", security, "(not available in this build)");
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-instructor")) {
@@ -81,6 +92,24 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 2;
   }
 
+  instructor::ScoresWriterOptions scores_options;
+  if (!experiment_file.empty() && db_url.empty()) {
+    std::fprintf(stderr, "microdex-instructor: --experiment: needs --db URL\n");
+    return 2;
+  }
+  if (!experiment_file.empty()) {
+    try {
+      scores_options.experiment = scores::ReadExperiment(experiment_file);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "microdex-instructor: %s\n", e.what());
+      return 2;
+    }
+  }
+  scores_options.url = db_url;
+  scores_options.course =
+      !course.empty() ? course : (o.dds.partition.empty() ? "default" : o.dds.partition);
+  scores_options.recording = o.record_file;
+
   stop_signals.Watch(g_stop);
 
   try {
@@ -90,6 +119,16 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
       web = std::make_unique<instructor::ConsoleServer>(console, http_address, http_port,
                                                         instructor::DefaultWebDir());
       std::printf("console: http://%s:%u/\n", http_address.c_str(), unsigned{web->port()});
+    }
+    std::unique_ptr<instructor::ScoresWriter> scores_db;
+    if (!db_url.empty()) {
+      scores_db = std::make_unique<instructor::ScoresWriter>(scores_options, console);
+      std::printf("scores database: %s (course %s)\n", scores::RedactUrl(db_url).c_str(),
+                  scores_options.course.c_str());
+      for (const auto& [trainee, condition] : scores_db->assignment()) {
+        std::printf("experiment %s: %s -> %s\n", scores_options.experiment->name.c_str(),
+                    trainee.c_str(), condition.c_str());
+      }
     }
     const std::int64_t start = instructor::MonotonicNowNs();
     std::int64_t next_table = start + static_cast<std::int64_t>(table_period_s * 1e9);
@@ -111,7 +150,13 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
           sent[i] = true;
         }
       }
-      for (const auto& e : console.TakeEvents()) {
+      const std::vector<net::TaskEvent> events = console.TakeEvents();
+      if (scores_db) {
+        for (const std::string& line : scores_db->Update(console.Stations(), events)) {
+          std::printf("[%7.3f] %s\n", t, line.c_str());
+        }
+      }
+      for (const auto& e : events) {
         if (e.kind == net::TaskEventKind::kContactBegin ||
             e.kind == net::TaskEventKind::kContactEnd) {
           continue;  // in the table's contact count; too many to list
@@ -129,8 +174,14 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
       }
       std::fflush(stdout);
       if (g_stop || (duration_s > 0 && t >= duration_s)) break;
+      if (scores_db && scores_db->ExperimentDone()) {
+        std::printf("[%7.3f] experiment %s: every trial scored\n", t,
+                    scores_options.experiment->name.c_str());
+        break;
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
+    if (scores_db) scores_db->Finish(console.Stations());
     const std::int64_t now = instructor::MonotonicNowNs();
     std::printf("--- final\n%s", instructor::FormatStationTable(console.Stations(), now).c_str());
     for (const auto& v : console.Stations()) {

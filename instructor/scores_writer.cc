@@ -1,0 +1,198 @@
+#include "instructor/scores_writer.h"
+
+#include <time.h>
+
+#include <cstdio>
+
+#include "common/scores/scores_store.h"
+
+namespace microdex::instructor {
+namespace {
+
+std::int64_t RealtimeNowNs() {
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::string FileName(const std::string& path) {
+  const auto slash = path.rfind('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+// A live score is written at most this often (the final one at once).
+constexpr std::int64_t kLiveScorePeriod_ns = 1'000'000'000;
+
+}  // namespace
+
+ScoresWriter::ScoresWriter(const ScoresWriterOptions& options, Instructor& console)
+    : options_(options), console_(console), db_(scores::ScoresDb::Open(options.url)) {
+  if (!options_.experiment) return;
+  const scores::ExperimentDef& e = *options_.experiment;
+  assignment_ = scores::AssignConditions(e);
+  scores::ExperimentRow row;
+  row.name = e.name;
+  row.file = e.file;
+  row.scene = e.scene;
+  row.seed = e.seed;
+  row.trials_per_trainee = e.trials_per_trainee;
+  for (const auto& c : e.conditions) {
+    std::string cues;
+    for (const auto& s : c.cue_specs) cues += (cues.empty() ? "" : ", ") + s;
+    row.conditions.push_back({c.name, cues});
+  }
+  for (const auto& [trainee, condition] : assignment_)
+    row.assignments.emplace_back(trainee, condition);
+  scores::SaveExperiment(*db_, row);
+  // Trials already finished (an instructor restarted in the middle of the experiment).
+  for (const auto& s : scores::LoadScoredSessions(*db_, "", e.name)) {
+    if (s.is_final) ++finished_trials_[s.trainee];
+  }
+}
+
+bool ScoresWriter::ExperimentDone() const {
+  if (!options_.experiment) return false;
+  for (const auto& [trainee, condition] : assignment_) {
+    auto it = finished_trials_.find(trainee);
+    if (it == finished_trials_.end() || it->second < options_.experiment->trials_per_trainee) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void ScoresWriter::SaveScoreOf(const StationView& v, Tracked& t) {
+  if (!v.score.latest || v.score.latest->header.session_id != t.session) return;
+  const net::Score& s = *v.score.latest;
+  if (t.score_final) return;
+  const std::int64_t now = RealtimeNowNs();
+  if (!s.is_final && s.header.step == t.score_step) return;
+  if (!s.is_final && now - t.score_saved_ns < kLiveScorePeriod_ns && !t.ended) return;
+  scores::ScoreRow r;
+  r.is_final = s.is_final;
+  r.step = s.header.step;
+  r.score = s.score;
+  r.task = s.task;
+  r.outcome = s.outcome;
+  r.progress = s.progress;
+  r.duration_s = s.duration_s;
+  r.time_in_contact_s = s.time_in_contact_s;
+  r.contacts = s.contacts;
+  r.tremor_rms_m = s.tremor_rms_m;
+  r.deviation_mean_m = s.deviation_mean_m;
+  r.received_ns = now;
+  for (const net::ScoreTerm& term : s.terms) {
+    r.terms.push_back({term.metric, term.value, term.limit, term.weight, term.points});
+  }
+  scores::SaveScore(*db_, t.session, r);
+  t.score_step = s.header.step;
+  t.score_saved_ns = now;
+  if (s.is_final) {
+    t.score_final = true;
+    if (t.counted) ++finished_trials_[v.info.trainee];
+  }
+}
+
+std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& stations,
+                                              const std::vector<net::TaskEvent>& events) {
+  std::vector<std::string> lines;
+  for (const StationView& v : stations) {
+    const std::string& session = v.info.header.session_id;
+    if (session.empty()) continue;  // no StationInfo yet
+    Tracked& t = stations_[v.info.header.station_id];
+    if (t.session != session) {
+      if (!t.session.empty() && !t.ended) {
+        scores::EndSession(*db_, t.session, RealtimeNowNs());
+      }
+      t = Tracked{};
+      t.session = session;
+      scores::SessionRow row;
+      row.id = session;
+      row.course = options_.course;
+      row.trainee = v.info.trainee.empty() ? "(unnamed)" : v.info.trainee;
+      row.scene = FileName(v.info.scene);
+      row.scene_path = v.info.scene;
+      row.station = v.info.header.station_id;
+      row.seed = v.info.seed;
+      row.skill = v.info.skill;
+      row.device = v.info.device;
+      row.instructor_session = console_.session_id();
+      row.recording = options_.recording;
+      row.started_ns = v.info.header.stamp_ns ? v.info.header.stamp_ns : RealtimeNowNs();
+      const scores::CueCondition* condition = nullptr;
+      if (options_.experiment) {
+        const scores::ExperimentDef& e = *options_.experiment;
+        auto a = assignment_.find(row.trainee);
+        const int done = scores::CountTrials(*db_, e.name, row.trainee);
+        if (a == assignment_.end()) {
+          lines.push_back("experiment " + e.name + ": trainee '" + row.trainee + "' of station " +
+                          row.station + " is not in the experiment; no cues sent");
+        } else if (FileName(e.scene) != row.scene) {
+          lines.push_back("experiment " + e.name + ": station " + row.station + " runs " +
+                          row.scene + ", not the experiment's " + FileName(e.scene) +
+                          "; not counted as a trial");
+        } else if (done >= e.trials_per_trainee) {
+          lines.push_back("experiment " + e.name + ": trainee '" + row.trainee + "' has done all " +
+                          std::to_string(e.trials_per_trainee) + " trials; not counted");
+        } else {
+          row.experiment = e.name;
+          row.condition = a->second;
+          row.trial = done + 1;
+          t.counted = true;
+          for (const auto& c : e.conditions) {
+            if (c.name == a->second) condition = &c;
+          }
+        }
+      }
+      scores::AddSession(*db_, row);
+      sessions_.insert(session);
+      if (condition) {
+        // The condition's cues, on receipt: the trial starts with them.
+        for (const cues::CueArg& c : condition->cues) {
+          console_.SendCue(row.station, c.kind, c.param, 0, c.off);
+        }
+        lines.push_back("experiment " + row.experiment + ": " + row.trainee + " trial " +
+                        std::to_string(row.trial) + "/" +
+                        std::to_string(options_.experiment->trials_per_trainee) + ", condition " +
+                        row.condition + " (" + std::to_string(condition->cues.size()) +
+                        " cues sent to " + row.station + ")");
+      }
+    }
+    SaveScoreOf(v, t);
+    if (!t.ended && v.presence != Presence::kAlive) {
+      t.ended = true;
+      SaveScoreOf(v, t);
+      scores::EndSession(*db_, t.session, RealtimeNowNs());
+    }
+  }
+  // Events of stored sessions; the others wait for their session's StationInfo.
+  std::vector<net::TaskEvent> all;
+  all.swap(pending_events_);
+  all.insert(all.end(), events.begin(), events.end());
+  std::map<std::string, std::vector<scores::EventRow>> by_session;
+  const std::int64_t now = RealtimeNowNs();
+  for (net::TaskEvent& e : all) {
+    if (!sessions_.count(e.header.session_id)) {
+      if (pending_events_.size() < 100'000) pending_events_.push_back(std::move(e));
+      continue;
+    }
+    by_session[e.header.session_id].push_back(
+        {e.header.step, net::TaskEventKindName(e.kind), e.cue_id, e.value, e.text, now});
+  }
+  for (const auto& [session, rows] : by_session) scores::AddEvents(*db_, session, rows);
+  return lines;
+}
+
+void ScoresWriter::Finish(const std::vector<StationView>& stations) {
+  for (const StationView& v : stations) {
+    auto it = stations_.find(v.info.header.station_id);
+    if (it == stations_.end()) continue;
+    Tracked& t = it->second;
+    if (t.ended) continue;
+    t.ended = true;
+    SaveScoreOf(v, t);
+    scores::EndSession(*db_, t.session, RealtimeNowNs());
+  }
+}
+
+}  // namespace microdex::instructor

@@ -1,0 +1,70 @@
+#pragma once
+// Writes what the instructor sees into the scores database (microdex-instructor --db URL):
+// each station run as a session (its trainee from StationInfo, the course, the scene), its
+// score (the live one, replaced until the final one arrives) and its task events. With an
+// experiment (--experiment FILE.yaml) it also stores the experiment and its assignment, and at
+// each trial's start (a station of an assigned trainee appearing with a new session) sends
+// that station its condition's cues and tags the session with experiment, condition and trial.
+//
+// Called from microdex-instructor's main loop (not the DDS thread): the database may be a
+// remote PostgreSQL server.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/scores/experiment.h"
+#include "common/scores/scores_db.h"
+#include "instructor/instructor.h"
+
+namespace microdex::instructor {
+
+struct ScoresWriterOptions {
+  std::string url;                 // --db
+  std::string course = "default";  // --course
+  std::string recording;           // --record file ("" none)
+  std::optional<scores::ExperimentDef> experiment;
+};
+
+class ScoresWriter {
+ public:
+  // Opens the database (migrating it) and stores the experiment. Throws ScoresDbError.
+  ScoresWriter(const ScoresWriterOptions& options, Instructor& console);
+
+  // One pass: new sessions (and their trial cues), scores, then `events` (the task events
+  // taken from the console since the last pass). Returns one line per thing worth printing.
+  std::vector<std::string> Update(const std::vector<StationView>& stations,
+                                  const std::vector<net::TaskEvent>& events);
+  // Writes the latest score of every session and marks the sessions ended.
+  void Finish(const std::vector<StationView>& stations);
+
+  // With an experiment: every trainee has a final score in each of its trials.
+  bool ExperimentDone() const;
+  const std::map<std::string, std::string>& assignment() const { return assignment_; }
+
+ private:
+  struct Tracked {
+    std::string session;
+    std::uint64_t score_step = 0;
+    bool score_final = false;
+    bool counted = false;  // a trial of the experiment
+    bool ended = false;
+    std::int64_t score_saved_ns = 0;
+  };
+  void SaveScoreOf(const StationView& v, Tracked& t);
+
+  ScoresWriterOptions options_;
+  Instructor& console_;
+  std::unique_ptr<scores::ScoresDb> db_;
+  std::map<std::string, std::string> assignment_;  // trainee → condition
+  std::map<std::string, Tracked> stations_;        // station id → its current session
+  std::set<std::string> sessions_;                 // sessions stored
+  std::vector<net::TaskEvent> pending_events_;     // of sessions not stored yet
+  std::map<std::string, int> finished_trials_;     // trainee → trials with a final score
+};
+
+}  // namespace microdex::instructor
