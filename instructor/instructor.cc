@@ -13,6 +13,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include "common/base/check.h"
 #include "common/net/convert.h"
@@ -315,6 +316,10 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
                                       1e-3);
     }
     v.last_heard_ns = now;
+    if constexpr (std::is_same_v<Plain, net::Score>) {
+      // For the scores database (a few per station run; bounded for a console without one).
+      if (p.is_final && final_scores_.size() < 10000) final_scores_.push_back(p);
+    }
     Mirror<Plain>& mir = v.*mirror;
     mir.latest = std::move(p);
     mir.received_ns = now;
@@ -429,6 +434,13 @@ std::vector<net::TaskEvent> Instructor::TakeEvents() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<net::TaskEvent> out;
   out.swap(new_events_);
+  return out;
+}
+
+std::vector<net::Score> Instructor::TakeFinalScores() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<net::Score> out;
+  out.swap(final_scores_);
   return out;
 }
 

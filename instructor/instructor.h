@@ -114,6 +114,10 @@ class Instructor {
   // Task events of every station received since the last call, in arrival order.
   std::vector<net::TaskEvent> TakeEvents();
 
+  // The final scores received since the last call (every one, even when a station's next
+  // session has replaced it in the registry's mirror), in arrival order.
+  std::vector<net::Score> TakeFinalScores();
+
   // Latency samples so far (record_latency only); clears them.
   LatencySamples TakeLatency();
 
@@ -154,6 +158,7 @@ class Instructor {
   std::map<std::string, StationView> stations_;
   std::map<std::string, std::string> writer_to_station_;  // StationInfo writer GUID → id
   std::vector<net::TaskEvent> new_events_;
+  std::vector<net::Score> final_scores_;
   std::vector<net::CueCommand> queued_cues_;
   LatencySamples latency_;
 

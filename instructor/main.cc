@@ -152,7 +152,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
       }
       const std::vector<net::TaskEvent> events = console.TakeEvents();
       if (scores_db) {
-        for (const std::string& line : scores_db->Update(console.Stations(), events)) {
+        for (const std::string& line :
+             scores_db->Update(console.Stations(), events, console.TakeFinalScores())) {
           std::printf("[%7.3f] %s\n", t, line.c_str());
         }
       }

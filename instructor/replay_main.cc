@@ -11,9 +11,11 @@
 #include <thread>
 
 #include "common/net/app_cli.h"
+#include "common/scores/experiment.h"
 #include "instructor/replay_export.h"
 #include "instructor/replay_player.h"
 #include "instructor/replay_resim.h"
+#include "instructor/scores_report.h"
 
 namespace {
 
@@ -73,7 +75,19 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   CLI::App app{
       "microdex-replay: replays a recorded session (microdex-instructor --record) over DDS, "
       "re-simulates it and checks every state hash, or exports it"};
-  app.add_option("file", file, "the recording (SQLite)")->required();
+  app.add_option("file", file, "the recording (SQLite); not with --db");
+  std::string db_url, curves_dir, experiment, report_dir, course;
+  app.add_option("--db", db_url,
+                 "scores database (SQLite file or postgresql:// URL) for --curves or "
+                 "--experiment, instead of a recording");
+  app.add_option("--curves", curves_dir,
+                 "--db: write each trainee's learning curve (score by session, per scene) as "
+                 "PNG into this folder");
+  app.add_option("--course", course, "--curves: only this course's sessions");
+  app.add_option("--experiment", experiment,
+                 "--db: report on this experiment (its YAML file, or its name): per-condition "
+                 "learning curves (PNG) and effect sizes (Markdown), into --report DIR");
+  app.add_option("--report", report_dir, "--experiment: output folder (default: report)");
   app.add_option("--speed", speed, "replay speed (1: real time; 4: four times faster)");
   app.add_option("--from", from_s, "start this many seconds into the session");
   app.add_option("--to", to_s, "stop this many seconds into the session");
@@ -103,6 +117,44 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   if ((from_s && !(*from_s >= 0)) || (to_s && !(*to_s >= 0)) ||
       (from_s && to_s && *to_s < *from_s)) {
     std::fprintf(stderr, "microdex-replay: --from/--to: expected 0 <= from <= to (seconds)\n");
+    return 2;
+  }
+  if (!db_url.empty()) {
+    if (!file.empty()) {
+      std::fprintf(stderr, "microdex-replay: --db: give either a recording or --db, not both\n");
+      return 2;
+    }
+    if (curves_dir.empty() && experiment.empty()) {
+      std::fprintf(stderr, "microdex-replay: --db: expected --curves DIR and/or --experiment\n");
+      return 2;
+    }
+    try {
+      const auto db = scores::ScoresDb::Open(db_url);
+      if (!curves_dir.empty()) {
+        for (const auto& f : instructor::WriteLearningCurves(*db, course, curves_dir)) {
+          std::printf("%s\n", f.c_str());
+        }
+      }
+      if (!experiment.empty()) {
+        std::string name = experiment;
+        const auto ends_with = [&](const char* ext) {
+          const std::string e(ext);
+          return name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0;
+        };
+        if (ends_with(".yaml") || ends_with(".yml")) name = scores::ReadExperiment(experiment).name;
+        const auto r = instructor::WriteExperimentReport(
+            *db, name, report_dir.empty() ? std::string("report") : report_dir);
+        for (const auto& f : r.files) std::printf("%s\n", f.c_str());
+        std::printf("best condition: %s\n", r.best.c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "microdex-replay: %s\n", e.what());
+      return 2;
+    }
+    return 0;
+  }
+  if (file.empty()) {
+    std::fprintf(stderr, "microdex-replay: expected a recording FILE.db (or --db URL)\n");
     return 2;
   }
   stop_signals.Watch(g_stop);

@@ -48,6 +48,9 @@ ScoresWriter::ScoresWriter(const ScoresWriterOptions& options, Instructor& conso
   for (const auto& s : scores::LoadScoredSessions(*db_, "", e.name)) {
     if (s.is_final) ++finished_trials_[s.trainee];
   }
+  for (const auto& [trainee, condition] : assignment_) {
+    started_trials_[trainee] = scores::CountTrials(*db_, e.name, trainee);
+  }
 }
 
 bool ScoresWriter::ExperimentDone() const {
@@ -61,13 +64,16 @@ bool ScoresWriter::ExperimentDone() const {
   return true;
 }
 
-void ScoresWriter::SaveScoreOf(const StationView& v, Tracked& t) {
-  if (!v.score.latest || v.score.latest->header.session_id != t.session) return;
-  const net::Score& s = *v.score.latest;
+ScoresWriter::Tracked* ScoresWriter::FindSession(const std::string& session) {
+  for (auto& [station, t] : stations_) {
+    if (t.session == session) return &t;
+  }
+  return nullptr;
+}
+
+void ScoresWriter::SaveScore(const net::Score& s, Tracked& t) {
   if (t.score_final) return;
   const std::int64_t now = RealtimeNowNs();
-  if (!s.is_final && s.header.step == t.score_step) return;
-  if (!s.is_final && now - t.score_saved_ns < kLiveScorePeriod_ns && !t.ended) return;
   scores::ScoreRow r;
   r.is_final = s.is_final;
   r.step = s.header.step;
@@ -89,80 +95,109 @@ void ScoresWriter::SaveScoreOf(const StationView& v, Tracked& t) {
   t.score_saved_ns = now;
   if (s.is_final) {
     t.score_final = true;
-    if (t.counted) ++finished_trials_[v.info.trainee];
+    if (t.counted) ++finished_trials_[t.trainee];
   }
 }
 
 std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& stations,
-                                              const std::vector<net::TaskEvent>& events) {
+                                              const std::vector<net::TaskEvent>& events,
+                                              const std::vector<net::Score>& final_scores) {
   std::vector<std::string> lines;
+  // New sessions: each trial's cues go out first, the database writes after.
+  std::vector<scores::SessionRow> new_sessions;
+  std::vector<std::string> ended;
   for (const StationView& v : stations) {
     const std::string& session = v.info.header.session_id;
     if (session.empty()) continue;  // no StationInfo yet
     Tracked& t = stations_[v.info.header.station_id];
-    if (t.session != session) {
-      if (!t.session.empty() && !t.ended) {
-        scores::EndSession(*db_, t.session, RealtimeNowNs());
-      }
-      t = Tracked{};
-      t.session = session;
-      scores::SessionRow row;
-      row.id = session;
-      row.course = options_.course;
-      row.trainee = v.info.trainee.empty() ? "(unnamed)" : v.info.trainee;
-      row.scene = FileName(v.info.scene);
-      row.scene_path = v.info.scene;
-      row.station = v.info.header.station_id;
-      row.seed = v.info.seed;
-      row.skill = v.info.skill;
-      row.device = v.info.device;
-      row.instructor_session = console_.session_id();
-      row.recording = options_.recording;
-      row.started_ns = v.info.header.stamp_ns ? v.info.header.stamp_ns : RealtimeNowNs();
-      const scores::CueCondition* condition = nullptr;
-      if (options_.experiment) {
-        const scores::ExperimentDef& e = *options_.experiment;
-        auto a = assignment_.find(row.trainee);
-        const int done = scores::CountTrials(*db_, e.name, row.trainee);
-        if (a == assignment_.end()) {
-          lines.push_back("experiment " + e.name + ": trainee '" + row.trainee + "' of station " +
-                          row.station + " is not in the experiment; no cues sent");
-        } else if (FileName(e.scene) != row.scene) {
-          lines.push_back("experiment " + e.name + ": station " + row.station + " runs " +
-                          row.scene + ", not the experiment's " + FileName(e.scene) +
-                          "; not counted as a trial");
-        } else if (done >= e.trials_per_trainee) {
-          lines.push_back("experiment " + e.name + ": trainee '" + row.trainee + "' has done all " +
-                          std::to_string(e.trials_per_trainee) + " trials; not counted");
-        } else {
-          row.experiment = e.name;
-          row.condition = a->second;
-          row.trial = done + 1;
-          t.counted = true;
-          for (const auto& c : e.conditions) {
-            if (c.name == a->second) condition = &c;
-          }
+    if (t.session == session) continue;
+    if (!t.session.empty() && !t.ended) ended.push_back(t.session);
+    t = Tracked{};
+    t.session = session;
+    scores::SessionRow row;
+    row.id = session;
+    row.course = options_.course;
+    row.trainee = v.info.trainee.empty() ? "(unnamed)" : v.info.trainee;
+    t.trainee = row.trainee;
+    row.scene = FileName(v.info.scene);
+    row.scene_path = v.info.scene;
+    row.station = v.info.header.station_id;
+    row.seed = v.info.seed;
+    row.skill = v.info.skill;
+    row.device = v.info.device;
+    row.instructor_session = console_.session_id();
+    row.recording = options_.recording;
+    row.started_ns = v.info.header.stamp_ns ? v.info.header.stamp_ns : RealtimeNowNs();
+    if (options_.experiment) {
+      const scores::ExperimentDef& e = *options_.experiment;
+      auto a = assignment_.find(row.trainee);
+      int& done = started_trials_[row.trainee];
+      if (a == assignment_.end()) {
+        lines.push_back("experiment " + e.name + ": trainee '" + row.trainee + "' of station " +
+                        row.station + " is not in the experiment; no cues sent");
+      } else if (FileName(e.scene) != row.scene) {
+        lines.push_back("experiment " + e.name + ": station " + row.station + " runs " + row.scene +
+                        ", not the experiment's " + FileName(e.scene) + "; not counted as a trial");
+      } else if (done >= e.trials_per_trainee) {
+        lines.push_back("experiment " + e.name + ": trainee '" + row.trainee + "' has done all " +
+                        std::to_string(e.trials_per_trainee) + " trials; not counted");
+      } else {
+        row.experiment = e.name;
+        row.condition = a->second;
+        row.trial = ++done;
+        t.counted = true;
+        const scores::CueCondition* condition = nullptr;
+        for (const auto& c : e.conditions) {
+          if (c.name == a->second) condition = &c;
         }
-      }
-      scores::AddSession(*db_, row);
-      sessions_.insert(session);
-      if (condition) {
         // The condition's cues, on receipt: the trial starts with them.
         for (const cues::CueArg& c : condition->cues) {
           console_.SendCue(row.station, c.kind, c.param, 0, c.off);
         }
         lines.push_back("experiment " + row.experiment + ": " + row.trainee + " trial " +
-                        std::to_string(row.trial) + "/" +
-                        std::to_string(options_.experiment->trials_per_trainee) + ", condition " +
-                        row.condition + " (" + std::to_string(condition->cues.size()) +
-                        " cues sent to " + row.station + ")");
+                        std::to_string(row.trial) + "/" + std::to_string(e.trials_per_trainee) +
+                        ", condition " + row.condition + " (" +
+                        std::to_string(condition->cues.size()) + " cues sent to " + row.station +
+                        ")");
       }
     }
-    SaveScoreOf(v, t);
+    new_sessions.push_back(std::move(row));
+  }
+  const std::int64_t now = RealtimeNowNs();
+  for (const std::string& session : ended) scores::EndSession(*db_, session, now);
+  for (const scores::SessionRow& row : new_sessions) {
+    scores::AddSession(*db_, row);
+    sessions_.insert(row.id);
+  }
+  // Final scores (every one the console received), then the live ones of the registry.
+  std::vector<net::Score> finals;
+  finals.swap(pending_finals_);
+  finals.insert(finals.end(), final_scores.begin(), final_scores.end());
+  for (const net::Score& s : finals) {
+    Tracked* t = FindSession(s.header.session_id);
+    if (t == nullptr) {
+      if (!sessions_.count(s.header.session_id) && pending_finals_.size() < 10'000) {
+        pending_finals_.push_back(s);  // its StationInfo has not come yet
+      }
+      continue;
+    }
+    SaveScore(s, *t);
+  }
+  for (const StationView& v : stations) {
+    auto it = stations_.find(v.info.header.station_id);
+    if (it == stations_.end()) continue;
+    Tracked& t = it->second;
+    if (v.score.latest && v.score.latest->header.session_id == t.session && !t.score_final) {
+      const net::Score& s = *v.score.latest;
+      const bool leaving = v.presence != Presence::kAlive;
+      if (s.header.step != t.score_step &&
+          (leaving || now - t.score_saved_ns >= kLiveScorePeriod_ns)) {
+        SaveScore(s, t);
+      }
+    }
     if (!t.ended && v.presence != Presence::kAlive) {
       t.ended = true;
-      SaveScoreOf(v, t);
-      scores::EndSession(*db_, t.session, RealtimeNowNs());
+      scores::EndSession(*db_, t.session, now);
     }
   }
   // Events of stored sessions; the others wait for their session's StationInfo.
@@ -170,7 +205,6 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
   all.swap(pending_events_);
   all.insert(all.end(), events.begin(), events.end());
   std::map<std::string, std::vector<scores::EventRow>> by_session;
-  const std::int64_t now = RealtimeNowNs();
   for (net::TaskEvent& e : all) {
     if (!sessions_.count(e.header.session_id)) {
       if (pending_events_.size() < 100'000) pending_events_.push_back(std::move(e));
@@ -188,9 +222,11 @@ void ScoresWriter::Finish(const std::vector<StationView>& stations) {
     auto it = stations_.find(v.info.header.station_id);
     if (it == stations_.end()) continue;
     Tracked& t = it->second;
+    if (v.score.latest && v.score.latest->header.session_id == t.session) {
+      SaveScore(*v.score.latest, t);
+    }
     if (t.ended) continue;
     t.ended = true;
-    SaveScoreOf(v, t);
     scores::EndSession(*db_, t.session, RealtimeNowNs());
   }
 }

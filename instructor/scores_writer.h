@@ -35,10 +35,13 @@ class ScoresWriter {
   // Opens the database (migrating it) and stores the experiment. Throws ScoresDbError.
   ScoresWriter(const ScoresWriterOptions& options, Instructor& console);
 
-  // One pass: new sessions (and their trial cues), scores, then `events` (the task events
-  // taken from the console since the last pass). Returns one line per thing worth printing.
+  // One pass: new sessions (their trial cues sent first, before any database write), the
+  // final scores taken from the console (Instructor::TakeFinalScores), the live scores of the
+  // registry, then `events` (the task events taken from the console since the last pass).
+  // Returns one line per thing worth printing.
   std::vector<std::string> Update(const std::vector<StationView>& stations,
-                                  const std::vector<net::TaskEvent>& events);
+                                  const std::vector<net::TaskEvent>& events,
+                                  const std::vector<net::Score>& final_scores);
   // Writes the latest score of every session and marks the sessions ended.
   void Finish(const std::vector<StationView>& stations);
 
@@ -49,13 +52,16 @@ class ScoresWriter {
  private:
   struct Tracked {
     std::string session;
+    std::string trainee;
     std::uint64_t score_step = 0;
     bool score_final = false;
     bool counted = false;  // a trial of the experiment
     bool ended = false;
     std::int64_t score_saved_ns = 0;
   };
-  void SaveScoreOf(const StationView& v, Tracked& t);
+  void SaveScore(const net::Score& s, Tracked& t);
+  // The tracked run of a session ("" station when not tracked).
+  Tracked* FindSession(const std::string& session);
 
   ScoresWriterOptions options_;
   Instructor& console_;
@@ -64,6 +70,8 @@ class ScoresWriter {
   std::map<std::string, Tracked> stations_;        // station id → its current session
   std::set<std::string> sessions_;                 // sessions stored
   std::vector<net::TaskEvent> pending_events_;     // of sessions not stored yet
+  std::vector<net::Score> pending_finals_;         // likewise
+  std::map<std::string, int> started_trials_;      // trainee → trials started
   std::map<std::string, int> finished_trials_;     // trainee → trials with a final score
 };
 
