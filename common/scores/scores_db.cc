@@ -135,6 +135,18 @@ std::string Head(const std::string& sql) {
   return h;
 }
 
+// libpq's messages span lines (and indent with tabs): one line for the apps' one-line errors.
+void OneLine(std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '\n' || c == '\t' || c == '\r') c = ' ';
+    if (c == ' ' && (out.empty() || out.back() == ' ')) continue;
+    out += c;
+  }
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  s = out;
+}
+
 bool StartsWith(const std::string& s, std::string_view prefix) {
   return s.compare(0, prefix.size(), prefix) == 0;
 }
@@ -244,10 +256,7 @@ class PostgresDb final : public ScoresDb {
     conn_ = PQconnectdb(info.c_str());
     if (conn_ == nullptr || PQstatus(conn_) != CONNECTION_OK) {
       std::string why = conn_ ? PQerrorMessage(conn_) : "out of memory";
-      while (!why.empty() && (why.back() == '\n' || why.back() == ' ')) why.pop_back();
-      for (char& c : why) {
-        if (c == '\n') c = ' ';
-      }
+      OneLine(why);
       PQfinish(conn_);
       conn_ = nullptr;
       throw ScoresDbError(name() + ": cannot connect: " + why);
@@ -282,10 +291,7 @@ class PostgresDb final : public ScoresDb {
     if (s == PGRES_COMMAND_OK || s == PGRES_TUPLES_OK) return;
     std::string why = r ? PQresultErrorMessage(r) : PQerrorMessage(conn_);
     PQclear(r);
-    while (!why.empty() && (why.back() == '\n' || why.back() == ' ')) why.pop_back();
-    for (char& c : why) {
-      if (c == '\n') c = ' ';
-    }
+    OneLine(why);
     throw ScoresDbError(name() + ": " + Head(sql) + ": " + why);
   }
   void Run(const std::string& sql, const std::vector<SqlValue>& params, std::vector<SqlRow>* rows) {

@@ -216,3 +216,53 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
 
 }  // namespace
 }  // namespace microdex
+
+namespace microdex {
+namespace {
+
+// Runs a binary to its exit; returns its status, its output in `out`.
+int RunTool(const std::string& binary, const std::vector<std::string>& args, const std::string& log,
+            std::string* out) {
+  const pid_t pid = testing::Spawn(binary, args, log);
+  const auto status = testing::WaitExit(pid, std::chrono::seconds(30));
+  if (!status) testing::KillAll({pid});
+  *out = testing::ReadFile(log);
+  return status.value_or(-1);
+}
+
+TEST(ExperimentBadInput, MalformedFileAndUnreachableServerAreNamed) {
+  const std::string dir = TmpDir();
+  const std::string bad = dir + "/bad.yaml";
+  std::ofstream(bad) << "name: pilot\nscene: hold.yaml\ntrials_per_trainee: 2\nconditions:\n"
+                     << "  none: []\n  audio: [audio_click:7]\ntrainees: [a, b]\n";
+  std::string out;
+  EXPECT_EQ(RunTool("microdex-instructor",
+                    {"--headless", "--domain", std::to_string(kDomain), "--db", dir + "/c.db",
+                     "--experiment", bad},
+                    dir + "/bad.log", &out),
+            2);
+  EXPECT_NE(out.find(bad + ":6: conditions.audio: 'audio_click:7'"), std::string::npos) << out;
+  // --experiment without --db.
+  EXPECT_EQ(
+      RunTool("microdex-instructor", {"--headless", "--experiment", bad}, dir + "/nodb.log", &out),
+      2);
+  EXPECT_NE(out.find("--experiment: needs --db"), std::string::npos) << out;
+  // Nothing listens on port 1: the URL (password hidden) and the reason, exit 2.
+  const std::string url = "postgresql://trainer:hunter2@127.0.0.1:1/scores";
+  EXPECT_EQ(
+      RunTool("microdex-instructor",
+              {"--headless", "--domain", std::to_string(kDomain), "--duration", "1", "--db", url},
+              dir + "/pg.log", &out),
+      2);
+  EXPECT_NE(out.find("postgresql://trainer:***@127.0.0.1:1/scores: cannot connect: "),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("hunter2"), std::string::npos) << out;
+  EXPECT_EQ(RunTool("microdex-replay", {"--db", url, "--curves", dir + "/curves"},
+                    dir + "/pg_replay.log", &out),
+            2);
+  EXPECT_NE(out.find("cannot connect"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace microdex
