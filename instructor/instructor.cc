@@ -19,6 +19,8 @@
 #include "common/net/convert.h"
 #include "common/record/recorded_topics.h"
 #include "cue_commandPubSubTypes.h"
+#include "cue_overlayPubSubTypes.h"
+#include "device_forcePubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
 #include "scorePubSubTypes.h"
@@ -78,6 +80,9 @@ struct Instructor::Dds {
   dds::DataReader* telemetry = nullptr;
   dds::DataReader* events = nullptr;
   dds::DataReader* score = nullptr;
+  // Recording only (the console does not read them): nullptr without a recording.
+  dds::DataReader* overlay = nullptr;
+  dds::DataReader* force = nullptr;
   dds::DataWriter* cue = nullptr;
   dds::WaitSet waitset;
   dds::GuardCondition guard;
@@ -113,6 +118,8 @@ Instructor::Instructor(const InstructorOptions& options)
     d.types.emplace_back(new msg::CueCommandPubSubType());
     d.types.emplace_back(new msg::TaskEventPubSubType());
     d.types.emplace_back(new msg::ScorePubSubType());
+    d.types.emplace_back(new msg::CueOverlayPubSubType());
+    d.types.emplace_back(new msg::DeviceForcePubSubType());
     for (int i = 0; i < record::kTopicCount; ++i) {
       MICRODEX_CHECK(d.types[static_cast<std::size_t>(i)]->getName() ==
                      record::KnownTopics()[static_cast<std::size_t>(i)].type);
@@ -133,8 +140,17 @@ Instructor::Instructor(const InstructorOptions& options)
   d.events = d.context->CreateReader<msg::TaskEventPubSubType>(net::kTaskEventTopic);
   d.score = d.context->CreateReader<msg::ScorePubSubType>(net::kScoreTopic);
   d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
-  for (dds::DataReader* r :
-       {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry, d.events, d.score}) {
+  if (recorder_) {
+    d.overlay = d.context->CreateReader<msg::CueOverlayPubSubType>(spec(net::kCueOverlayTopic));
+    // DeviceForce is best-effort and latest-only like the mirrored states: read with the
+    // recording mirror reader's deep history so that none is replaced before it is taken.
+    net::TopicSpec force = net::kDeviceForceTopic;
+    force.reader_profile = "microdex_mirror_record_reader";
+    d.force = d.context->CreateReader<msg::DeviceForcePubSubType>(force);
+  }
+  for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry,
+                             d.events, d.score, d.overlay, d.force}) {
+    if (r == nullptr) continue;
     dds::StatusMask mask = dds::StatusMask::data_available();
     if (r == d.info) mask << dds::StatusMask::liveliness_changed();
     r->get_statuscondition().set_enabled_statuses(mask);
@@ -150,9 +166,9 @@ Instructor::~Instructor() {
   if (thread_.joinable()) thread_.join();
   Dds& d = *dds_;
   d.waitset.detach_condition(d.guard);
-  for (dds::DataReader* r :
-       {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry, d.events, d.score}) {
-    d.waitset.detach_condition(r->get_statuscondition());
+  for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry,
+                             d.events, d.score, d.overlay, d.force}) {
+    if (r != nullptr) d.waitset.detach_condition(r->get_statuscondition());
   }
   d.context.reset();
 }
@@ -207,6 +223,8 @@ void Instructor::Run() {
     TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry, "telemetry");
     HandleEvents();
     HandleScores();
+    RecordOnly<msg::CueOverlay>(dds_->overlay, record::TopicIndex::kCueOverlay);
+    RecordOnly<msg::DeviceForce>(dds_->force, record::TopicIndex::kDeviceForce);
     CheckSilence();
   }
 }
@@ -324,6 +342,17 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
     mir.latest = std::move(p);
     mir.received_ns = now;
     ++mir.count;
+  }
+}
+
+template <class Msg>
+void Instructor::RecordOnly(void* reader_ptr, record::TopicIndex topic) {
+  auto* reader = static_cast<dds::DataReader*>(reader_ptr);
+  if (reader == nullptr) return;
+  Msg m;
+  dds::SampleInfo si;
+  while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (si.valid_data) Record(static_cast<int>(topic), m, &si);
   }
 }
 

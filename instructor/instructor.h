@@ -22,6 +22,7 @@
 
 #include "common/net/dds_context.h"
 #include "common/net/messages.h"
+#include "common/record/recorded_topics.h"
 #include "common/record/recorder.h"
 
 namespace microdex::instructor {
@@ -135,6 +136,9 @@ class Instructor {
   void HandleLiveliness();
   template <class Msg, class Plain>
   void TakeAll(void* reader, Mirror<Plain> StationView::*mirror, const char* topic);
+  // Takes every sample of a topic only recorded (no mirror): CueOverlay, DeviceForce.
+  template <class Msg>
+  void RecordOnly(void* reader, record::TopicIndex topic);
   void HandleInputs();
   void HandleEvents();
   void HandleScores();

@@ -10,6 +10,8 @@
 
 #include "common/record/recorded_topics.h"
 #include "cue_commandPubSubTypes.h"
+#include "cue_overlayPubSubTypes.h"
+#include "device_forcePubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "instructor/recorded_sample.h"
 #include "needle_statePubSubTypes.h"
@@ -172,6 +174,25 @@ const TopicCsv kTopicCsv[record::kTopicCount] = {
          << std::uint8_t{m.outcome()} << m.progress() << m.duration_s() << m.time_in_contact_s()
          << std::uint32_t{m.contacts()} << m.tremor_rms_m() << m.path_length_m()
          << m.deviation_mean_m();
+       return true;
+     }},
+    {"stamp_ns,active_cues,polylines,points,labels",
+     [](std::span<const std::uint8_t> b, Row& r) {
+       msg::CueOverlay m;
+       if (!DecodeSample<msg::CueOverlayPubSubType>(b, m)) return false;
+       std::uint64_t points = 0;
+       for (const auto& p : m.polylines()) points += p.p_W().size() / 3;
+       r << std::int64_t{m.stamp_ns()} << std::uint32_t{m.active_cues()}
+         << static_cast<std::uint64_t>(m.polylines().size()) << points
+         << static_cast<std::uint64_t>(m.labels().size());
+       return true;
+     }},
+    {"stamp_ns,sample_step,sample_stamp_ns,fx,fy,fz,tx,ty,tz,fault",
+     [](std::span<const std::uint8_t> b, Row& r) {
+       msg::DeviceForce m;
+       if (!DecodeSample<msg::DeviceForcePubSubType>(b, m)) return false;
+       r << std::int64_t{m.stamp_ns()} << std::uint64_t{m.sample_step()}
+         << std::int64_t{m.sample_stamp_ns()} << m.f_D() << m.tau_D() << std::uint8_t{m.fault()};
        return true;
      }},
 };

@@ -9,6 +9,7 @@
 
 #include "common/record/recorded_topics.h"
 #include "cue_commandPubSubTypes.h"
+#include "cue_overlayPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "instructor/recorded_sample.h"
 #include "needle_statePubSubTypes.h"
@@ -59,6 +60,8 @@ class Publishers {
     writers_[TopicIndex::kTaskEvent] =
         dds.CreateWriter<msg::TaskEventPubSubType>(net::kTaskEventTopic);
     writers_[TopicIndex::kScore] = dds.CreateWriter<msg::ScorePubSubType>(net::kScoreTopic);
+    writers_[TopicIndex::kCueOverlay] =
+        dds.CreateWriter<msg::CueOverlayPubSubType>(net::kCueOverlayTopic);
   }
 
   // False when the bytes do not decode.
@@ -94,6 +97,10 @@ class Publishers {
         return Write<msg::TaskEventPubSubType, msg::TaskEvent>(m);
       case TopicIndex::kScore:
         return Write<msg::ScorePubSubType, msg::Score>(m);
+      case TopicIndex::kCueOverlay:
+        return Write<msg::CueOverlayPubSubType, msg::CueOverlay>(m);
+      case TopicIndex::kDeviceForce:
+        return true;  // never republished: it would drive a real device (filtered out before)
     }
     return false;
   }
@@ -103,7 +110,8 @@ class Publishers {
   bool WaitForReaders(std::int64_t deadline_ns, const std::atomic<bool>& stop) {
     std::vector<dds::DataWriter*> all;
     for (const auto& [t, w] : writers_) {
-      if (t != TopicIndex::kCueCommand) all.push_back(w);
+      // A console reads neither the cue commands nor (yet) the overlays.
+      if (t != TopicIndex::kCueCommand && t != TopicIndex::kCueOverlay) all.push_back(w);
     }
     for (const auto& [s, w] : inputs_) all.push_back(w);
     for (;;) {
@@ -237,6 +245,7 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
   std::int64_t reached = from_ns;
   reader.ForEach(f, [&](const record::MessageView& m) {
     if (m.topic == static_cast<int>(TopicIndex::kCueCommand) && !o.republish_cues) return true;
+    if (m.topic == static_cast<int>(TopicIndex::kDeviceForce)) return true;  // drives a device
     // Wait until the clock reaches the message (sleeping in slices, so pause and stop work).
     for (;;) {
       if (stop.load()) return false;

@@ -143,6 +143,7 @@ ExperimentReport WriteExperimentReport(scores::ScoresDb& db, const std::string& 
   std::map<std::string, std::map<std::string, std::map<int, double>>> scores;
   int finals = 0, unfinished = 0;
   for (const auto& s : sessions) {
+    if (s.trial <= 0) continue;  // a void trial (ended without a final score), run again
     if (!s.is_final) {
       ++unfinished;
       continue;

@@ -20,6 +20,13 @@ std::string FileName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
+// How long after a counted trial's end its final score may still arrive before the trial is
+// void.
+constexpr std::int64_t kFinalScoreGrace_ns = 3'000'000'000;
+
+// How long a new session seen in DeviceInput waits for its StationInfo.
+constexpr std::int64_t kStationInfoWait_ns = 1'000'000'000;
+
 // A live score is written at most this often (the final one at once).
 constexpr std::int64_t kLiveScorePeriod_ns = 1'000'000'000;
 
@@ -46,7 +53,7 @@ ScoresWriter::ScoresWriter(const ScoresWriterOptions& options, Instructor& conso
   scores::SaveExperiment(*db_, row);
   // Trials already finished (an instructor restarted in the middle of the experiment).
   for (const auto& s : scores::LoadScoredSessions(*db_, "", e.name)) {
-    if (s.is_final) ++finished_trials_[s.trainee];
+    if (s.is_final && s.trial > 0) ++finished_trials_[s.trainee];
   }
   for (const auto& [trainee, condition] : assignment_) {
     started_trials_[trainee] = scores::CountTrials(*db_, e.name, trainee);
@@ -68,7 +75,44 @@ ScoresWriter::Tracked* ScoresWriter::FindSession(const std::string& session) {
   for (auto& [station, t] : stations_) {
     if (t.session == session) return &t;
   }
-  return nullptr;
+  auto it = past_.find(session);
+  return it == past_.end() ? nullptr : &it->second;
+}
+
+void ScoresWriter::VoidUnfinishedTrials(std::int64_t now_ns, std::vector<std::string>& lines) {
+  const auto check = [&](Tracked& t) {
+    if (!t.counted || t.voided || t.score_final || t.ended_ns == 0 ||
+        now_ns - t.ended_ns < kFinalScoreGrace_ns) {
+      return;
+    }
+    t.voided = true;
+    const std::string& experiment = options_.experiment->name;
+    db_->Begin();
+    try {
+      db_->Exec("UPDATE sessions SET trial = NULL WHERE id = ?", {t.session});
+      db_->Exec(
+          "UPDATE sessions SET trial = trial - 1 WHERE experiment = ? AND trainee = ? AND trial "
+          "> ?",
+          {experiment, t.trainee, std::int64_t{t.trial}});
+      db_->Commit();
+    } catch (...) {
+      db_->Rollback();
+      throw;
+    }
+    for (auto* group : {&stations_, &past_}) {
+      for (auto& [key, other] : *group) {
+        if (other.counted && !other.voided && other.trainee == t.trainee && other.trial > t.trial) {
+          --other.trial;
+        }
+      }
+    }
+    --started_trials_[t.trainee];
+    lines.push_back("experiment " + experiment + ": " + t.trainee + " trial " +
+                    std::to_string(t.trial) + " void (session " + t.session +
+                    " ended without a final score); the next run repeats it");
+  };
+  for (auto& [station, t] : stations_) check(t);
+  for (auto& [session, t] : past_) check(t);
 }
 
 void ScoresWriter::SaveScore(const net::Score& s, Tracked& t) {
@@ -95,7 +139,7 @@ void ScoresWriter::SaveScore(const net::Score& s, Tracked& t) {
   t.score_saved_ns = now;
   if (s.is_final) {
     t.score_final = true;
-    if (t.counted) ++finished_trials_[t.trainee];
+    if (t.counted && !t.voided) ++finished_trials_[t.trainee];
   }
 }
 
@@ -106,12 +150,37 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
   // New sessions: each trial's cues go out first, the database writes after.
   std::vector<scores::SessionRow> new_sessions;
   std::vector<std::string> ended;
+  const std::int64_t pass_ns = RealtimeNowNs();
   for (const StationView& v : stations) {
-    const std::string& session = v.info.header.session_id;
+    std::string session = v.info.header.session_id;
     if (session.empty()) continue;  // no StationInfo yet
     Tracked& t = stations_[v.info.header.station_id];
-    if (t.session == session) continue;
-    if (!t.session.empty() && !t.ended) ended.push_back(t.session);
+    bool info_missing = false;
+    if (t.session == session && !v.input_session.empty() && v.input_session != session &&
+        !sessions_.count(v.input_session)) {
+      // The station runs a new session (its DeviceInput says so) whose StationInfo has not
+      // come. Seen with Fast DDS 2.9 when a station restarts under the same id: the old run's
+      // unregistration can replace the new StationInfo in the keep-last-1 reader. After
+      // kStationInfoWait_ns the run is stored with the station's previous StationInfo.
+      auto [it, fresh] = awaiting_info_.try_emplace(v.input_session, pass_ns);
+      if (pass_ns - it->second < kStationInfoWait_ns) continue;
+      session = v.input_session;
+      info_missing = true;
+      awaiting_info_.erase(it);
+    }
+    // A session stored already: the current one, or an earlier run whose StationInfo the
+    // registry still holds while the new run was stored from its DeviceInput.
+    if (t.session == session || sessions_.count(session)) continue;
+    if (info_missing) {
+      lines.push_back("station " + v.info.header.station_id + ": no StationInfo for session " +
+                      session + "; trainee, scene and seed taken from its previous run");
+    }
+    if (!t.session.empty() && !t.ended) {
+      ended.push_back(t.session);
+      t.ended = true;
+      t.ended_ns = pass_ns;
+    }
+    if (!t.session.empty()) past_[t.session] = t;
     t = Tracked{};
     t.session = session;
     scores::SessionRow row;
@@ -128,6 +197,11 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
     row.instructor_session = console_.session_id();
     row.recording = options_.recording;
     row.started_ns = v.info.header.stamp_ns ? v.info.header.stamp_ns : RealtimeNowNs();
+    if (info_missing) {  // not the previous run's seed, skill and start
+      row.seed = 0;
+      row.skill = -1;
+      row.started_ns = pass_ns;
+    }
     if (options_.experiment) {
       const scores::ExperimentDef& e = *options_.experiment;
       auto a = assignment_.find(row.trainee);
@@ -146,6 +220,7 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
         row.condition = a->second;
         row.trial = ++done;
         t.counted = true;
+        t.trial = row.trial;
         const scores::CueCondition* condition = nullptr;
         for (const auto& c : e.conditions) {
           if (c.name == a->second) condition = &c;
@@ -197,9 +272,11 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
     }
     if (!t.ended && v.presence != Presence::kAlive) {
       t.ended = true;
+      t.ended_ns = now;
       scores::EndSession(*db_, t.session, now);
     }
   }
+  if (options_.experiment) VoidUnfinishedTrials(now, lines);
   // Events of stored sessions; the others wait for their session's StationInfo.
   std::vector<net::TaskEvent> all;
   all.swap(pending_events_);

@@ -56,23 +56,32 @@ class ScoresWriter {
     std::uint64_t score_step = 0;
     bool score_final = false;
     bool counted = false;  // a trial of the experiment
+    int trial = 0;
     bool ended = false;
+    std::int64_t ended_ns = 0;  // when it was seen to end (realtime)
+    bool voided = false;        // ended without a final score: its trial is run again
     std::int64_t score_saved_ns = 0;
   };
   void SaveScore(const net::Score& s, Tracked& t);
-  // The tracked run of a session ("" station when not tracked).
+  // The tracked run of a session (current or earlier); nullptr when not tracked.
   Tracked* FindSession(const std::string& session);
+  // A counted trial that ended without a final score (its StationInfo, events or score never
+  // reached the instructor) is void: its later trials move down one, and the trainee's next
+  // run repeats it.
+  void VoidUnfinishedTrials(std::int64_t now_ns, std::vector<std::string>& lines);
 
   ScoresWriterOptions options_;
   Instructor& console_;
   std::unique_ptr<scores::ScoresDb> db_;
-  std::map<std::string, std::string> assignment_;  // trainee → condition
-  std::map<std::string, Tracked> stations_;        // station id → its current session
-  std::set<std::string> sessions_;                 // sessions stored
-  std::vector<net::TaskEvent> pending_events_;     // of sessions not stored yet
-  std::vector<net::Score> pending_finals_;         // likewise
-  std::map<std::string, int> started_trials_;      // trainee → trials started
-  std::map<std::string, int> finished_trials_;     // trainee → trials with a final score
+  std::map<std::string, std::string> assignment_;      // trainee → condition
+  std::map<std::string, Tracked> stations_;            // station id → its current session
+  std::map<std::string, Tracked> past_;                // session id → an earlier run
+  std::set<std::string> sessions_;                     // sessions stored
+  std::vector<net::TaskEvent> pending_events_;         // of sessions not stored yet
+  std::vector<net::Score> pending_finals_;             // likewise
+  std::map<std::string, std::int64_t> awaiting_info_;  // session seen in DeviceInput → when
+  std::map<std::string, int> started_trials_;          // trainee → trials started
+  std::map<std::string, int> finished_trials_;         // trainee → trials with a final score
 };
 
 }  // namespace microdex::instructor

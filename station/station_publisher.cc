@@ -548,8 +548,17 @@ void StationPublisher::Goodbye() {
   w_->input->wait_for_acknowledgments(
       eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(input_wait_ns / 1'000'000'000),
                                      static_cast<std::uint32_t>(input_wait_ns % 1'000'000'000)));
-  w_->events->wait_for_acknowledgments(wait);
-  w_->score->wait_for_acknowledgments(wait);
+  // A recorded session (--wait-for-recorder raises input_ack_wait_s): the final score and the
+  // task end are waited for as long, so that a recorder on a loaded machine still gets them
+  // (with 150 ms, final scores were lost at a load average of 13).
+  const eprosima::fastrtps::Duration_t final_wait =
+      config_.input_ack_wait_s > 0.15
+          ? eprosima::fastrtps::Duration_t(
+                static_cast<std::int32_t>(input_wait_ns / 1'000'000'000),
+                static_cast<std::uint32_t>(input_wait_ns % 1'000'000'000))
+          : wait;
+  w_->events->wait_for_acknowledgments(final_wait);
+  w_->score->wait_for_acknowledgments(final_wait);
   // Departure: dispose the station's instance, then unregister it.
   w_->info->dispose(&w_->info_msg, w_->info_handle);
   w_->info->unregister_instance(&w_->info_msg, w_->info_handle);

@@ -41,6 +41,8 @@ const std::vector<TopicInfo>& KnownTopics() {
       Make("microdex/cue_command", "CueCommand", "cue_command"),
       Make("microdex/task_event", "TaskEvent", "task_event"),
       Make("microdex/score", "Score", "score"),
+      Make("microdex/cue_overlay", "CueOverlay", "cue_overlay"),
+      Make("microdex/device_force", "DeviceForce", "device_force"),
   };
   return topics;
 }

@@ -34,8 +34,10 @@ enum class TopicIndex : int {
   kCueCommand,
   kTaskEvent,
   kScore,
+  kCueOverlay,   // the station's visual cue overlays (60 Hz, best-effort)
+  kDeviceForce,  // the device bridge's force back to an external driver (1 kHz, best-effort)
 };
-inline constexpr int kTopicCount = 10;
+inline constexpr int kTopicCount = 12;
 
 // The topics this build records, with this build's IDL hashes.
 const std::vector<TopicInfo>& KnownTopics();

@@ -133,8 +133,9 @@ void SaveExperiment(ScoresDb& db, const ExperimentRow& e) {
 }
 
 int CountTrials(ScoresDb& db, const std::string& experiment, const std::string& trainee) {
-  const auto rows = db.Query("SELECT COUNT(*) FROM sessions WHERE experiment = ? AND trainee = ?",
-                             {experiment, trainee});
+  const auto rows = db.Query(
+      "SELECT COUNT(*) FROM sessions WHERE experiment = ? AND trainee = ? AND trial IS NOT NULL",
+      {experiment, trainee});
   return rows.empty() ? 0 : static_cast<int>(rows[0].Int(0));
 }
 

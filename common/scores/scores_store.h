@@ -88,7 +88,7 @@ void EndSession(ScoresDb& db, const std::string& session, std::int64_t ended_ns)
 // Stores an experiment with its conditions and assignment. When it is already there (an
 // instructor restarted), its stored assignment must equal this one, or ScoresDbError.
 void SaveExperiment(ScoresDb& db, const ExperimentRow& e);
-// The trials the trainee has started in the experiment so far.
+// The trials the trainee has started in the experiment so far (void ones, trial NULL, left out).
 int CountTrials(ScoresDb& db, const std::string& experiment, const std::string& trainee);
 // The experiment as stored (conditions in their order); throws ScoresDbError when absent.
 ExperimentRow LoadExperiment(ScoresDb& db, const std::string& name);

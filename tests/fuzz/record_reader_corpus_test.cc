@@ -57,7 +57,7 @@ TEST(RecordReaderCorpus, TheValidSeedReadsAndDecodesEveryMessage) {
   const std::string path = FreshValidSeed(TmpDir());
   const ExerciseResult r = ExerciseReader(path);
   ASSERT_TRUE(r.opened) << r.error;
-  EXPECT_EQ(r.messages, 12u);  // WriteSeedRecording: one or more of every topic
+  EXPECT_EQ(r.messages, 14u);  // WriteSeedRecording: one or more of every topic
   EXPECT_EQ(r.decoded, r.messages);
   EXPECT_EQ(r.problems, 0u) << r.first_problem;
 }

@@ -6,6 +6,8 @@
 #include "common/record/session_reader.h"
 #include "common/record/session_writer.h"
 #include "cue_commandPubSubTypes.h"
+#include "cue_overlayPubSubTypes.h"
+#include "device_forcePubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "instructor/recorded_sample.h"
 #include "needle_statePubSubTypes.h"
@@ -50,6 +52,10 @@ bool DecodeAny(int topic, std::span<const std::uint8_t> cdr) {
       return Decode<msg::TaskEventPubSubType, msg::TaskEvent>(cdr);
     case TopicIndex::kScore:
       return Decode<msg::ScorePubSubType, msg::Score>(cdr);
+    case TopicIndex::kCueOverlay:
+      return Decode<msg::CueOverlayPubSubType, msg::CueOverlay>(cdr);
+    case TopicIndex::kDeviceForce:
+      return Decode<msg::DeviceForcePubSubType, msg::DeviceForce>(cdr);
   }
   return false;
 }
@@ -162,6 +168,15 @@ void WriteSeedRecording(const std::string& path) {
   score.terms().resize(1);
   score.terms()[0].metric("deviation");
   batch.push_back(Serialize<msg::ScorePubSubType>(TopicIndex::kScore, score, 2));
+  msg::CueOverlay overlay;
+  Header(overlay, 2);
+  overlay.polylines().resize(1);
+  overlay.polylines()[0].p_W({0, 0, 0.002, 0.001, 0, 0.002});
+  batch.push_back(Serialize<msg::CueOverlayPubSubType>(TopicIndex::kCueOverlay, overlay, 2));
+  msg::DeviceForce force;
+  Header(force, 2);
+  force.f_D({0.1, -0.2, 0.05});
+  batch.push_back(Serialize<msg::DeviceForcePubSubType>(TopicIndex::kDeviceForce, force, 2));
   w.Write(batch);
 }
 

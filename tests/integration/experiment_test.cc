@@ -14,11 +14,17 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "common/record/recorded_topics.h"
+#include "common/record/session_reader.h"
 #include "common/scores/scores_db.h"
 #include "common/scores/scores_store.h"
+#include "cue_overlayPubSubTypes.h"
+#include "instructor/recorded_sample.h"
 #include "instructor/scores_report.h"
 #include "tests/integration/process.h"
 
@@ -82,7 +88,7 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
   std::ofstream(experiment) << "name: audio-pilot\nscene: hold_short.yaml\nseed: 11\n"
                             << "trials_per_trainee: " << kTrials << "\n"
                             << "conditions:\n  none: []\n  audio: [audio_click:0.8]\n"
-                            << "  divergent: [divergent:100]\n"
+                            << "  divergent: [divergent:100, visual_path]\n"
                             << "trainees: [" << trainees << "]\n";
   const std::string db_file = dir_ + "/course.db";
   const pid_t console =
@@ -93,45 +99,78 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
             dir_ + "/instructor.log");
   pids_.push_back(console);
 
-  // Each round, every trainee does one trial (all stations at once, paced at 1 kHz).
+  // Each round, the trainees in `who` do one trial each (all stations at once, paced at
+  // 1 kHz); the simulated trainees then learn from what their station applied.
   std::vector<double> skill(kTrainees);
   for (int i = 0; i < kTrainees; ++i) skill[static_cast<std::size_t>(i)] = 0.10 + 0.02 * i;
-  std::map<std::string, int> heard_audio;  // trainee → trials with the audio cue applied
-  for (int trial = 1; trial <= kTrials; ++trial) {
+  std::map<std::string, int> heard_audio, runs;  // trainee → runs with the audio cue, runs
+  int round = 0;
+  const auto run_round = [&](const std::vector<int>& who) {
+    ++round;
     std::vector<pid_t> stations;
-    for (int i = 0; i < kTrainees; ++i) {
+    for (int i : who) {
       const std::string id = Trainee(i);
       char s[32];
       std::snprintf(s, sizeof s, "%.6f", skill[static_cast<std::size_t>(i)]);
       stations.push_back(
           Spawn("microdex-station",
                 {"--scene", dir_ + "/hold_short.yaml", "--station-id", id, "--trainee", id,
-                 "--seed", std::to_string(100 * trial + i), "--skill", s, "--no-realtime",
+                 "--seed", std::to_string(100 * round + i), "--skill", s, "--no-realtime",
                  "--domain", std::to_string(kDomain), "--wait-for-recorder", "20", "--score-out",
-                 dir_ + "/" + id + "_" + std::to_string(trial) + ".json"},
+                 dir_ + "/" + id + "_" + std::to_string(round) + ".json"},
                 dir_ + "/" + id + ".log"));
       pids_.push_back(stations.back());
     }
-    for (std::size_t i = 0; i < stations.size(); ++i) {
-      const auto status = WaitExit(stations[i], 60s);
-      ASSERT_TRUE(status.has_value()) << Trainee(static_cast<int>(i));
-      ASSERT_EQ(*status, 0) << ReadFile(dir_ + "/" + Trainee(static_cast<int>(i)) + ".log");
+    for (std::size_t k = 0; k < stations.size(); ++k) {
+      const auto status = WaitExit(stations[k], 60s);
+      ASSERT_TRUE(status.has_value()) << Trainee(who[k]);
+      ASSERT_EQ(*status, 0) << ReadFile(dir_ + "/" + Trainee(who[k]) + ".log");
     }
-    // The simulated trainees learn from what their station applied.
-    for (int i = 0; i < kTrainees; ++i) {
+    for (int i : who) {
       const std::string json =
-          ReadFile(dir_ + "/" + Trainee(i) + "_" + std::to_string(trial) + ".json");
+          ReadFile(dir_ + "/" + Trainee(i) + "_" + std::to_string(round) + ".json");
       const auto at = json.find("\"cues_applied\"");
       ASSERT_NE(at, std::string::npos) << json;
       const std::string applied = json.substr(at, json.find(']', at) - at);
       const bool audio = applied.find("\"audio_click\"") != std::string::npos;
       heard_audio[Trainee(i)] += audio ? 1 : 0;
+      ++runs[Trainee(i)];
       double& s = skill[static_cast<std::size_t>(i)];
       s = 1 - (1 - s) * std::exp(-(audio ? kRateWithAudio : kRateOtherwise));
     }
+  };
+  std::vector<int> everyone;
+  for (int i = 0; i < kTrainees; ++i) everyone.push_back(i);
+  for (int trial = 1; trial <= kTrials; ++trial) {
+    run_round(everyone);
+    if (HasFatalFailure()) return;
   }
-  // Every trial scored: the instructor ends the experiment by itself.
-  const auto console_status = WaitExit(console, 30s);
+  // Every trial scored: the instructor ends the experiment by itself. A run the instructor
+  // did not count (its StationInfo never arrived: see the README) is run again, as an
+  // operator would, for the trainees the database shows short of trials.
+  std::optional<int> console_status = WaitExit(console, 5s);
+  int reruns = 0;
+  for (int extra = 0; extra < 2 && !console_status; ++extra) {
+    std::vector<int> short_of_trials;
+    {
+      const auto db = scores::ScoresDb::Open(db_file);
+      for (int i = 0; i < kTrainees; ++i) {
+        const auto n = db->Query(
+            "SELECT COUNT(*) FROM sessions s JOIN scores c ON c.session = s.id WHERE "
+            "s.experiment = 'audio-pilot' AND s.trainee = ? AND c.is_final = 1 AND s.trial IS NOT "
+            "NULL",
+            {Trainee(i)});
+        if (n.at(0).Int(0) < kTrials) short_of_trials.push_back(i);
+      }
+    }
+    reruns += static_cast<int>(short_of_trials.size());
+    if (!short_of_trials.empty()) run_round(short_of_trials);
+    if (HasFatalFailure()) return;
+    console_status = WaitExit(console, 10s);
+  }
+  std::printf("runs not counted by the instructor and run again: %d of %d\n", reruns,
+              kTrainees * kTrials + reruns);
+  EXPECT_LE(reruns, 2);
   ASSERT_TRUE(console_status.has_value()) << ReadFile(dir_ + "/instructor.log");
   ASSERT_EQ(*console_status, 0) << ReadFile(dir_ + "/instructor.log");
   EXPECT_NE(ReadFile(dir_ + "/instructor.log").find("every trial scored"), std::string::npos);
@@ -144,16 +183,20 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
   std::map<std::string, int> per_condition;
   for (const auto& [trainee, condition] : e.assignments) {
     ++per_condition[condition];
-    EXPECT_EQ(heard_audio[trainee], condition == "audio" ? kTrials : 0) << trainee;
+    EXPECT_EQ(heard_audio[trainee], condition == "audio" ? runs[trainee] : 0) << trainee;
   }
   EXPECT_EQ(per_condition,
             (std::map<std::string, int>{{"audio", 3}, {"divergent", 3}, {"none", 3}}));
-  const auto sessions = scores::LoadScoredSessions(*db, "pilot", "audio-pilot");
-  ASSERT_EQ(sessions.size(), static_cast<std::size_t>(kTrainees * kTrials));
-  for (const auto& s : sessions) {
+  // Every trainee's trials 1..T, each with a final score (void runs, trial NULL, aside).
+  std::map<std::string, std::set<int>> trials;
+  for (const auto& s : scores::LoadScoredSessions(*db, "pilot", "audio-pilot")) {
+    if (s.trial == 0) continue;
     EXPECT_TRUE(s.is_final) << s.id;
-    EXPECT_GE(s.trial, 1);
-    EXPECT_LE(s.trial, kTrials);
+    EXPECT_TRUE(trials[s.trainee].insert(s.trial).second) << s.id << " trial " << s.trial;
+  }
+  ASSERT_EQ(trials.size(), static_cast<std::size_t>(kTrainees));
+  for (const auto& [trainee, t] : trials) {
+    EXPECT_EQ(t, (std::set<int>{1, 2, 3, 4})) << trainee;
   }
   // The cue-applied events in the database: none in a session of `none`; where recorded,
   // early in the trial (the cues are sent when the station appears). A TaskEvent written
@@ -162,7 +205,8 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
   // checked above from its own score file.
   const auto first_cue = db->Query(
       "SELECT s.id, s.condition, MIN(e.step) FROM sessions s LEFT JOIN events e ON e.session = "
-      "s.id AND e.kind = 'cue-applied' WHERE s.experiment = 'audio-pilot' GROUP BY s.id, "
+      "s.id AND e.kind = 'cue-applied' WHERE s.experiment = 'audio-pilot' AND s.trial IS NOT "
+      "NULL GROUP BY s.id, "
       "s.condition");
   ASSERT_EQ(first_cue.size(), static_cast<std::size_t>(kTrainees * kTrials));
   std::int64_t latest_first_cue_step = 0;
@@ -183,6 +227,32 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
   EXPECT_LT(latest_first_cue_step, 1500) << "a trial's cues came after its hold";
   std::printf("cue sessions with a cue-applied event: %d of %d; latest first cue at step %lld\n",
               cue_sessions_with_event, 6 * kTrials, static_cast<long long>(latest_first_cue_step));
+
+  // The recording holds every station's cue overlays; those with a drawn path come from the
+  // divergent trainees' stations only (their condition's visual_path).
+  {
+    record::SessionReader rec(dir_ + "/session.db");
+    std::map<std::string, int> overlays, drawn;
+    rec.ForEach({static_cast<int>(record::TopicIndex::kCueOverlay)},
+                [&](const record::MessageView& m) {
+                  msg::CueOverlay o;
+                  EXPECT_TRUE(instructor::DecodeSample<msg::CueOverlayPubSubType>(m.cdr, o));
+                  ++overlays[std::string(m.station)];
+                  if (!o.polylines().empty()) ++drawn[std::string(m.station)];
+                  return true;
+                });
+    EXPECT_TRUE(rec.problems().empty());
+    EXPECT_EQ(overlays.size(), static_cast<std::size_t>(kTrainees));
+    ASSERT_EQ(drawn.size(), 3u);
+    for (const auto& [station, n] : drawn) {
+      EXPECT_GT(n, 10) << station;
+      for (const auto& [trainee, condition] : e.assignments) {
+        if (trainee == station) {
+          EXPECT_EQ(condition, "divergent") << station;
+        }
+      }
+    }
+  }
 
   // The report, through the command line (PNG, Markdown) and in-process (the figures).
   const std::string report = dir_ + "/report";

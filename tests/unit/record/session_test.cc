@@ -73,9 +73,10 @@ class SessionTest : public ::testing::Test {
 
 TEST_F(SessionTest, TopicsAreThoseOfTheDdsLayerWithThisBuildsIdlHashes) {
   const net::TopicSpec specs[] = {
-      net::kStationInfoTopic, net::kDeviceInputTopic, net::kToolStateTopic, net::kNeedleStateTopic,
-      net::kThreadStateTopic, net::kTissueStateTopic, net::kTelemetryTopic, net::kCueCommandTopic,
-      net::kTaskEventTopic,   net::kScoreTopic};
+      net::kStationInfoTopic, net::kDeviceInputTopic, net::kToolStateTopic,
+      net::kNeedleStateTopic, net::kThreadStateTopic, net::kTissueStateTopic,
+      net::kTelemetryTopic,   net::kCueCommandTopic,  net::kTaskEventTopic,
+      net::kScoreTopic,       net::kCueOverlayTopic,  net::kDeviceForceTopic};
   ASSERT_EQ(KnownTopics().size(), std::size(specs));
   ASSERT_EQ(static_cast<int>(KnownTopics().size()), kTopicCount);
   for (std::size_t i = 0; i < std::size(specs); ++i) {
