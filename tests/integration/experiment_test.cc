@@ -139,8 +139,8 @@ TEST_F(ExperimentTest, TheReportRecoversTheConditionThatHelpsLearning) {
       s = 1 - (1 - s) * std::exp(-(audio ? kRateWithAudio : kRateOtherwise));
     }
   };
-  std::vector<int> everyone;
-  for (int i = 0; i < kTrainees; ++i) everyone.push_back(i);
+  std::vector<int> everyone(kTrainees);
+  for (int i = 0; i < kTrainees; ++i) everyone[static_cast<std::size_t>(i)] = i;
   for (int trial = 1; trial <= kTrials; ++trial) {
     run_round(everyone);
     if (HasFatalFailure()) return;
