@@ -27,6 +27,7 @@
 #include "instructor/recorded_sample.h"
 #include "instructor/scores_report.h"
 #include "tests/integration/process.h"
+#include "tests/support/postgres_server.h"
 
 namespace microdex {
 namespace {
@@ -332,6 +333,66 @@ TEST(ExperimentBadInput, MalformedFileAndUnreachableServerAreNamed) {
                     dir + "/pg_replay.log", &out),
             2);
   EXPECT_NE(out.find("cannot connect"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace microdex
+
+namespace microdex {
+namespace {
+
+// The instructor writing a station run into a PostgreSQL database (a real server, started
+// here), read back: the same rows as with SQLite.
+class InstructorPostgres : public testing::PostgresServerTest {};
+
+TEST_F(InstructorPostgres, AStationRunIsStoredWithItsFinalScoreAndEvents) {
+  const std::string work = TmpDir();
+  std::ofstream(work + "/hold_short.yaml") << kScene;
+  const std::string url = NewDatabase("course");
+  const pid_t console =
+      Spawn("microdex-instructor",
+            {"--headless", "--table-period", "0", "--domain", std::to_string(kDomain), "--db", url,
+             "--course", "pg-course", "--duration", "30"},
+            work + "/instructor.log");
+  const pid_t station = Spawn(
+      "microdex-station",
+      {"--scene", work + "/hold_short.yaml", "--station-id", "pg1", "--trainee", "zoe", "--seed",
+       "5", "--skill", "0.6", "--no-realtime", "--domain", std::to_string(kDomain),
+       "--wait-for-recorder", "20", "--cue", "audio_click:0.5", "--score-out", work + "/pg1.json"},
+      work + "/pg1.log");
+  const auto station_status = WaitExit(station, 60s);
+  ASSERT_TRUE(station_status.has_value());
+  ASSERT_EQ(*station_status, 0) << ReadFile(work + "/pg1.log");
+  const auto db = scores::ScoresDb::Open(url);
+  ASSERT_TRUE(db->is_postgresql());
+  // The final score reaches the database within a few seconds of the station's end.
+  std::vector<scores::ScoredSession> scored;
+  ASSERT_TRUE(testing::WaitUntil(
+      [&] {
+        scored = scores::LoadScoredSessions(*db, "pg-course");
+        return scored.size() == 1 && scored[0].is_final;
+      },
+      10s))
+      << ReadFile(work + "/instructor.log");
+  kill(console, SIGINT);
+  const auto console_status = WaitExit(console, 20s);
+  ASSERT_TRUE(console_status.has_value());
+  EXPECT_EQ(*console_status, 0) << ReadFile(work + "/instructor.log");
+  EXPECT_EQ(scored[0].trainee, "zoe");
+  EXPECT_EQ(scored[0].scene, "hold_short.yaml");
+  EXPECT_NEAR(scored[0].score, testing::JsonNumber(ReadFile(work + "/pg1.json"), "score"), 1e-6);
+  const auto session =
+      db->Query("SELECT seed, skill, ended_ns FROM sessions WHERE id = ?", {scored[0].id});
+  ASSERT_EQ(session.size(), 1u);
+  EXPECT_EQ(session[0].Int(0), 5);
+  EXPECT_DOUBLE_EQ(session[0].Real(1), 0.6);
+  EXPECT_FALSE(session[0].IsNull(2));
+  const auto terms =
+      db->Query("SELECT COUNT(*) FROM score_terms WHERE session = ?", {scored[0].id});
+  EXPECT_EQ(terms.at(0).Int(0), 3);  // the scene's three scoring terms
+  const auto ends = db->Query("SELECT COUNT(*) FROM events WHERE session = ? AND kind = 'task-end'",
+                              {scored[0].id});
+  EXPECT_EQ(ends.at(0).Int(0), 1);
 }
 
 }  // namespace
