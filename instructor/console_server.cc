@@ -1,26 +1,27 @@
 #include "instructor/console_server.h"
 
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
 #include "common/cues/cue_kind.h"
 #include "common/scene/scene.h"
+#include "common/view/scene_files.h"
 #include "common/view/scene_view.h"
 
 namespace microdex::instructor {
 namespace {
 
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+// The station list's readouts: 6 significant digits.
+std::string Num(double v) { return view::JsonNumber(v, 6); }
 
 std::int64_t RealtimeNowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -51,7 +52,10 @@ std::string DefaultWebDir() {
 
 ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address, int port,
                              const std::string& web_dir)
-    : instructor_(instructor), frame_(std::make_unique<view::FrameBytes>()) {
+    : instructor_(instructor),
+      scene_dir_((std::filesystem::temp_directory_path() /
+                  ("microdex-console-scenes-" + std::to_string(getpid())))
+                     .string()) {
   std::map<std::string, view::WebFile> files =
       view::LoadWebFiles(web_dir, {"console.html", "console.js", "frame_worker.js"});
   files["/"] = files["/console.html"];
@@ -74,22 +78,55 @@ ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address,
   server_->Start();
 }
 
-ConsoleServer::~ConsoleServer() { server_->Stop(); }
+ConsoleServer::~ConsoleServer() {
+  server_->Stop();
+  std::error_code ec;
+  std::filesystem::remove_all(scene_dir_, ec);
+}
 
+// The scene from the station's SceneDescription (never from the path in its StationInfo: that
+// names a file on the station's machine). {"error": REASON, "retry": true} while it may still
+// come (not received yet, or its hash not yet that of the StationInfo received); a refused or
+// unloadable description is logged once per station and reason.
 std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_id) {
-  const std::optional<StationView> v = instructor_.Station(station_id);
-  if (!v) return std::nullopt;
-  const std::string& path = v->info.scene;
-  auto it = scene_json_.find(path);
-  if (it == scene_json_.end()) {
-    std::string json;
-    try {
-      json = view::SceneViewJson(scene::LoadScene(path));
-    } catch (const std::exception& e) {
-      // Not on this machine (or not readable): the page draws the tile without a scene.
-      json = "{\"error\":" + view::JsonQuote(e.what()) + "}";
+  std::shared_ptr<const view::SceneFiles> files;
+  std::string refused;
+  std::uint64_t info_hash = 0;
+  bool found = false;
+  instructor_.VisitStations([&](const StationView& v) {
+    if (v.info.header.station_id != station_id) return;
+    found = true;
+    files = v.scene_files;
+    refused = v.scene_error;
+    info_hash = v.info.scene_hash;
+  });
+  if (!found) return std::nullopt;
+  auto error = [&](const std::string& why, bool retry) {
+    if (scene_logged_[station_id] != why && !retry) {
+      spdlog::error("console: station '{}': {}", station_id, why);
     }
-    it = scene_json_.emplace(path, std::move(json)).first;
+    scene_logged_[station_id] = why;
+    return view::WebFile{"application/json", "{\"error\":" + view::JsonQuote(why) +
+                                                 ",\"retry\":" + (retry ? "true" : "false") + "}"};
+  };
+  if (!refused.empty()) return error("scene description refused: " + refused, false);
+  if (!files) return error("scene description not received yet", true);
+  if (files->hash != info_hash) {
+    const std::string why = "scene description hash " + view::HashHex(files->hash) +
+                            " differs from the StationInfo's scene_hash " +
+                            view::HashHex(info_hash);
+    spdlog::warn("console: station '{}': {}", station_id, why);
+    return error(why, true);
+  }
+  auto it = scene_json_.find(files->hash);
+  if (it == scene_json_.end()) {
+    try {
+      const std::string path =
+          view::WriteSceneFiles(*files, scene_dir_ + "/" + view::HashHex(files->hash));
+      it = scene_json_.emplace(files->hash, view::SceneViewJson(scene::LoadScene(path))).first;
+    } catch (const std::exception& e) {
+      return error(std::string("scene description does not load: ") + e.what(), false);
+    }
   }
   return view::WebFile{"application/json", it->second};
 }
@@ -158,15 +195,17 @@ std::string CueKindsJson() {
 
 }  // namespace
 
-std::string ConsoleServer::StatusJson(const std::vector<StationView>& stations,
-                                      std::int64_t now_ns) const {
+std::string ConsoleServer::StatusJsonHead() const {
+  return "{\"type\":\"stations\",\"issuer_session\":" + view::JsonQuote(instructor_.session_id()) +
+         ",\"cue_kinds\":" + CueKindsJson() + ",\"stations\":[";
+}
+
+void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, std::int64_t now_ns,
+                                      std::string& out) const {
   std::ostringstream j;
-  j << "{\"type\":\"stations\",\"issuer_session\":" << view::JsonQuote(instructor_.session_id())
-    << ",\"cue_kinds\":" << CueKindsJson() << ",\"stations\":[";
-  for (std::size_t i = 0; i < stations.size(); ++i) {
-    const StationView& v = stations[i];
+  {
     const std::string& id = v.info.header.station_id;
-    j << (i ? "," : "") << "{\"slot\":" << i << ",\"id\":" << view::JsonQuote(id)
+    j << (slot ? "," : "") << "{\"slot\":" << slot << ",\"id\":" << view::JsonQuote(id)
       << ",\"trainee\":" << view::JsonQuote(v.info.trainee)
       << ",\"scene\":" << view::JsonQuote(v.info.scene)
       << ",\"device\":" << view::JsonQuote(v.info.device) << ",\"skill\":" << Num(v.info.skill)
@@ -221,37 +260,37 @@ std::string ConsoleServer::StatusJson(const std::vector<StationView>& stations,
         j << "}";
       }
     }
-    j << "]}";
+    j << "]";
+    if (!v.scene_error.empty()) j << ",\"scene_error\":" << view::JsonQuote(v.scene_error);
+    j << "}";
   }
-  j << "]}";
-  return j.str();
+  out += j.str();
 }
 
+// Deltas only: under the registry's lock, a frame for each station whose tool state is new
+// since its last frame (the others cost a comparison), the station list at kStatusRate_hz or
+// when the stations change; nothing of the registry is copied. The frames go out after the
+// lock is released.
 void ConsoleServer::Poll() {
   const std::int64_t now = MonotonicNowNs();
-  if (now < next_frames_ns_ && now < next_status_ns_) return;
-  const std::vector<StationView> stations = instructor_.Stations();
+  const bool frames_due = now >= next_frames_ns_;
+  bool status_due = now >= next_status_ns_;
+  if (!frames_due && !status_due) return;
+  if (frames_due) next_frames_ns_ = now + static_cast<std::int64_t>(1e9 / kFrameRate_hz);
   std::vector<std::string> ids;
-  ids.reserve(stations.size());
-  for (const StationView& v : stations) ids.push_back(v.info.header.station_id);
-  // A new list goes out before any frame that uses its slots.
-  if (ids != ids_ || now >= next_status_ns_) {
-    ids_ = ids;
-    server_->BroadcastText(StatusJson(stations, now));
-    next_status_ns_ = now + static_cast<std::int64_t>(1e9 / kStatusRate_hz);
-  }
-  if (now < next_frames_ns_) return;
-  next_frames_ns_ = now + static_cast<std::int64_t>(1e9 / kFrameRate_hz);
-  // Each period starts at the next station: a page short of credit (view_server.h) loses
-  // frames of every station in turn, not always of the last ones.
-  ++first_slot_;
-  for (std::size_t k = 0; k < stations.size(); ++k) {
-    const std::size_t i = (first_slot_ + k) % stations.size();
-    const StationView& v = stations[i];
-    if (!v.tool.latest) continue;
-    std::uint64_t& sent = frames_sent_[ids[i]];
-    if (v.tool.count == sent) continue;
+  std::vector<std::size_t> encoded;  // slots with a new frame
+  std::string status;
+  const std::int64_t sent_ns = RealtimeNowNs();
+  instructor_.VisitStations([&](const StationView& v) {
+    const std::size_t i = ids.size();
+    ids.push_back(v.info.header.station_id);
+    if (status_due) AppendStationJson(v, i, now, status);
+    if (!frames_due || !v.tool.latest) return;
+    std::uint64_t& sent = frames_sent_[v.info.header.station_id];
+    if (v.tool.count == sent) return;
     sent = v.tool.count;
+    if (frames_.size() <= i) frames_.resize(i + 1);
+    if (!frames_[i]) frames_[i] = std::make_unique<view::FrameBytes>();
     view::FrameSource src;
     src.slot = static_cast<std::uint32_t>(i);
     src.tool = &*v.tool.latest;
@@ -260,11 +299,32 @@ void ConsoleServer::Poll() {
     if (v.tissue.latest) src.tissue = &*v.tissue.latest;
     if (v.score.latest) src.score = &*v.score.latest;
     if (v.telemetry.latest) src.telemetry = &*v.telemetry.latest;
+    if (v.overlay.latest) src.overlay = &v.overlay.latest->overlay;
     src.presence = PresenceCode(v.presence);
     src.tool_age_ms = static_cast<double>(now - v.tool.received_ns) * 1e-6;
-    src.sent_realtime_ns = RealtimeNowNs();
-    view::EncodeFrame(src, *frame_);
-    server_->BroadcastBinary(frame_->bytes.data(), frame_->size);
+    src.sent_realtime_ns = sent_ns;
+    view::EncodeFrame(src, *frames_[i]);
+    encoded.push_back(i);
+  });
+  // A new list goes out before any frame that uses its slots.
+  if (!status_due && ids != ids_) {
+    status_due = true;
+    std::size_t slot = 0;
+    instructor_.VisitStations(
+        [&](const StationView& v) { AppendStationJson(v, slot++, now, status); });
+  }
+  if (status_due) {
+    ids_ = ids;
+    server_->BroadcastText(StatusJsonHead() + status + "]}");
+    next_status_ns_ = now + static_cast<std::int64_t>(1e9 / kStatusRate_hz);
+  }
+  if (encoded.empty()) return;
+  // Each period starts at the next station: a page short of credit (view_server.h) loses
+  // frames of every station in turn, not always of the last ones.
+  ++first_slot_;
+  for (std::size_t k = 0; k < encoded.size(); ++k) {
+    const std::size_t i = encoded[(first_slot_ + k) % encoded.size()];
+    server_->BroadcastBinary(frames_[i]->bytes.data(), frames_[i]->size);
   }
 }
 

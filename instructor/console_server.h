@@ -6,11 +6,14 @@
 // their parameter limits, and per station trainee, scene, presence, loop health, live score,
 // and the cues this console sent with the station's acknowledgement (applied at step N, or
 // rejected and why). The page sends "cue STATION KIND PARAM|off" (every kind of
-// common/cues/cue_kind.h). The scene of a station
-// is read from the path its StationInfo names, when this machine has it (/scene/ID.json).
+// common/cues/cue_kind.h). The scene of a station (/scene/ID.json) comes from the files it
+// sent on the SceneDescription topic, checked against the hash in its StationInfo, written
+// under a folder of this console's own and loaded there: the console needs none of the
+// station's files.
 //
 // Threads: everything here runs on the view server's thread; it reads the Instructor's
-// registry through its copying API (the instructor has no real-time thread).
+// registry under its lock (VisitStations) and encodes only the stations whose state is new
+// (the instructor has no real-time thread).
 
 #include <cstdint>
 #include <map>
@@ -42,8 +45,10 @@ class ConsoleServer {
 
   // The reply to a page's text message (throws std::invalid_argument for a bad one).
   std::string HandleMessage(const std::string& message);
-  // The station list as the page reads it.
-  std::string StatusJson(const std::vector<StationView>& stations, std::int64_t now_ns) const;
+  // The station list as the page reads it: the opening, one station, the end.
+  std::string StatusJsonHead() const;
+  void AppendStationJson(const StationView& v, std::size_t slot, std::int64_t now_ns,
+                         std::string& out) const;
 
  private:
   struct SentCue {
@@ -59,9 +64,11 @@ class ConsoleServer {
   Instructor& instructor_;
   std::map<std::string, std::vector<SentCue>> sent_;  // by station
   std::map<std::string, std::uint64_t> frames_sent_;  // tool-state count at the last frame
-  std::map<std::string, std::string> scene_json_;     // by scene path
+  std::map<std::uint64_t, std::string> scene_json_;   // by the scene files' hash
+  std::map<std::string, std::string> scene_logged_;   // station → the last scene error logged
+  std::string scene_dir_;                             // where received scenes are written
   std::vector<std::string> ids_;                      // slot → station id, as last listed
-  std::unique_ptr<view::FrameBytes> frame_;
+  std::vector<std::unique_ptr<view::FrameBytes>> frames_;  // per slot, reused
   std::int64_t next_frames_ns_ = 0, next_status_ns_ = 0;
   std::size_t first_slot_ = 0;
   std::unique_ptr<view::ViewServer> server_;

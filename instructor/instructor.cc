@@ -1,5 +1,6 @@
 #include "instructor/instructor.h"
 
+#include <spdlog/spdlog.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -11,18 +12,21 @@
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/core/status/LivelinessChangedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
 
 #include "common/base/check.h"
 #include "common/net/convert.h"
+#include "common/net/overlay_convert.h"
 #include "common/record/recorded_topics.h"
 #include "cue_commandPubSubTypes.h"
 #include "cue_overlayPubSubTypes.h"
 #include "device_forcePubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
+#include "scene_descriptionPubSubTypes.h"
 #include "scorePubSubTypes.h"
 #include "station_infoPubSubTypes.h"
 #include "task_eventPubSubTypes.h"
@@ -80,9 +84,9 @@ struct Instructor::Dds {
   dds::DataReader* telemetry = nullptr;
   dds::DataReader* events = nullptr;
   dds::DataReader* score = nullptr;
-  // Recording only (the console does not read them): nullptr without a recording.
-  dds::DataReader* overlay = nullptr;
-  dds::DataReader* force = nullptr;
+  dds::DataReader* scene = nullptr;    // SceneDescription
+  dds::DataReader* overlay = nullptr;  // CueOverlay (the console's mirror, and recorded)
+  dds::DataReader* force = nullptr;    // DeviceForce: recording only (nullptr without one)
   dds::DataWriter* cue = nullptr;
   dds::WaitSet waitset;
   dds::GuardCondition guard;
@@ -139,9 +143,10 @@ Instructor::Instructor(const InstructorOptions& options)
   d.telemetry = d.context->CreateReader<msg::TelemetryPubSubType>(spec(net::kTelemetryTopic));
   d.events = d.context->CreateReader<msg::TaskEventPubSubType>(net::kTaskEventTopic);
   d.score = d.context->CreateReader<msg::ScorePubSubType>(net::kScoreTopic);
+  d.scene = d.context->CreateReader<msg::SceneDescriptionPubSubType>(net::kSceneDescriptionTopic);
+  d.overlay = d.context->CreateReader<msg::CueOverlayPubSubType>(spec(net::kCueOverlayTopic));
   d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
   if (recorder_) {
-    d.overlay = d.context->CreateReader<msg::CueOverlayPubSubType>(spec(net::kCueOverlayTopic));
     // DeviceForce is best-effort and latest-only like the mirrored states: read with the
     // recording mirror reader's deep history so that none is replaced before it is taken.
     net::TopicSpec force = net::kDeviceForceTopic;
@@ -149,7 +154,7 @@ Instructor::Instructor(const InstructorOptions& options)
     d.force = d.context->CreateReader<msg::DeviceForcePubSubType>(force);
   }
   for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry,
-                             d.events, d.score, d.overlay, d.force}) {
+                             d.events, d.score, d.scene, d.overlay, d.force}) {
     if (r == nullptr) continue;
     dds::StatusMask mask = dds::StatusMask::data_available();
     if (r == d.info) mask << dds::StatusMask::liveliness_changed();
@@ -167,7 +172,7 @@ Instructor::~Instructor() {
   Dds& d = *dds_;
   d.waitset.detach_condition(d.guard);
   for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry,
-                             d.events, d.score, d.overlay, d.force}) {
+                             d.events, d.score, d.scene, d.overlay, d.force}) {
     if (r != nullptr) d.waitset.detach_condition(r->get_statuscondition());
   }
   d.context.reset();
@@ -223,7 +228,8 @@ void Instructor::Run() {
     TakeAll<msg::Telemetry, net::Telemetry>(dds_->telemetry, &StationView::telemetry, "telemetry");
     HandleEvents();
     HandleScores();
-    RecordOnly<msg::CueOverlay>(dds_->overlay, record::TopicIndex::kCueOverlay);
+    HandleSceneDescriptions();
+    HandleOverlays();
     RecordOnly<msg::DeviceForce>(dds_->force, record::TopicIndex::kDeviceForce);
     CheckSilence();
   }
@@ -450,6 +456,71 @@ std::vector<StationView> Instructor::Stations() const {
   std::vector<StationView> out;
   for (const auto& [id, v] : stations_) out.push_back(v);
   return out;
+}
+
+void Instructor::VisitStations(const std::function<void(const StationView&)>& f) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const auto& [id, v] : stations_) f(v);
+}
+
+// A station's scene as files: checked (sizes, paths, hash) before it is kept; a refused one is
+// logged with the reason and kept as the station's scene_error (the console shows it).
+void Instructor::HandleSceneDescriptions() {
+  msg::SceneDescription m;
+  dds::SampleInfo si;
+  while (dds_->scene->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (!si.valid_data) continue;
+    const std::string station = m.station_id().to_string();
+    auto files = std::make_shared<view::SceneFiles>();
+    files->scene_path = m.scene_path();
+    files->hash = m.hash();
+    std::string why;
+    if (m.files().size() > view::kMaxSceneFiles) {
+      why = std::to_string(m.files().size()) + " files, more than " +
+            std::to_string(view::kMaxSceneFiles);
+    } else {
+      files->files.reserve(m.files().size());
+      for (const msg::SceneFile& f : m.files()) {
+        if (f.bytes().size() > view::kMaxSceneFileBytes) break;  // CheckSceneFiles names it
+        files->files.push_back({f.path(), std::string(f.bytes().begin(), f.bytes().end())});
+      }
+      if (files->files.size() != m.files().size()) {
+        why = "a file larger than " + std::to_string(view::kMaxSceneFileBytes) + " bytes";
+      } else {
+        why = view::CheckSceneFiles(*files);
+      }
+    }
+    if (!why.empty()) {
+      spdlog::error("instructor: station '{}': scene description refused: {}", station, why);
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    StationView& v = ViewFor(station);
+    v.last_heard_ns = MonotonicNowNs();
+    if (why.empty()) {
+      v.scene_files = std::move(files);
+      v.scene_error.clear();
+    } else {
+      v.scene_error = why;
+    }
+  }
+}
+
+void Instructor::HandleOverlays() {
+  msg::CueOverlay m;
+  dds::SampleInfo si;
+  OverlayMirror o;
+  while (dds_->overlay->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+    if (!si.valid_data) continue;
+    Record(static_cast<int>(record::TopicIndex::kCueOverlay), m, &si);
+    if (!net::FromMsg(m, o.header, o.active_cues, o.overlay)) continue;
+    const std::int64_t now = MonotonicNowNs();
+    std::lock_guard<std::mutex> lock(mutex_);
+    StationView& v = ViewFor(o.header.station_id);
+    v.last_heard_ns = now;
+    v.overlay.latest = o;
+    v.overlay.received_ns = now;
+    ++v.overlay.count;
+  }
 }
 
 std::optional<StationView> Instructor::Station(const std::string& station_id) const {

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -20,10 +21,12 @@
 #include <thread>
 #include <vector>
 
+#include "common/cues/cue_overlay.h"
 #include "common/net/dds_context.h"
 #include "common/net/messages.h"
 #include "common/record/recorded_topics.h"
 #include "common/record/recorder.h"
+#include "common/view/scene_files.h"
 
 namespace microdex::instructor {
 
@@ -60,6 +63,13 @@ struct Mirror {
   std::uint64_t count = 0;
 };
 
+// The visual cues a station draws (CueOverlay topic), as received.
+struct OverlayMirror {
+  net::Header header;
+  std::uint32_t active_cues = 0;  // bit (1 << cues::CueKind)
+  cues::CueOverlay overlay;
+};
+
 struct StationView {
   net::StationInfo info;
   Presence presence = Presence::kAlive;
@@ -77,7 +87,13 @@ struct StationView {
   std::uint64_t inputs_lost = 0;  // gaps in the DeviceInput step sequence of a session
   std::uint64_t last_input_step = 0;
   std::string input_session;
+  Mirror<OverlayMirror> overlay;
   std::deque<net::TaskEvent> events;  // the latest kMaxEventsPerStation
+  // The scene's files (SceneDescription topic) once received and checked
+  // (view::CheckSceneFiles); shared, never changed once set. scene_error: why the latest
+  // description was refused ("" when none was).
+  std::shared_ptr<const view::SceneFiles> scene_files;
+  std::string scene_error;
 };
 
 struct LatencySamples {
@@ -105,6 +121,9 @@ class Instructor {
   // Copies of the registry, sorted by station id.
   std::vector<StationView> Stations() const;
   std::optional<StationView> Station(const std::string& station_id) const;
+  // Calls f with every station in id order under the registry's lock, without copying (the
+  // console's poll): f must be quick and must not call back into the Instructor.
+  void VisitStations(const std::function<void(const StationView&)>& f) const;
 
   // Queues a cue for `station_id` (or net::kAllStations) applied at `at_step` (0: on
   // receipt); `off` switches the kind off. Returns its cue id. Throws std::invalid_argument
@@ -142,6 +161,8 @@ class Instructor {
   void HandleInputs();
   void HandleEvents();
   void HandleScores();
+  void HandleSceneDescriptions();
+  void HandleOverlays();
   void SendQueuedCues();
   void CheckSilence();
   // Hands the sample to the recorder (serialized again to CDR with its type); DDS thread only.

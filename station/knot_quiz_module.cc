@@ -9,16 +9,8 @@ namespace microdex::station {
 
 KnotQuizModule::KnotQuizModule(const scene::SceneModel& scene) : items_(scene.knots->items) {
   for (std::size_t i = 0; i < items_.size(); ++i) {
-    // Vary the shapes from item to item (mirror image, lean, tails), so the class, not the
-    // picture, is what a trainee learns.
-    knot::StitchKnotShapeDef def;
-    def.kind = items_[i];
-    def.thread_diameter_m = scene.knots->thread_diameter_m;
-    def.mirror = i % 2 == 1;
-    def.axis_tilt_rad = 0.3 * static_cast<double>(i % 3);
-    def.axis_azimuth_rad = 1.1 * static_cast<double>(i);
-    def.tail_first_azimuth_rad = 3.14159 + 0.4 * static_cast<double>(i % 4);
-    shapes_.push_back(knot::MakeStitchKnot(def));
+    shapes_.push_back(
+        knot::MakeStitchKnot(knot::QuizItemShapeDef(items_[i], i, scene.knots->thread_diameter_m)));
     const knot::StitchKnotType seen = knot::RecogniseStitchKnot(shapes_.back());
     if (seen != items_[i]) {
       throw std::runtime_error(scene.path + ": knots.items[" + std::to_string(i) + "]: the " +

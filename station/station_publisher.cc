@@ -1,5 +1,7 @@
 #include "station/station_publisher.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,10 +15,12 @@
 #include "common/knot/recognition.h"
 #include "common/net/convert.h"
 #include "common/net/overlay_convert.h"
+#include "common/view/scene_files.h"
 #include "cue_commandPubSubTypes.h"
 #include "cue_overlayPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "needle_statePubSubTypes.h"
+#include "scene_descriptionPubSubTypes.h"
 #include "scorePubSubTypes.h"
 #include "station/rt/clock.h"
 #include "station/score.h"
@@ -37,6 +41,7 @@ using eprosima::fastrtps::types::ReturnCode_t;
 
 struct StationPublisher::Writers {
   dds::DataWriter* info = nullptr;
+  dds::DataWriter* scene = nullptr;  // SceneDescription, written once
   dds::DataWriter* input = nullptr;
   dds::DataWriter* tool = nullptr;
   dds::DataWriter* needle = nullptr;  // only with the needle module
@@ -168,6 +173,33 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   info.skill = config_.skill;
   info.device = config_.device;
   info.seed = config_.seed;
+  // The scene's files for a remote instructor's mirror: once, before StationInfo names their
+  // hash (a scene parsed from text has no files: no description, hash 0).
+  if (!scene.path.empty()) {
+    try {
+      const view::SceneFiles files = view::CollectSceneFiles(scene);
+      msg::SceneDescription d;
+      d.station_id(config_.station_id);
+      d.session_id(config_.session_id);
+      d.step(0);
+      d.stamp_ns(info.header.stamp_ns);
+      d.scene_path(files.scene_path);
+      d.hash(files.hash);
+      d.files().resize(files.files.size());
+      for (std::size_t i = 0; i < files.files.size(); ++i) {
+        d.files()[i].path(files.files[i].path);
+        d.files()[i].bytes().assign(files.files[i].bytes.begin(), files.files[i].bytes.end());
+      }
+      w_->scene = dds_->CreateWriter<msg::SceneDescriptionPubSubType>(net::kSceneDescriptionTopic);
+      if (w_->scene->write(&d)) {
+        info.scene_hash = files.hash;
+      } else {
+        spdlog::warn("station {}: the scene description could not be written", config_.station_id);
+      }
+    } catch (const std::exception& e) {
+      spdlog::warn("station {}: no scene description: {}", config_.station_id, e.what());
+    }
+  }
   net::ToMsg(info, w_->info_msg);
   w_->info_handle = w_->info->register_instance(&w_->info_msg);
   w_->info->write(&w_->info_msg, w_->info_handle);
@@ -390,6 +422,7 @@ void StationPublisher::EncodeViewFrame() {
   }
   if (have_score_) src.score = &last_score_;
   if (have_telemetry_) src.telemetry = &last_telemetry_;
+  src.overlay = &w_->overlay_plain;
   src.sent_realtime_ns = SystemClock().RealtimeNs();
   view::EncodeFrame(src, view_frames_->back());
   view_frames_->Publish();

@@ -299,4 +299,17 @@ std::vector<Eigen::Vector3d> ResampleByArcLength(std::span<const Eigen::Vector3d
   return out;
 }
 
+StitchKnotShapeDef QuizItemShapeDef(StitchKnotType kind, std::size_t index,
+                                    double thread_diameter_m) {
+  StitchKnotShapeDef def;
+  def.kind = kind;
+  def.thread_diameter_m = thread_diameter_m;
+  const auto i = static_cast<double>(index);
+  def.mirror = index % 2 == 1;
+  def.axis_tilt_rad = 0.3 * static_cast<double>(index % 3);
+  def.axis_azimuth_rad = 1.1 * i;
+  def.tail_first_azimuth_rad = 3.14159 + 0.4 * static_cast<double>(index % 4);
+  return def;
+}
+
 }  // namespace microdex::knot

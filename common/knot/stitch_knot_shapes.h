@@ -63,6 +63,12 @@ struct StitchKnotShapeDef {
 // aimed through the knot or at each other).
 std::vector<Eigen::Vector3d> MakeStitchKnot(const StitchKnotShapeDef& def);
 
+// The shape of item `index` of the knot-topology quiz (scene `knots.items`): varied from item
+// to item (mirror image, lean, tails) so that the class, not the picture, is what a trainee
+// learns. The station's quiz and the views draw the same shape from it.
+StitchKnotShapeDef QuizItemShapeDef(StitchKnotType kind, std::size_t index,
+                                    double thread_diameter_m);
+
 // `segments` equal arc-length pieces of an open polyline (segments + 1 points, both ends kept);
 // at least two points in, segments >= 1.
 std::vector<Eigen::Vector3d> ResampleByArcLength(std::span<const Eigen::Vector3d> open,

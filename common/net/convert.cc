@@ -262,6 +262,7 @@ void ToMsg(const StationInfo& in, msg::StationInfo& out) {
   out.skill(in.skill);
   out.device(in.device);
   out.seed(in.seed);
+  out.scene_hash(in.scene_hash);
 }
 
 bool FromMsg(const msg::StationInfo& in, StationInfo& out, std::string* why) {
@@ -286,6 +287,7 @@ bool FromMsg(const msg::StationInfo& in, StationInfo& out, std::string* why) {
   out.skill = in.skill();
   out.device = S(in.device());
   out.seed = in.seed();
+  out.scene_hash = in.scene_hash();
   return c.ok();
 }
 

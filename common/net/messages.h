@@ -38,7 +38,8 @@ struct StationInfo {
   double mirror_rate_hz = 0;
   double skill = -1;  // simulated trainee skill 0..1; -1: a real device
   std::string device;
-  std::uint64_t seed = 0;  // the simulation's seed
+  std::uint64_t seed = 0;        // the simulation's seed
+  std::uint64_t scene_hash = 0;  // of the scene's files (SceneDescription); 0: none sent
 };
 
 struct DeviceInput {

@@ -38,6 +38,11 @@ inline constexpr TopicSpec kNeedleStateTopic = MirrorTopic("microdex/needle_stat
 inline constexpr TopicSpec kThreadStateTopic = MirrorTopic("microdex/thread_state");
 inline constexpr TopicSpec kTissueStateTopic = MirrorTopic("microdex/tissue_state");
 inline constexpr TopicSpec kCueOverlayTopic = MirrorTopic("microdex/cue_overlay");
+// A station's scene as files, sent once (reliable, transient-local, keep-last 1 per station:
+// StationInfo's QoS).
+inline constexpr TopicSpec kSceneDescriptionTopic{
+    "microdex/scene_description", "microdex_topic_keep_last_1", "microdex_station_info_writer",
+    "microdex_station_info_reader"};
 inline constexpr TopicSpec kTelemetryTopic{"microdex/telemetry", "microdex_topic_keep_last_1",
                                            "microdex_telemetry_writer",
                                            "microdex_telemetry_reader"};

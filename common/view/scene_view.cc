@@ -1,21 +1,18 @@
 #include "common/view/scene_view.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <sstream>
 
 #include "common/geometry/loop_wire.h"
+#include "common/knot/stitch_knot_shapes.h"
 
 namespace microdex::view {
 namespace {
 
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
+std::string Num(double v) { return JsonNumber(v); }
 
 std::string Vec(const Eigen::Vector3d& v) {
   std::string out = "[";
@@ -75,7 +72,33 @@ std::string IdealPath(const scene::SceneModel& s) {
   return out + "]";
 }
 
+// The knot-topology quiz's knots (the station's shapes, knot::QuizItemShapeDef), each
+// resampled to at most kKnotPoints points: [[x, y, z, x, y, z, ...], ...].
+std::string KnotItems(const scene::KnotQuizSceneDef& k) {
+  constexpr int kKnotPoints = 240;
+  std::string out = "[";
+  for (std::size_t i = 0; i < k.items.size(); ++i) {
+    std::vector<Eigen::Vector3d> p =
+        knot::MakeStitchKnot(knot::QuizItemShapeDef(k.items[i], i, k.thread_diameter_m));
+    if (p.size() > kKnotPoints) p = knot::ResampleByArcLength(p, kKnotPoints - 1);
+    out += i ? ",[" : "[";
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      if (j) out += ',';
+      out.append(Num(p[j].x())).append(",").append(Num(p[j].y())).append(",").append(Num(p[j].z()));
+    }
+    out += "]";
+  }
+  return out + "]";
+}
+
 }  // namespace
+
+std::string JsonNumber(double v, int digits) {
+  if (!std::isfinite(v)) return "null";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*g", std::clamp(digits, 1, 17), v);
+  return buf;
+}
 
 std::string JsonQuote(const std::string& text) {
   std::string out = "\"";
@@ -150,6 +173,10 @@ std::string SceneViewJson(const scene::SceneModel& s) {
       << ",\"end_height\":" << Num(s.placement->end_height_m)
       << ",\"stitches\":" << s.placement->stitches << ",\"bite\":" << Num(s.placement->bite_m)
       << "}";
+  }
+  if (s.knots) {
+    j << ",\"knots\":{\"radius\":" << Num(s.knots->thread_diameter_m / 2)
+      << ",\"items\":" << KnotItems(*s.knots) << "}";
   }
   j << "}";
   return j.str();

@@ -104,6 +104,48 @@ void EncodeFrame(const FrameSource& src, FrameBytes& out) {
     std::memcpy(p, src.tissue->displacement_m.data(), tissue_values * sizeof(float));
     p += tissue_values * sizeof(float);
   }
+  if (src.overlay != nullptr) {
+    const cues::CueOverlay& o = *src.overlay;
+    const int lines = std::clamp(o.polyline_count, 0, cues::kMaxOverlayPolylines);
+    const int labels = std::clamp(o.label_count, 0, cues::kMaxOverlayLabels);
+    auto put = [&p](double v) {
+      const auto f = static_cast<float>(v);
+      std::memcpy(p, &f, 4);
+      p += 4;
+    };
+    put(lines);
+    put(labels);
+    for (int i = 0; i < lines; ++i) {
+      const cues::OverlayPolyline& l = o.polylines[static_cast<std::size_t>(i)];
+      const int n = std::clamp(l.count, 0, cues::kMaxOverlayPoints);
+      put(static_cast<double>(l.role));
+      put(l.colour.r);
+      put(l.colour.g);
+      put(l.colour.b);
+      put(l.colour.a);
+      put(l.width_m);
+      put(n);
+      for (int k = 0; k < n; ++k) {
+        for (int c = 0; c < 3; ++c) put(l.p_W[static_cast<std::size_t>(k)][c]);
+      }
+    }
+    for (int i = 0; i < labels; ++i) {
+      const cues::OverlayLabel& l = o.labels[static_cast<std::size_t>(i)];
+      put(static_cast<double>(l.role));
+      put(l.colour.r);
+      put(l.colour.g);
+      put(l.colour.b);
+      put(l.colour.a);
+      for (int c = 0; c < 3; ++c) put(l.p_W[c]);
+      std::array<char, kOverlayLabelBytes> text{};
+      std::memcpy(text.data(), l.text.data(),
+                  std::min(strnlen(l.text.data(), l.text.size()), kOverlayLabelBytes - 1));
+      std::memcpy(p, text.data(), text.size());
+      p += text.size();
+    }
+    flags |= kHasOverlay;
+    PutU16(out.bytes.data() + 6, flags);
+  }
   out.size = static_cast<std::uint32_t>(p - out.bytes.data());
 }
 

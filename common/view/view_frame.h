@@ -9,19 +9,23 @@
 //                 u32 thread node count
 //   bytes 16..    kScalarCount float64 scalars (index names below)
 //   then          float32 thread nodes (x, y, z per node, world, m), then float32 tissue
-//                 displacement field (nodes_x * nodes_y, x fastest, m)
+//                 displacement field (nodes_x * nodes_y, x fastest, m), then the cue overlay
+//                 (common/cues/cue_overlay.h) as float32: polyline count, label count; per
+//                 polyline role, r, g, b, a, width (m), point count, then x, y, z per point;
+//                 per label role, r, g, b, a, x, y, z, then 32 bytes of text (NUL-padded)
 // Little-endian throughout (x86-64 and every browser's typed arrays on it).
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 
+#include "common/cues/cue_overlay.h"
 #include "common/net/messages.h"
 
 namespace microdex::view {
 
 inline constexpr std::uint32_t kFrameMagic = 0x4658444d;  // "MDXF" read as little-endian u32
-inline constexpr std::uint16_t kFrameVersion = 1;
+inline constexpr std::uint16_t kFrameVersion = 2;
 inline constexpr std::size_t kFrameHeaderBytes = 16;
 
 // Section flags.
@@ -30,6 +34,7 @@ inline constexpr std::uint16_t kHasThread = 2;
 inline constexpr std::uint16_t kHasTissue = 4;
 inline constexpr std::uint16_t kHasScore = 8;
 inline constexpr std::uint16_t kHasTelemetry = 16;
+inline constexpr std::uint16_t kHasOverlay = 32;
 
 // Scalar indices (float64).
 enum Scalar : int {
@@ -66,8 +71,14 @@ enum Scalar : int {
 
 inline constexpr std::size_t kMaxFrameThreadNodes = net::kMaxThreadNodes;
 inline constexpr std::size_t kMaxFrameTissueNodes = net::kMaxTissueNodes;
-inline constexpr std::size_t kMaxFrameBytes =
-    kFrameHeaderBytes + kScalarCount * 8 + kMaxFrameThreadNodes * 3 * 4 + kMaxFrameTissueNodes * 4;
+inline constexpr std::size_t kOverlayLabelBytes = 32;
+inline constexpr std::size_t kMaxOverlayBytes =
+    4 * (2 + cues::kMaxOverlayPolylines * (7 + 3 * cues::kMaxOverlayPoints) +
+         cues::kMaxOverlayLabels * 8) +
+    cues::kMaxOverlayLabels * kOverlayLabelBytes;
+inline constexpr std::size_t kMaxFrameBytes = kFrameHeaderBytes + kScalarCount * 8 +
+                                              kMaxFrameThreadNodes * 3 * 4 +
+                                              kMaxFrameTissueNodes * 4 + kMaxOverlayBytes;
 
 // One encoded frame, plain data (it travels through a TripleBuffer).
 struct FrameBytes {
@@ -84,6 +95,7 @@ struct FrameSource {
   const net::TissueState* tissue = nullptr;
   const net::Score* score = nullptr;
   const net::Telemetry* telemetry = nullptr;
+  const cues::CueOverlay* overlay = nullptr;
   double presence = 0;
   double tool_age_ms = 0;
   std::int64_t sent_realtime_ns = 0;

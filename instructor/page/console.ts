@@ -2,11 +2,18 @@
 // enlarge), drawn with the shared scene objects (common/view/src) at the tiles' level of
 // detail by one renderer into scissored viewports; a cue panel per station with the
 // station's acknowledgements; a score table.
+//
+// Update budget: the canvas keeps its pixels between frames (preserveDrawingBuffer), so a
+// tile is drawn again only when it has a new state (or the layout moved); the enlarged tile
+// whenever it has one, the others oldest first, at most `budget` of them per animation frame.
+// The budget adapts to the frame time (more tiles while frames take under 1/25 s, fewer
+// above 1/18 s; `?budget=N` fixes it). A frame is applied to its tile only when the tile is
+// drawn (newer frames replace a waiting one), and its latency is taken then.
 
 import * as THREE from 'three';
 import { Frame, S, activeCueNames, decodeFrame } from '../../common/view/src/frame';
 import { LOW_DETAIL, SceneJson, SceneView } from '../../common/view/src/scene_objects';
-import { microscopeCamera } from '../../common/view/src/microscope';
+import { fitCamera, microscopeCamera } from '../../common/view/src/microscope';
 import { socketUrl } from '../../common/view/src/socket';
 import { FrameLink, MAX_SLOTS } from '../../common/view/src/frame_link';
 
@@ -27,13 +34,19 @@ interface StationJson {
   slot: number; id: string; trainee: string; scene: string; device: string; presence: string;
   lost_by: string; heard_ms_ago: number; modules: string[]; period_p99_ms?: number;
   overruns?: number; score?: number; progress?: number; outcome?: number; task?: string;
-  cues: CueJson[];
+  cues: CueJson[]; scene_error?: string;
 }
 
 class Tile {
   readonly el: HTMLDivElement;
   readonly viewport: HTMLDivElement;
-  readonly label: HTMLDivElement;
+  readonly label: HTMLDivElement; // the caption bar above the picture
+  readonly note: HTMLDivElement; // why there is no scene, over the empty picture
+  rectKey = '';
+  rect: DOMRect | null = null;
+  drawn = false; // its picture is on the canvas at its current place
+  drawnAt = 0; // performance.now() of its last drawing
+  framedVersion = -1; // the thread extent the camera was last fitted to
   readonly acks: HTMLDivElement;
   readonly inForce = new Map<number, HTMLElement>(); // by cue bit
   readonly touched = new Set<string>(); // kinds this console has switched
@@ -49,11 +62,14 @@ class Tile {
     this.el = document.createElement('div');
     this.el.className = 'tile';
     this.el.dataset.station = station.id;
-    this.viewport = document.createElement('div');
-    this.viewport.className = 'viewport';
     this.label = document.createElement('div');
     this.label.className = 'label';
-    this.viewport.appendChild(this.label);
+    this.el.appendChild(this.label);
+    this.viewport = document.createElement('div');
+    this.viewport.className = 'viewport';
+    this.note = document.createElement('div');
+    this.note.className = 'note';
+    this.viewport.appendChild(this.note);
     this.viewport.addEventListener('click', () => this.el.classList.toggle('big'));
     this.el.appendChild(this.viewport);
     const panel = document.createElement('div');
@@ -90,21 +106,47 @@ class Tile {
         if (box.checked) send(`cue ${this.station.id} ${t.dataset.strength} ${Number(t.value)}`);
       }
     });
-    fetch(`/scene/${encodeURIComponent(station.id)}.json`).then((r) => r.json()).then((j) => {
-      this.setScene(j.error ? null : j as SceneJson);
-    }).catch(() => this.setScene(null));
+    this.fetchScene(0);
   }
 
-  private setScene(scene: SceneJson | null): void {
+  // The scene as the station sent it (SceneDescription); while it has not arrived the server
+  // says so with retry: true, and the tile asks again.
+  private fetchScene(attempt: number): void {
+    fetch(`/scene/${encodeURIComponent(this.station.id)}.json`).then((r) => r.json()).then((j) => {
+      if (!j.error) {
+        this.setScene(j as SceneJson, '');
+      } else if (j.retry && attempt < 120) {
+        this.note.textContent = j.error;
+        setTimeout(() => this.fetchScene(attempt + 1), 500);
+      } else {
+        this.setScene(null, j.error);
+      }
+    }).catch((e) => this.setScene(null, String(e)));
+  }
+
+  private setScene(scene: SceneJson | null, why: string): void {
     const s: SceneJson = scene ?? {
-      name: '(scene not on this machine)', task: '', modules: [], tolerance: 0, path: [],
+      name: '(no scene)', task: '', modules: [], tolerance: 0, path: [],
       microscope: { magnification: 10, look_at: [0, 0, 0], view_dir: [0, 0, -1] },
       tool_start: { p: [0, 0, 0], q: [1, 0, 0, 0] },
     };
+    this.note.textContent = scene ? '' : `no scene: ${why}`;
     this.view = new SceneView(s, LOW_DETAIL);
     this.world.add(this.view.root);
     this.world.background = new THREE.Color(0x101418);
     this.camera = microscopeCamera(s, 16 / 9);
+    this.drawn = false;
+  }
+
+  // A thread tile frames the thread (its extent so far, and the anchor) rather than the
+  // microscope's whole field: a suture is a few pixels of a small tile otherwise.
+  frameThread(): void {
+    const v = this.view;
+    if (!v || !this.camera || !v.scene.thread || v.threadBox.isEmpty()) return;
+    if (v.threadBoxVersion === this.framedVersion) return;
+    this.framedVersion = v.threadBoxVersion;
+    const box = v.threadBox.clone().expandByPoint(new THREE.Vector3(...v.scene.thread.anchor));
+    v.setThreadField(fitCamera(this.camera, v.scene, box));
   }
 
   update(station: StationJson): void {
@@ -116,11 +158,13 @@ class Tile {
     const score = station.score !== undefined
         ? `score ${station.score.toFixed(1)} · ${((station.progress ?? 0) * 100).toFixed(0)} % · ${OUTCOMES[station.outcome ?? 0]}` : 'score –';
     const age = f ? `${f.scalars[S.toolAgeMs].toFixed(0)} ms` : '–';
-    this.label.innerHTML =
-        `<div class="name">${esc(station.trainee)} <span style="opacity:.7">${esc(station.id)}</span></div>` +
-        `<div>${esc(station.scene.split('/').pop() ?? '')} · ${score}</div>` +
-        `<div class="${lost ? 'lost' : 'ok'}">${lost ? `${station.presence.toUpperCase()} (${station.lost_by})` : 'alive'}</div>` +
-        `<div>${health} · state age ${age}</div>`;
+    const html =
+        `<div><span class="name">${esc(station.trainee)}</span> <span style="opacity:.7">${esc(station.id)}</span>` +
+        ` · <span class="${lost ? 'lost' : 'ok'}">${lost ? `${station.presence.toUpperCase()} (${station.lost_by})` : 'alive'}</span>` +
+        ` · ${esc(station.scene.split('/').pop() ?? '')}</div>` +
+        `<div>${score}</div><div>${health} · state age ${age}</div>` +
+        (station.scene_error ? `<div class="lost">scene refused: ${esc(station.scene_error)}</div>` : '');
+    if (html !== this.label.innerHTML) this.label.innerHTML = html;
     this.acks.innerHTML = station.cues.slice().reverse().map((c) => {
       const ack = c.ack === null ? 'waiting for the station…'
           : c.ack.applied ? `applied at step ${c.ack.step}` : `rejected: ${esc(c.ack.text)}`;
@@ -131,6 +175,7 @@ class Tile {
   applyPending(): void {
     if (!this.pending || !this.view) return;
     this.view.apply(this.pending);
+    this.frameThread();
     const mask = this.pending.scalars[S.activeCues];
     for (const [bit, el] of this.inForce) {
       const on = (mask & (1 << bit)) !== 0;
@@ -150,7 +195,9 @@ function esc(s: string): string {
 
 function main(): void {
   const canvas = document.getElementById('canvas') as HTMLCanvasElement;
-  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
+  // The canvas keeps its pixels between frames: a tile without news is not drawn again.
+  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
+  renderer.autoClear = true;
   renderer.setPixelRatio(1);
   renderer.setSize(window.innerWidth, window.innerHeight, false);
   renderer.setScissorTest(true);
@@ -161,7 +208,8 @@ function main(): void {
   const probe = {
     stations: [] as StationJson[], framesReceived: 0, badFrames: 0, fps: 0, tilesDrawn: 0,
     framesBySlot: [] as number[], errors: [] as string[], latencyMs: [] as number[],
-    receivedMs: [] as number[],
+    receivedMs: [] as number[], budget: 0, tileDrawsPerSecond: 0,
+    sceneNames: {} as Record<string, string>, // station → the name of the scene its tile draws
   };
   (window as any).microdexConsole = probe;
 
@@ -179,6 +227,7 @@ function main(): void {
             grid.appendChild(tile.el);
           }
           tile.update(s);
+          probe.sceneNames[s.id] = tile.view?.scene.name ?? '';
         }
         for (const [id, tile] of tiles) {
           if (!slots.includes(id)) { tile.el.remove(); tiles.delete(id); }
@@ -221,43 +270,95 @@ function main(): void {
   };
 
   window.addEventListener('resize', () => renderer.setSize(window.innerWidth, window.innerHeight, false));
+  const params = new URLSearchParams(location.search);
+  const fixedBudget = params.has('budget') ? Math.max(1, Number(params.get('budget'))) : 0;
+  let budget = fixedBudget || 2;
   let fpsCount = 0;
   let fpsStart = performance.now();
+  let lastFrameAt = performance.now();
+  let frameMsAvg = 0;
+  let tileDraws = 0;
+  let lastW = 0;
+  let lastH = 0;
   const clear = new THREE.Color(0x15191d);
+  const drawTile = (tile: Tile, h: number) => {
+    const f = tile.pending;
+    tile.applyPending();
+    if (f && probe.latencyMs.length < 100000) {
+      probe.latencyMs.push(performance.timeOrigin + performance.now() - f.scalars[S.stampMs]);
+    }
+    const r = tile.rect!;
+    const aspect = r.width / r.height;
+    if (Math.abs(tile.camera!.aspect - aspect) > 1e-3) {
+      tile.camera!.aspect = aspect;
+      tile.camera!.updateProjectionMatrix();
+      tile.framedVersion = -1;
+      tile.frameThread();
+    }
+    renderer.setViewport(r.left, h - r.bottom, r.width, r.height);
+    renderer.setScissor(r.left, h - r.bottom, r.width, r.height);
+    renderer.render(tile.world, tile.camera!);
+    tile.drawn = true;
+    tile.drawnAt = performance.now();
+    ++tileDraws;
+  };
   renderer.setAnimationLoop(() => {
+    const now = performance.now();
+    frameMsAvg = frameMsAvg === 0 ? now - lastFrameAt : 0.9 * frameMsAvg + 0.1 * (now - lastFrameAt);
+    lastFrameAt = now;
+    if (!fixedBudget) {
+      if (frameMsAvg > 1000 / 18 && budget > 1) budget -= 1;
+      else if (frameMsAvg < 1000 / 25 && budget < MAX_TILES) budget += 1;
+    }
+    const w = window.innerWidth;
     const h = window.innerHeight;
-    renderer.setScissor(0, 0, window.innerWidth, h);
-    renderer.setViewport(0, 0, window.innerWidth, h);
-    renderer.setClearColor(clear);
-    renderer.clear();
-    let drawn = 0;
     takeFrames();
+    // Where each tile is; a moved layout clears the canvas and every tile is drawn again.
+    let moved = w !== lastW || h !== lastH;
+    lastW = w;
+    lastH = h;
+    const visible: Tile[] = [];
     for (const tile of tiles.values()) {
-      const f = tile.pending;
-      tile.applyPending();
-      if (f && probe.latencyMs.length < 100000) {
-        probe.latencyMs.push(performance.timeOrigin + performance.now() - f.scalars[S.stampMs]);
-      }
       if (!tile.view || !tile.camera) continue;
       const r = tile.viewport.getBoundingClientRect();
-      if (r.bottom < 0 || r.top > h || r.width < 2 || r.height < 2) continue;
-      const aspect = r.width / r.height;
-      if (Math.abs(tile.camera.aspect - aspect) > 1e-3) {
-        tile.camera.aspect = aspect;
-        tile.camera.updateProjectionMatrix();
+      const key = `${r.left},${r.top},${r.width},${r.height}`;
+      if (key !== tile.rectKey) {
+        tile.rectKey = key;
+        moved = true;
       }
-      renderer.setViewport(r.left, h - r.bottom, r.width, r.height);
-      renderer.setScissor(r.left, h - r.bottom, r.width, r.height);
-      renderer.render(tile.world, tile.camera);
-      ++drawn;
+      tile.rect = r;
+      if (r.bottom < 0 || r.top > h || r.width < 2 || r.height < 2) continue;
+      visible.push(tile);
     }
-    probe.tilesDrawn = drawn;
+    if (moved) {
+      renderer.setScissor(0, 0, w, h);
+      renderer.setViewport(0, 0, w, h);
+      renderer.setClearColor(clear);
+      renderer.clear();
+      for (const tile of tiles.values()) tile.drawn = false;
+    }
+    // The enlarged tile and any tile not on the canvas yet, then the others with a new state,
+    // oldest picture first, within the budget.
+    let small = 0;
+    const due = visible.filter((t) => !t.drawn || t.pending).sort((a, b) => a.drawnAt - b.drawnAt);
+    for (const tile of due) {
+      const big = tile.el.classList.contains('big');
+      if (tile.drawn && !big) {
+        if (small >= budget) continue;
+        ++small;
+      }
+      drawTile(tile, h);
+    }
+    probe.tilesDrawn = visible.filter((t) => t.drawn).length;
+    probe.budget = budget;
     link.drew();
     ++fpsCount;
     const t = performance.now();
     if (t - fpsStart >= 1000) {
       probe.fps = (fpsCount * 1000) / (t - fpsStart);
+      probe.tileDrawsPerSecond = (tileDraws * 1000) / (t - fpsStart);
       fpsCount = 0;
+      tileDraws = 0;
       fpsStart = t;
     }
   });

@@ -2,8 +2,11 @@
 // mirrored as three drawn tiles with their scores; switching a cue on for one station shows
 // that station's acknowledgement (applied at step N) beside the command, and the station's
 // state reports the cue in force; the other stations get none. A bad cue gets an error.
+// The instructor runs in a folder of its own where the stations' scene paths (relative to
+// theirs) lead nowhere: it draws their scenes from the SceneDescription topic alone.
 // node console_view_test.mjs --bin BUILD/bin --out DIR
-import { writeFileSync } from 'node:fs';
+import { existsSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { launchBrowser, sourceDir } from './browser.mjs';
 import { args, check, decodePng, hsv, startProcess, stopProcess, waitFor } from './harness.mjs';
@@ -13,15 +16,18 @@ const a = args({ bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/
 const dds = ['--partition', `web-console-${process.pid}`];
 const scenes = ['needle_tube', 'thread_pull', 'tissue_press'];
 const ids = scenes.map((s) => `web-${s}`);
+const elsewhere = mkdtempSync(join(tmpdir(), 'microdex-console-'));
+const scenePath = (s) => `assets/scenes/${s}.yaml`; // relative to the stations' folder
+check(!existsSync(join(elsewhere, scenePath(scenes[0]))), 'the instructor\'s folder has no scene files');
 const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
                                       ['--http', '0', '--duration', '180', ...dds],
-                                      /console: http:\/\/127\.0\.0\.1:(\d+)\//);
+                                      /console: http:\/\/127\.0\.0\.1:(\d+)\//, { cwd: elsewhere });
 const stations = [];
 for (const [i, s] of scenes.entries()) {
   stations.push(await startProcess(join(a.bin, 'microdex-station'), [
-    '--scene', join(sourceDir, `assets/scenes/${s}.yaml`), '--station-id', ids[i],
+    '--scene', scenePath(s), '--station-id', ids[i],
     '--trainee', `trainee ${i + 1}`, '--no-realtime', '--duration', '150', ...dds,
-  ], /station|info/));
+  ], /station|info/, { cwd: sourceDir }));
 }
 const url = `http://127.0.0.1:${instructor.match[1]}/`;
 const { context, close } = await launchBrowser({ width: 1280, height: 800 });
@@ -39,6 +45,14 @@ try {
   check(JSON.stringify(listed) === JSON.stringify([...ids].sort()),
         `the console lists exactly the three stations (${listed.join(', ')})`);
   check(await page.evaluate(() => window.microdexConsole.badFrames) === 0, 'every frame decodes');
+  // The scenes came over DDS (the instructor cannot read the paths the stations name).
+  await waitFor(() => page.evaluate((n) => Object.values(window.microdexConsole.sceneNames)
+      .filter((x) => x && x !== '(no scene)').length === n, ids.length),
+  'every tile has its station\'s scene', 20000);
+  const names = await page.evaluate(() => window.microdexConsole.sceneNames);
+  check(names['web-needle_tube'] === 'needle-in-tube' && names['web-thread_pull'] === 'thread-pull' &&
+        names['web-tissue_press'] === 'tissue-press',
+        `each tile has its station's scene, sent over DDS: ${JSON.stringify(names)}`);
   const tiles = await page.locator('.tile').count();
   check(tiles === 3, `three tiles (${tiles})`);
   await page.waitForTimeout(1000);
@@ -130,4 +144,5 @@ try {
   await close();
   for (const s of stations) await stopProcess(s.child);
   await stopProcess(instructor.child);
+  rmSync(elsewhere, { recursive: true, force: true });
 }

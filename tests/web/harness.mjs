@@ -26,9 +26,10 @@ for (const sig of ['SIGINT', 'SIGTERM']) process.on(sig, () => { killAll(); proc
 
 // Starts `bin` and resolves with {child, match} once a line of its output matches `pattern`
 // (or rejects after timeoutMs, or when it exits first).
-export function startProcess(bin, argv, pattern, { timeoutMs = 20000, env = process.env } = {}) {
+export function startProcess(bin, argv, pattern,
+                             { timeoutMs = 20000, env = process.env, cwd = undefined } = {}) {
   return new Promise((resolve, reject) => {
-    const child = spawn(bin, argv, { env, stdio: ['ignore', 'pipe', 'pipe'] });
+    const child = spawn(bin, argv, { env, cwd, stdio: ['ignore', 'pipe', 'pipe'] });
     children.add(child);
     let output = '';
     let done = false;

@@ -2,7 +2,10 @@
 // second of the station view at 1280 x 720 and of the console with 8 stations, and the
 // state-to-screen latency (the tick stamp of the state → the page drawing it, both
 // CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
-// node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N]
+// node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N] [--limit S]
+// Bounded: every wait has its own time-out and the whole run stops after --limit seconds
+// (default 300), writing what it measured so far; each step is reported on stderr with the
+// time since the start.
 import { readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { dirname } from 'node:path';
@@ -10,13 +13,18 @@ import { fileURLToPath } from 'node:url';
 import { startReplay } from './replay_console.mjs';
 import { join } from 'node:path';
 import { launchBrowser, sourceDir } from './browser.mjs';
+import { loadavg } from 'node:os';
 import { args, startProcess, stopProcess, waitFor } from './harness.mjs';
+
 
 const here = dirname(fileURLToPath(import.meta.url));
 const a = args({ web: join(sourceDir, 'build/web'), bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
                  seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0',
-                 width: '1280', height: '720', only: '', query: '' });
+                 width: '1280', height: '720', only: '', query: '', limit: '300', replay: '1',
+                 console_query: '' });
 const seconds = Number(a.seconds);
+const t0 = Date.now();
+const progress = (what) => process.stderr.write(`[${((Date.now() - t0) / 1000).toFixed(0).padStart(4)} s] ${what}\n`);
 const rt = a.realtime === '1' ? [] : ['--no-realtime'];
 const quantile = (v, q) => {
   if (!v.length) return NaN;
@@ -28,6 +36,7 @@ const summary = (lat) => ({ n: lat.length, p50_ms: quantile(lat, 0.5), p99_ms: q
 
 async function measurePage(page, probeName) {
   // Warm up, then count frames and collect latencies over the window.
+  progress(`${probeName}: 2 s warm-up, then ${seconds} s measured`);
   await page.waitForTimeout(2000);
   const start = await page.evaluate((p) => {
     const v = window[p];
@@ -43,16 +52,32 @@ async function measurePage(page, probeName) {
   return page.evaluate(([p, t0]) => {
     const v = window[p];
     return { fps: window.__frames / ((performance.now() - t0) / 1000), latency: [...v.latencyMs],
-             received: [...v.receivedMs], encoded: [...(v.encodedMs ?? [])] };
+             received: [...v.receivedMs], encoded: [...(v.encodedMs ?? [])],
+             tileDrawsPerSecond: v.tileDrawsPerSecond, budget: v.budget };
   }, [probeName, start]);
 }
 
 const report = { seconds, machine_load: (await import('node:os')).loadavg() };
 const W = Number(a.width), H = Number(a.height);
+const writeReport = () => {
+  report.machine_load_after = loadavg();
+  writeFileSync(join(a.out, 'view_speed.json'), JSON.stringify(report, null, 1));
+};
+// The whole run's bound: past it, what was measured is written and the run stops (the
+// harness kills the processes it started on exit).
+const limit = setTimeout(() => {
+  progress(`time limit ${a.limit} s reached: stopping with what was measured`);
+  report.stopped_at_limit = true;
+  writeReport();
+  process.exit(3);
+}, Number(a.limit) * 1000);
+limit.unref();
+progress('starting the browser');
 const { context, close } = await launchBrowser({ width: W, height: H });
 try {
   // Station view.
   if (a.only !== 'console') {
+  progress(`station view: ${a.scene}`);
   const station = await startProcess(join(a.bin, 'microdex-station'), [
     '--scene', join(sourceDir, `assets/scenes/${a.scene}.yaml`), '--view', '0', ...rt,
     '--duration', String(seconds + 60), '--partition', `measure-${process.pid}-s`,
@@ -62,7 +87,8 @@ try {
   await waitFor(() => page.evaluate(() => (window.microdexView?.framesDrawn ?? 0) >= 5), 'frames', 30000);
   const s = await measurePage(page, 'microdexView');
   report.station = { scene: a.scene, width: W, height: H, fps: s.fps, latency: summary(s.latency),
-                    received: summary(s.received), encoded: summary(s.encoded) };
+                    received: summary(s.received), encoded: summary(s.encoded), load_during: loadavg() };
+  progress(`station view: ${s.fps.toFixed(1)} fps`);
   await page.close();
   await stopProcess(station.child);
   }
@@ -70,6 +96,7 @@ try {
 
   // Console with N stations.
   const n = Number(a.stations);
+  progress(`console: the instructor and ${n} stations`);
   const dds = ['--partition', `measure-${process.pid}-c`];
   const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
                                         ['--http', '0', '--duration', String(seconds + 90), ...dds],
@@ -85,19 +112,27 @@ try {
     ], /station|info/));
   }
   const cpage = await context.newPage();
-  await cpage.goto(`http://127.0.0.1:${instructor.match[1]}/`);
+  progress('console: waiting for every tile to be drawn');
+  await cpage.goto(`http://127.0.0.1:${instructor.match[1]}/${a.console_query ? `?${a.console_query}` : ''}`);
   await waitFor(() => cpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
                 `${n} tiles drawn`, 60000);
   const c = await measurePage(cpage, 'microdexConsole');
   report.console = { stations: n, width: W, height: H, fps: c.fps, latency: summary(c.latency),
-                    received: summary(c.received) };
+                    received: summary(c.received), tile_draws_per_s: c.tileDrawsPerSecond,
+                    budget: c.budget, load_during: loadavg() };
+  progress(`console: ${c.fps.toFixed(1)} fps, ${c.tileDrawsPerSecond?.toFixed(1)} tile drawings/s`);
   await cpage.screenshot({ path: join(a.out, 'console_8_stations.png') });
   await cpage.close();
+  if (a.replay === '0') {
+    for (const st of stations) await stopProcess(st.child);
+    await stopProcess(instructor.child);
+  } else {
+  progress('console: recording 15 s of it for the replay');
   // A recording of the same console, replayed without the stations: the page's own cost.
   const recFile = join(a.out, 'console_recording.json');
   rmSync(recFile, { force: true });
   const recorder = spawnSync(process.execPath, ['--experimental-websocket', join(here, 'replay_console.mjs'), 'record',
-                               '--url', `http://127.0.0.1:${instructor.match[1]}/`, '--seconds', '30',
+                               '--url', `http://127.0.0.1:${instructor.match[1]}/`, '--seconds', '15',
                                '--out', recFile], { encoding: 'utf8', timeout: 90000 });
   if (recorder.status !== 0) throw new Error(`recording the console failed: ${recorder.stderr}`);
   for (const st of stations) await stopProcess(st.child);
@@ -114,11 +149,13 @@ try {
   await rpage.screenshot({ path: join(a.out, 'console_8_stations_replayed.png') });
   replay.close();
   }
+  }
 } finally {
   await close();
 }
-report.machine_load_after = (await import('node:os')).loadavg();
-writeFileSync(join(a.out, 'view_speed.json'), JSON.stringify(report, null, 1));
+clearTimeout(limit);
+writeReport();
+progress('done');
 const f = (v) => (Number.isFinite(v) ? v.toFixed(1) : '–');
 console.log(`| view | fps (goal) | state → drawn p50 / p99 ms (goal 25 / 60) | state → received by the page p50 / p99 ms |`);
 for (const [name, r, goal] of [[`station, ${a.scene}, ${W}x${H}`, report.station, 30],

@@ -3,7 +3,7 @@
 // message: no copies, nothing drawn here.
 
 export const FRAME_MAGIC = 0x4658444d; // "MDXF"
-export const FRAME_VERSION = 1;
+export const FRAME_VERSION = 2;
 export const HEADER_BYTES = 16;
 export const SCALAR_COUNT = 48;
 
@@ -12,6 +12,13 @@ export const HAS_THREAD = 2;
 export const HAS_TISSUE = 4;
 export const HAS_SCORE = 8;
 export const HAS_TELEMETRY = 16;
+export const HAS_OVERLAY = 32;
+
+// The cue overlay's bounds (common/cues/cue_overlay.h).
+export const MAX_OVERLAY_POLYLINES = 8;
+export const MAX_OVERLAY_POINTS = 64;
+export const MAX_OVERLAY_LABELS = 4;
+const LABEL_TEXT_BYTES = 32;
 
 // Scalar indices (float64), as in view_frame.h.
 export const S = {
@@ -45,6 +52,11 @@ export const S = {
   toolAgeMs: 44,
 } as const;
 
+// The visual cues as drawing data (common/cues/cue_overlay.h): world points, colours 0..1.
+export interface OverlayPolyline { role: number; rgba: Float32Array; widthM: number; points: Float32Array }
+export interface OverlayLabel { role: number; rgba: Float32Array; p: Float32Array; text: string }
+export interface Overlay { polylines: OverlayPolyline[]; labels: OverlayLabel[] }
+
 export interface Frame {
   flags: number;
   slot: number;
@@ -53,6 +65,7 @@ export interface Frame {
   tissue: Float32Array; // nodesX * nodesY displacements (x fastest, m)
   tissueNodesX: number;
   tissueNodesY: number;
+  overlay: Overlay | null; // null: the frame carries none (the view keeps what it drew)
 }
 
 export class FrameError extends Error {}
@@ -94,12 +107,58 @@ export function decodeFrame(buffer: ArrayBuffer): Frame {
     }
   }
   const tissueCount = tissueNodesX * tissueNodesY;
-  if (offset + tissueCount * 4 !== buffer.byteLength) {
-    throw new FrameError(
-        `frame: ${buffer.byteLength} bytes, expected ${offset + tissueCount * 4}`);
+  const tissueEnd = offset + tissueCount * 4;
+  if (tissueEnd > buffer.byteLength || ((flags & HAS_OVERLAY) === 0 && tissueEnd !== buffer.byteLength)) {
+    throw new FrameError(`frame: ${buffer.byteLength} bytes, expected ${tissueEnd}`);
   }
   const tissue = new Float32Array(buffer, offset, tissueCount);
-  return { flags, slot, scalars, threadNodes, tissue, tissueNodesX, tissueNodesY };
+  offset = tissueEnd;
+  let overlay: Overlay | null = null;
+  if (flags & HAS_OVERLAY) {
+    overlay = decodeOverlay(buffer, offset);
+  }
+  return { flags, slot, scalars, threadNodes, tissue, tissueNodesX, tissueNodesY, overlay };
+}
+
+// The overlay section, which must end the message exactly.
+function decodeOverlay(buffer: ArrayBuffer, start: number): Overlay {
+  let at = start;
+  const need = (bytes: number, what: string) => {
+    if (at + bytes > buffer.byteLength) throw new FrameError(`frame: overlay ${what} overruns the message`);
+  };
+  const count = (v: number, max: number, what: string) => {
+    if (!Number.isInteger(v) || v < 0 || v > max) throw new FrameError(`frame: overlay ${what} ${v} (0..${max})`);
+    return v;
+  };
+  need(8, 'counts');
+  const head = new Float32Array(buffer, at, 2);
+  const lines = count(head[0], MAX_OVERLAY_POLYLINES, 'polyline count');
+  const labels = count(head[1], MAX_OVERLAY_LABELS, 'label count');
+  at += 8;
+  const out: Overlay = { polylines: [], labels: [] };
+  for (let i = 0; i < lines; ++i) {
+    need(28, 'polyline');
+    const h = new Float32Array(buffer, at, 7);
+    const n = count(h[6], MAX_OVERLAY_POINTS, 'point count');
+    at += 28;
+    need(n * 12, 'points');
+    out.polylines.push({ role: h[0], rgba: h.subarray(1, 5), widthM: h[5],
+                         points: new Float32Array(buffer, at, n * 3) });
+    at += n * 12;
+  }
+  for (let i = 0; i < labels; ++i) {
+    need(32 + LABEL_TEXT_BYTES, 'label');
+    const h = new Float32Array(buffer, at, 8);
+    const bytes = new Uint8Array(buffer, at + 32, LABEL_TEXT_BYTES);
+    const end = bytes.indexOf(0);
+    const text = new TextDecoder().decode(bytes.subarray(0, end < 0 ? LABEL_TEXT_BYTES : end));
+    out.labels.push({ role: h[0], rgba: h.subarray(1, 5), p: h.subarray(5, 8), text });
+    at += 32 + LABEL_TEXT_BYTES;
+  }
+  if (at !== buffer.byteLength) {
+    throw new FrameError(`frame: ${buffer.byteLength} bytes, expected ${at}`);
+  }
+  return out;
 }
 
 // Bits of the active cues: bit k is cues::CueKind k (common/cues/cue_kind.h, same order).

@@ -54,3 +54,40 @@ export function softwareGl(): boolean {
   gl.getExtension('WEBGL_lose_context')?.loseContext();
   return /swiftshader|llvmpipe|software/i.test(name);
 }
+
+// Aims `camera` along the scene's view direction at the centre of `box` (world), from the
+// distance at which the box, with `margin` around it, just fits the view (its extent across
+// and up the image plane against the horizontal and vertical angles of view): the console's
+// thread tiles show the thread wherever it lies, as large as fits. Returns the height of the
+// field shown at the box's centre (m).
+export function fitCamera(camera: THREE.PerspectiveCamera, scene: SceneJson, box: THREE.Box3,
+                          margin = 1.15): number {
+  if (box.isEmpty()) return fieldOfView(scene);
+  const centre = box.getCenter(new THREE.Vector3());
+  const framed: SceneJson = { ...scene, microscope: { ...scene.microscope,
+                                                      look_at: centre.toArray() as [number, number, number] } };
+  // The image-plane axes for this view direction (aimCamera's), then the box's half extents
+  // along them and along the view.
+  aimCamera(camera, framed, 1);
+  const { right, up, forward } = screenAxes(camera);
+  let halfW = 0;
+  let halfH = 0;
+  let halfD = 0;
+  const corner = new THREE.Vector3();
+  for (let k = 0; k < 8; ++k) {
+    corner.set(k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y,
+               k & 4 ? box.max.z : box.min.z).sub(centre);
+    halfW = Math.max(halfW, Math.abs(corner.dot(right)));
+    halfH = Math.max(halfH, Math.abs(corner.dot(up)));
+    halfD = Math.max(halfD, Math.abs(corner.dot(forward)));
+  }
+  const minHalf = fieldOfView(scene) / 80; // a point-like thread: not closer than this
+  const tanV = Math.tan(THREE.MathUtils.degToRad(camera.fov / 2));
+  const tanH = tanV * camera.aspect;
+  const distance = halfD + margin * Math.max(halfW / tanH, halfH / tanV, minHalf / tanV);
+  camera.near = distance / 50;
+  camera.far = distance * 20;
+  camera.updateProjectionMatrix();
+  aimCamera(camera, framed, distance);
+  return 2 * (distance - halfD) * tanV;
+}

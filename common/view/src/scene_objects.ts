@@ -3,7 +3,10 @@
 // per scene; apply() updates their poses and buffers in place (no geometry rebuilt per frame).
 
 import * as THREE from 'three';
-import { Frame, HAS_NEEDLE, HAS_THREAD, HAS_TISSUE, S } from './frame';
+import {
+  Frame, HAS_NEEDLE, HAS_SCORE, HAS_THREAD, HAS_TISSUE, MAX_OVERLAY_LABELS, MAX_OVERLAY_POINTS,
+  MAX_OVERLAY_POLYLINES, Overlay, S,
+} from './frame';
 
 export type V3 = [number, number, number];
 export type Q4 = [number, number, number, number]; // w, x, y, z
@@ -29,6 +32,8 @@ export interface SceneJson {
     jaw_width: number; jaw_length: number; jaw_thickness: number; open_gap: number;
   };
   placement?: { vessel_radius: number; end_height: number; stitches: number; bite: number };
+  // The knot-topology quiz: each item's thread, x y z per point (m, the tissue at z = 0).
+  knots?: { radius: number; items: number[][] };
 }
 
 // Colours the tests look for (tests/web): the needle is drawn unlit in NEEDLE_COLOR, red in
@@ -38,6 +43,8 @@ export const CONTACT_COLOR = 0xff2020;
 export const TOOL_COLOR = 0xc8c8d0;
 export const THREAD_COLOR = 0x3050ff;
 export const PATH_COLOR = 0xd0d080; // the task's ideal path, faint
+export const KNOT_COLOR = 0x2040ff; // the quiz's knot (a blue suture)
+export const STITCH_TARGET_COLOR = 0x40ff60; // where the placement task's stitches go
 
 // Level of detail: the station's full view or a console tile.
 export interface Detail {
@@ -136,7 +143,7 @@ export class PolylineTube {
   private readonly positions: Float32Array;
   private readonly normals: Float32Array;
 
-  constructor(readonly maxNodes: number, readonly radius: number, readonly sides: number,
+  constructor(readonly maxNodes: number, public radius: number, readonly sides: number,
               mat: THREE.Material) {
     this.positions = new Float32Array(maxNodes * sides * 3);
     this.normals = new Float32Array(maxNodes * sides * 3);
@@ -231,6 +238,12 @@ export class SceneView {
   thread: PolylineTube | null = null;
   tissue: THREE.Mesh | null = null;
   private tissueKey = '';
+  knot: PolylineTube | null = null;
+  knotItem = -1; // the quiz item drawn (-1 none; items.length: the quiz is done)
+  readonly overlay: CueOverlayView;
+  // The thread's extent so far (grows only): the console frames a thread tile on it.
+  readonly threadBox = new THREE.Box3();
+  threadBoxVersion = 0;
   private shadowDot: THREE.Mesh;
   private floorZ: number;
   lastFrame: Frame | null = null;
@@ -299,6 +312,36 @@ export class SceneView {
       geom.translate(0, 0, p.end_height / 2);
       this.root.add(new THREE.Mesh(geom, material(0xd0606a, { side: THREE.DoubleSide })));
     }
+    if (scene.placement) {
+      // Where the stitches go: evenly around the vessel, bite below the cut edge (a guide;
+      // the stitches placed are not mirrored yet, only their count in the score's progress).
+      const p = scene.placement;
+      const z = p.end_height - p.bite;
+      const r = p.vessel_radius * 1.04;
+      const dotGeom = new THREE.SphereGeometry(p.vessel_radius * 0.09, d.radial, d.radial / 2);
+      const dotMat = new THREE.MeshBasicMaterial({ color: STITCH_TARGET_COLOR });
+      for (let k = 0; k < p.stitches; ++k) {
+        const a = (2 * Math.PI * k) / p.stitches;
+        const dot = new THREE.Mesh(dotGeom, dotMat);
+        dot.position.set(r * Math.cos(a), r * Math.sin(a), z);
+        this.root.add(dot);
+      }
+      // The cut edge, a ring.
+      const edge = new THREE.Mesh(new THREE.TorusGeometry(p.vessel_radius, p.vessel_radius * 0.03,
+                                                          4, d.along * 2),
+                                  new THREE.MeshBasicMaterial({ color: 0xffe0e0 }));
+      edge.position.z = p.end_height;
+      this.root.add(edge);
+    }
+    if (scene.knots && scene.knots.items.length > 0) {
+      const maxPoints = Math.max(...scene.knots.items.map((k) => k.length / 3));
+      // Thin: the strands of a tight knot lie a diameter apart; drawn at least a pixel or two.
+      const radius = Math.max(scene.knots.radius, (fieldOfView(scene) * d.thinFraction) / 6);
+      this.knot = new PolylineTube(Math.max(maxPoints, 2), radius, Math.max(4, d.radial / 2),
+                                   material(KNOT_COLOR));
+      this.root.add(this.knot.mesh);
+      this.showKnot(0);
+    }
     if (scene.path.length >= 2) {
       const line = new THREE.Line(
           new THREE.BufferGeometry().setFromPoints(scene.path.map((p) => new THREE.Vector3(...p))),
@@ -350,6 +393,8 @@ export class SceneView {
     }
     setPose(this.tool, scene.tool_start.p, 0, scene.tool_start.q, 0);
     this.root.add(this.tool);
+    this.overlay = new CueOverlayView(fieldOfView(scene));
+    this.root.add(this.overlay.root);
     // The tool tip's shadow on the table (a depth cue under a microscope's vertical light).
     this.shadowDot = new THREE.Mesh(new THREE.CircleGeometry(shaftRadius * 1.5, 16),
                                     new THREE.MeshBasicMaterial({ color: 0x000000,
@@ -377,8 +422,46 @@ export class SceneView {
       setPose(this.needle, s, S.needleP, s, S.needleQ);
       this.needleMaterial!.color.setHex(s[S.contact] ? CONTACT_COLOR : NEEDLE_COLOR);
     }
-    if (this.thread && (f.flags & HAS_THREAD)) this.thread.update(f.threadNodes);
+    if (this.thread && (f.flags & HAS_THREAD)) {
+      this.thread.update(f.threadNodes);
+      this.growThreadBox(f.threadNodes);
+    }
     if (f.flags & HAS_TISSUE) this.applyTissue(f);
+    if (this.knot && this.scene.knots && (f.flags & HAS_SCORE)) {
+      // The quiz's progress is the share of its items answered: the item shown is the next.
+      this.showKnot(Math.round(s[S.progress] * this.scene.knots.items.length));
+    }
+    if (f.overlay) this.overlay.apply(f.overlay);
+  }
+
+  // The thread drawn at least a few pixels wide for a view showing `field` (m) high (a tile
+  // framed on the thread shows less than the microscope's field).
+  setThreadField(field: number): void {
+    if (!this.thread || !this.scene.thread) return;
+    this.thread.radius = Math.max(this.scene.thread.radius, (field * this.detail.thinFraction) / 2);
+    if (this.lastFrame && (this.lastFrame.flags & HAS_THREAD)) this.thread.update(this.lastFrame.threadNodes);
+  }
+
+  // The quiz item i's knot (none once every item is answered).
+  showKnot(i: number): void {
+    if (!this.knot || !this.scene.knots || i === this.knotItem) return;
+    this.knotItem = i;
+    const items = this.scene.knots.items;
+    if (i >= 0 && i < items.length) {
+      this.knot.update(new Float32Array(items[i]));
+      this.knot.mesh.visible = true;
+    } else {
+      this.knot.mesh.visible = false;
+    }
+  }
+
+  private growThreadBox(nodes: Float32Array): void {
+    const before = this.threadBox.clone();
+    const p = new THREE.Vector3();
+    for (let i = 0; i + 2 < nodes.length; i += 3) {
+      this.threadBox.expandByPoint(p.set(nodes[i], nodes[i + 1], nodes[i + 2]));
+    }
+    if (!before.equals(this.threadBox)) ++this.threadBoxVersion;
   }
 
   private applyTissue(f: Frame): void {
@@ -428,6 +511,104 @@ export class SceneView {
     const p = needleCurve(n.radius, n.sweep).getPoint(0.5);
     this.needle.updateMatrixWorld();
     return p.applyMatrix4(this.needle.matrixWorld);
+  }
+}
+
+// The visual cues (CueOverlay topic, in the frames): each polyline a line strip of its colour,
+// each label a text sprite at its point, drawn over the scene (no depth test) so that a cue is
+// never hidden behind the object it is about. Buffers are allocated once; a label's texture
+// is redrawn only when its text or colour changes.
+export class CueOverlayView {
+  readonly root = new THREE.Group();
+  readonly lines: THREE.Line[] = [];
+  readonly labels: { sprite: THREE.Sprite; key: string; canvas: HTMLCanvasElement | null }[] = [];
+  drawnPolylines = 0;
+  drawnLabels = 0;
+
+  constructor(private readonly field: number) {
+    this.root.renderOrder = 10;
+    for (let i = 0; i < MAX_OVERLAY_POLYLINES; ++i) {
+      const geom = new THREE.BufferGeometry();
+      geom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(MAX_OVERLAY_POINTS * 3), 3));
+      geom.setDrawRange(0, 0);
+      const line = new THREE.Line(geom, new THREE.LineBasicMaterial({
+        color: 0xffffff, transparent: true, depthTest: false, depthWrite: false }));
+      line.frustumCulled = false;
+      line.renderOrder = 10;
+      line.visible = false;
+      this.lines.push(line);
+      this.root.add(line);
+    }
+    for (let i = 0; i < MAX_OVERLAY_LABELS; ++i) {
+      const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ depthTest: false, depthWrite: false,
+                                                                 transparent: true }));
+      sprite.renderOrder = 11;
+      sprite.visible = false;
+      this.labels.push({ sprite, key: '', canvas: null });
+      this.root.add(sprite);
+    }
+  }
+
+  apply(o: Overlay): void {
+    for (let i = 0; i < this.lines.length; ++i) {
+      const line = this.lines[i];
+      const pl = o.polylines[i];
+      if (!pl || pl.points.length < 6) { line.visible = false; continue; }
+      const attr = line.geometry.getAttribute('position') as THREE.BufferAttribute;
+      (attr.array as Float32Array).set(pl.points);
+      attr.needsUpdate = true;
+      line.geometry.setDrawRange(0, pl.points.length / 3);
+      const m = line.material as THREE.LineBasicMaterial;
+      m.color.setRGB(pl.rgba[0], pl.rgba[1], pl.rgba[2], THREE.SRGBColorSpace);
+      m.opacity = pl.rgba[3];
+      line.visible = true;
+    }
+    this.drawnPolylines = Math.min(o.polylines.length, this.lines.length);
+    for (let i = 0; i < this.labels.length; ++i) {
+      const l = this.labels[i];
+      const lab = o.labels[i];
+      if (!lab || !lab.text) { l.sprite.visible = false; continue; }
+      l.sprite.position.set(lab.p[0], lab.p[1], lab.p[2]);
+      const key = `${lab.text}|${Array.from(lab.rgba).map((v) => v.toFixed(2)).join(',')}`;
+      if (key !== l.key) {
+        l.key = key;
+        this.drawLabel(l, lab.text, lab.rgba);
+        // Labels anchored at nearly the same point (the tool's) stack downwards, not overlap.
+        l.sprite.center.set(0, 0.5 + 1.1 * i);
+      }
+      l.sprite.visible = true;
+    }
+    this.drawnLabels = Math.min(o.labels.length, this.labels.length);
+  }
+
+  private drawLabel(l: { sprite: THREE.Sprite; canvas: HTMLCanvasElement | null }, text: string,
+                    rgba: Float32Array): void {
+    if (typeof document === 'undefined') return; // no DOM (unit tests): positions only
+    if (!l.canvas) {
+      l.canvas = document.createElement('canvas');
+      l.canvas.width = 256;
+      l.canvas.height = 48;
+    }
+    const ctx = l.canvas.getContext('2d');
+    if (!ctx) return;
+    ctx.clearRect(0, 0, 256, 48);
+    ctx.font = 'bold 30px sans-serif';
+    ctx.textBaseline = 'middle';
+    ctx.lineWidth = 6;
+    ctx.strokeStyle = 'rgba(0,0,0,0.8)';
+    ctx.strokeText(text, 6, 24);
+    const c = (v: number) => Math.round(Math.min(Math.max(v, 0), 1) * 255);
+    ctx.fillStyle = `rgb(${c(rgba[0])},${c(rgba[1])},${c(rgba[2])})`;
+    ctx.fillText(text, 6, 24);
+    const m = l.sprite.material as THREE.SpriteMaterial;
+    if (m.map) m.map.dispose();
+    m.map = new THREE.CanvasTexture(l.canvas);
+    m.map.colorSpace = THREE.SRGBColorSpace;
+    m.needsUpdate = true;
+    // About a twentieth of the field high, anchored at its left end.
+    const h = this.field / 20;
+    l.sprite.scale.set(h * (256 / 48), h, 1);
+    l.sprite.center.set(0, 0.5);
   }
 }
 

@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <limits>
+#include <string>
 
 #include "cue_command.h"
 #include "cue_commandPubSubTypes.h"
@@ -14,6 +15,8 @@
 #include "device_inputPubSubTypes.h"
 #include "needle_state.h"
 #include "needle_statePubSubTypes.h"
+#include "scene_description.h"
+#include "scene_descriptionPubSubTypes.h"
 #include "score.h"
 #include "scorePubSubTypes.h"
 #include "station_info.h"
@@ -56,7 +59,22 @@ StationInfo MakeStationInfo() {
   info.mirror_rate_hz(60.0);
   info.skill(0.25);
   info.device("sim");
+  info.scene_hash(0x0123456789abcdefULL);
   return info;
+}
+
+SceneDescription MakeSceneDescription() {
+  SceneDescription m;
+  FillHeader(m);
+  m.scene_path("scenes/needle_tube.yaml");
+  m.hash(0xfedcba9876543210ULL);
+  m.files().resize(2);
+  m.files()[0].path("scenes/needle_tube.yaml");
+  const std::string yaml = "name: needle-in-tube\nmodules: [needle]\n";
+  m.files()[0].bytes().assign(yaml.begin(), yaml.end());
+  m.files()[1].path("meshes/vessel.glb");
+  m.files()[1].bytes().assign(300, 0x5a);
+  return m;
 }
 
 DeviceInput MakeDeviceInput() {
@@ -202,7 +220,8 @@ using Cases = ::testing::Types<
     Case<ToolState, ToolStatePubSubType>, Case<NeedleState, NeedleStatePubSubType>,
     Case<ThreadState, ThreadStatePubSubType>, Case<TissueState, TissueStatePubSubType>,
     Case<Telemetry, TelemetryPubSubType>, Case<CueCommand, CueCommandPubSubType>,
-    Case<TaskEvent, TaskEventPubSubType>, Case<Score, ScorePubSubType>>;
+    Case<TaskEvent, TaskEventPubSubType>, Case<Score, ScorePubSubType>,
+    Case<SceneDescription, SceneDescriptionPubSubType>>;
 TYPED_TEST_SUITE(IdlRoundTrip, Cases);
 
 StationInfo Make(StationInfo*) { return MakeStationInfo(); }
@@ -215,6 +234,7 @@ Telemetry Make(Telemetry*) { return MakeTelemetry(); }
 CueCommand Make(CueCommand*) { return MakeCueCommand(); }
 TaskEvent Make(TaskEvent*) { return MakeTaskEvent(); }
 Score Make(Score*) { return MakeScore(); }
+SceneDescription Make(SceneDescription*) { return MakeSceneDescription(); }
 
 template <class C>
 typename C::MsgType MakeSample() {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 
 #include "common/scene/scene.h"
 #include "common/view/scene_view.h"
@@ -125,6 +126,14 @@ TEST(SceneView, JsonHasTheSceneShapes) {
   const std::string jn = SceneViewJson(n);
   EXPECT_NE(jn.find("\"vessel\":{\"core_radius\":"), std::string::npos);
   EXPECT_NE(jn.find("\"needle\":{\"radius\":"), std::string::npos);
+}
+
+TEST(SceneView, JsonNumberDigitsAndNonFinite) {
+  EXPECT_EQ(JsonNumber(0.123456789012), "0.123456789");
+  EXPECT_EQ(JsonNumber(0.123456789012, 6), "0.123457");
+  EXPECT_EQ(JsonNumber(2.5e-5, 6), "2.5e-05");
+  EXPECT_EQ(JsonNumber(std::numeric_limits<double>::quiet_NaN()), "null");
+  EXPECT_EQ(JsonNumber(-std::numeric_limits<double>::infinity(), 6), "null");
 }
 
 TEST(SceneView, JsonQuoteEscapes) { EXPECT_EQ(JsonQuote("a\"b\\c\n"), "\"a\\\"b\\\\c\\u000a\""); }

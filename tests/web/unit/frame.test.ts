@@ -3,20 +3,21 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import {
-  decodeFrame, FrameError, FRAME_MAGIC, FRAME_VERSION, HAS_NEEDLE, HAS_THREAD, HAS_TISSUE,
+  decodeFrame, FrameError, FRAME_MAGIC, FRAME_VERSION, HAS_NEEDLE, HAS_OVERLAY, HAS_THREAD, HAS_TISSUE,
   HEADER_BYTES, S, SCALAR_COUNT, activeCueNames,
 } from '../../../common/view/src/frame';
 
 interface Parts { flags: number; slot?: number; scalars: Record<number, number>;
-                  thread?: number[]; tissue?: number[]; extraBytes?: number;
+                  thread?: number[]; tissue?: number[]; extraBytes?: number; overlay?: number[];
                   magic?: number; version?: number; threadCount?: number }
 
 // Writes a frame the way view_frame.cc does.
 function encode(p: Parts): ArrayBuffer {
   const thread = p.thread ?? [];
   const tissue = p.tissue ?? [];
+  const overlay = p.overlay ?? [];
   const bytes = HEADER_BYTES + SCALAR_COUNT * 8 + thread.length * 4 + tissue.length * 4 +
-                (p.extraBytes ?? 0);
+                overlay.length * 4 + (p.extraBytes ?? 0);
   const buf = new ArrayBuffer(bytes);
   const v = new DataView(buf);
   v.setUint32(0, p.magic ?? FRAME_MAGIC, true);
@@ -28,8 +29,51 @@ function encode(p: Parts): ArrayBuffer {
   let o = HEADER_BYTES + SCALAR_COUNT * 8;
   for (const x of thread) { v.setFloat32(o, x, true); o += 4; }
   for (const x of tissue) { v.setFloat32(o, x, true); o += 4; }
+  for (const x of overlay) { v.setFloat32(o, x, true); o += 4; }
   return buf;
 }
+
+// An overlay section as view_frame.cc writes it: one polyline of two points and one label
+// (its text packed into the 32 bytes that follow its 8 numbers, little-endian floats reused
+// as bytes).
+function overlaySection(text: string): number[] {
+  const out = [1, 1, /* polyline */ 2, 1, 0.5, 0, 0.8, 0, 2, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006,
+               /* label */ 4, 0, 1, 1, 1, 0.01, 0.02, 0.03];
+  const bytes = new Uint8Array(32);
+  bytes.set(new TextEncoder().encode(text));
+  const asFloats = new Float32Array(bytes.buffer);
+  return out.concat(Array.from(asFloats));
+}
+
+test('the cue overlay: polylines and labels after the tissue field', () => {
+  const f = decodeFrame(encode({ flags: HAS_TISSUE | HAS_OVERLAY, tissue: [0, 0, 0, 0],
+    scalars: { [S.tissueNodesX]: 2, [S.tissueNodesY]: 2 }, overlay: overlaySection('0.42 mm') }));
+  assert.ok(f.overlay);
+  assert.equal(f.overlay.polylines.length, 1);
+  const pl = f.overlay.polylines[0];
+  assert.equal(pl.role, 2);
+  assert.equal(pl.points.length, 6);
+  assert.ok(Math.abs(pl.points[5] - 0.006) < 1e-7);
+  assert.ok(Math.abs(pl.rgba[1] - 0.5) < 1e-7);
+  assert.equal(f.overlay.labels.length, 1);
+  assert.equal(f.overlay.labels[0].text, '0.42 mm');
+  assert.ok(Math.abs(f.overlay.labels[0].p[2] - 0.03) < 1e-7);
+});
+
+test('an overlay out of its bounds or short is refused', () => {
+  const tooMany = overlaySection('x');
+  tooMany[0] = 9; // polylines: at most 8
+  assert.throws(() => decodeFrame(encode({ flags: HAS_OVERLAY, scalars: {}, overlay: tooMany })),
+                /polyline count 9/);
+  const cut = overlaySection('x').slice(0, 12);
+  assert.throws(() => decodeFrame(encode({ flags: HAS_OVERLAY, scalars: {}, overlay: cut })), /overruns/);
+  const points = overlaySection('x');
+  points[8] = 65; // points: at most 64
+  assert.throws(() => decodeFrame(encode({ flags: HAS_OVERLAY, scalars: {}, overlay: points })),
+                /point count 65/);
+  assert.throws(() => decodeFrame(encode({ flags: HAS_OVERLAY, scalars: {}, overlay: overlaySection('x'),
+                                           extraBytes: 4 })), /expected/);
+});
 
 test('the magic is "MDXF" as little-endian bytes', () => {
   const b = new Uint8Array(encode({ flags: 0, scalars: {} }));

@@ -3,12 +3,12 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import * as THREE from 'three';
-import { HAS_NEEDLE, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame } from '../../../common/view/src/frame';
+import { HAS_NEEDLE, HAS_SCORE, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame, Overlay } from '../../../common/view/src/frame';
 import {
   SceneJson, SceneView, HIGH_DETAIL, LOW_DETAIL, NEEDLE_COLOR, CONTACT_COLOR, gridIndices,
   needleCurve, polylineCurve, sampleTissue, fieldOfView, TISSUE_REST,
 } from '../../../common/view/src/scene_objects';
-import { microscopeCamera } from '../../../common/view/src/microscope';
+import { fitCamera, microscopeCamera } from '../../../common/view/src/microscope';
 
 const base: SceneJson = {
   name: 't', task: 'follow_path', modules: ['needle'], tolerance: 1e-4, path: [],
@@ -26,8 +26,65 @@ function frame(flags: number, set: Record<number, number>, thread: number[] = []
   scalars[S.tissueQ] = 1;
   for (const [k, v] of Object.entries(set)) scalars[Number(k)] = v;
   return { flags, slot: 0, scalars, threadNodes: new Float32Array(thread),
-           tissue: new Float32Array(tissue), tissueNodesX: nx, tissueNodesY: ny };
+           tissue: new Float32Array(tissue), tissueNodesX: nx, tissueNodesY: ny, overlay: null };
 }
+
+test('the knot quiz shows the item its progress points at, none once done', () => {
+  const knots = { radius: 15e-6, items: [[0, 0, 0, 1e-4, 0, 0, 2e-4, 1e-4, 0], [0, 0, 0, 0, 3e-4, 0]] };
+  const v = new SceneView({ ...base, modules: ['knots'], vessel: undefined, needle: undefined, knots }, LOW_DETAIL);
+  assert.ok(v.knot);
+  assert.equal(v.knotItem, 0);
+  const drawn = () => v.knot!.mesh.geometry.drawRange.count;
+  const first = drawn();
+  assert.ok(first > 0);
+  v.apply(frame(HAS_SCORE, { [S.progress]: 0.5 }));
+  assert.equal(v.knotItem, 1);
+  assert.ok(drawn() < first, 'the second knot has fewer points');
+  assert.ok(v.knot!.mesh.visible);
+  v.apply(frame(HAS_SCORE, { [S.progress]: 1 }));
+  assert.equal(v.knot!.mesh.visible, false);
+});
+
+test('the cue overlay draws the frame\'s polylines in their colours, hides the rest', () => {
+  const v = new SceneView(base, LOW_DETAIL);
+  const f = frame(0, {});
+  const o: Overlay = { polylines: [{ role: 2, rgba: new Float32Array([1, 0, 0, 0.5]), widthM: 0,
+                                     points: new Float32Array([0, 0, 0, 1e-3, 0, 0, 1e-3, 1e-3, 0]) }],
+                       labels: [{ role: 3, rgba: new Float32Array([1, 1, 0, 1]), p: new Float32Array([1e-3, 2e-3, 3e-3]), text: '0.3 mm' }] };
+  f.overlay = o;
+  v.apply(f);
+  const line = v.overlay.lines[0];
+  assert.ok(line.visible);
+  assert.equal(line.geometry.drawRange.count, 3);
+  assert.ok(Math.abs((line.material as THREE.LineBasicMaterial).opacity - 0.5) < 1e-6);
+  assert.equal(v.overlay.lines[1].visible, false);
+  assert.ok(v.overlay.labels[0].sprite.visible);
+  assert.ok(Math.abs(v.overlay.labels[0].sprite.position.z - 3e-3) < 1e-9);
+  // An empty overlay clears what was drawn; a frame without one keeps it.
+  const g = frame(0, {});
+  g.overlay = { polylines: [], labels: [] };
+  v.apply(g);
+  assert.equal(line.visible, false);
+  assert.equal(v.overlay.labels[0].sprite.visible, false);
+});
+
+test('a thread tile frames the thread: the camera sees every node, closer than the field', () => {
+  const s: SceneJson = { ...base, modules: ['thread'], vessel: undefined, needle: undefined,
+                         thread: { anchor: [0, 0, 0], radius: 15e-6 } };
+  const v = new SceneView(s, LOW_DETAIL);
+  const nodes = [0, 0, 0, 2e-3, 1e-3, 0, 4e-3, 0, 0];
+  v.apply(frame(HAS_THREAD, {}, nodes));
+  assert.ok(!v.threadBox.isEmpty());
+  const cam = microscopeCamera(s, 16 / 9);
+  const before = cam.position.distanceTo(new THREE.Vector3(0, 0, 0));
+  fitCamera(cam, s, v.threadBox);
+  cam.updateMatrixWorld();
+  for (let i = 0; i < nodes.length; i += 3) {
+    const p = new THREE.Vector3(nodes[i], nodes[i + 1], nodes[i + 2]).project(cam);
+    assert.ok(Math.abs(p.x) <= 1 && Math.abs(p.y) <= 1, `node ${i / 3} in view`);
+  }
+  assert.ok(cam.position.distanceTo(new THREE.Vector3(2e-3, 0.5e-3, 0)) < before);
+});
 
 test('the needle curve is the arc (rho cos s, rho sin s, 0)', () => {
   const c = needleCurve(2, Math.PI / 2);
