@@ -84,13 +84,15 @@ ConsoleServer::~ConsoleServer() {
   std::filesystem::remove_all(scene_dir_, ec);
 }
 
-// The scene from the station's SceneDescription (never from the path in its StationInfo: that
-// names a file on the station's machine). {"error": REASON, "retry": true} while it may still
+// The scene from the station's SceneDescription (the path in its StationInfo names a file on
+// the station's machine: it is used only when no description came and that path leads, here,
+// to files with the StationInfo's scene_hash). {"error": REASON, "retry": true} while it may still
 // come (not received yet, or its hash not yet that of the StationInfo received); a refused or
 // unloadable description is logged once per station and reason.
 std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_id) {
   std::shared_ptr<const view::SceneFiles> files;
   std::string refused;
+  std::string info_path;
   std::uint64_t info_hash = 0;
   bool found = false;
   instructor_.VisitStations([&](const StationView& v) {
@@ -99,6 +101,7 @@ std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_
     files = v.scene_files;
     refused = v.scene_error;
     info_hash = v.info.scene_hash;
+    info_path = v.info.scene;
   });
   if (!found) return std::nullopt;
   auto error = [&](const std::string& why, bool retry) {
@@ -110,6 +113,18 @@ std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_
                                                  ",\"retry\":" + (retry ? "true" : "false") + "}"};
   };
   if (!refused.empty()) return error("scene description refused: " + refused, false);
+  if (!files && info_hash != 0) {
+    // No description (a replay of a recording publishes StationInfo only): the file the
+    // StationInfo names, if this machine has it and its files hash to the StationInfo's
+    // scene_hash, is certainly the same scene.
+    try {
+      auto local = std::make_shared<view::SceneFiles>(
+          view::CollectSceneFiles(scene::LoadScene(info_path)));
+      if (local->hash == info_hash) files = std::move(local);
+    } catch (const std::exception&) {
+      // Not here: wait for the description.
+    }
+  }
   if (!files) return error("scene description not received yet", true);
   if (files->hash != info_hash) {
     const std::string why = "scene description hash " + view::HashHex(files->hash) +

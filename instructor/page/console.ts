@@ -115,9 +115,10 @@ class Tile {
     fetch(`/scene/${encodeURIComponent(this.station.id)}.json`).then((r) => r.json()).then((j) => {
       if (!j.error) {
         this.setScene(j as SceneJson, '');
-      } else if (j.retry && attempt < 120) {
+      } else if (j.retry) {
+        // Asked again, less often as it takes longer (a station may start long after).
         this.note.textContent = j.error;
-        setTimeout(() => this.fetchScene(attempt + 1), 500);
+        setTimeout(() => this.fetchScene(attempt + 1), Math.min(500 + 250 * attempt, 5000));
       } else {
         this.setScene(null, j.error);
       }
@@ -208,7 +209,7 @@ function main(): void {
   const probe = {
     stations: [] as StationJson[], framesReceived: 0, badFrames: 0, fps: 0, tilesDrawn: 0,
     framesBySlot: [] as number[], errors: [] as string[], latencyMs: [] as number[],
-    receivedMs: [] as number[], budget: 0, tileDrawsPerSecond: 0,
+    receivedMs: [] as number[], budget: 0, tileDrawsPerSecond: 0, tileDrawsTotal: 0,
     sceneNames: {} as Record<string, string>, // station → the name of the scene its tile draws
   };
   (window as any).microdexConsole = probe;
@@ -301,6 +302,7 @@ function main(): void {
     tile.drawn = true;
     tile.drawnAt = performance.now();
     ++tileDraws;
+    ++probe.tileDrawsTotal;
   };
   renderer.setAnimationLoop(() => {
     const now = performance.now();

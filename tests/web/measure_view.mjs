@@ -31,6 +31,15 @@ const quantile = (v, q) => {
   const s = [...v].sort((x, y) => x - y);
   return s[Math.min(s.length - 1, Math.floor(q * s.length))];
 };
+// CPU time of a process so far (user + system, s; Linux /proc).
+const cpuSeconds = (pid) => {
+  try {
+    const f = readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' ');
+    return (Number(f[11]) + Number(f[12])) / 100;
+  } catch {
+    return NaN;
+  }
+};
 const summary = (lat) => ({ n: lat.length, p50_ms: quantile(lat, 0.5), p99_ms: quantile(lat, 0.99),
                             max_ms: quantile(lat, 1) });
 
@@ -44,6 +53,7 @@ async function measurePage(page, probeName) {
     v.receivedMs.length = 0;
     if (v.encodedMs) v.encodedMs.length = 0;
     window.__frames = 0;
+    window.__tileDraws0 = v.tileDrawsTotal ?? 0;
     const count = () => { ++window.__frames; requestAnimationFrame(count); };
     requestAnimationFrame(count);
     return performance.now();
@@ -53,7 +63,8 @@ async function measurePage(page, probeName) {
     const v = window[p];
     return { fps: window.__frames / ((performance.now() - t0) / 1000), latency: [...v.latencyMs],
              received: [...v.receivedMs], encoded: [...(v.encodedMs ?? [])],
-             tileDrawsPerSecond: v.tileDrawsPerSecond, budget: v.budget };
+             tileDrawsPerSecond: ((v.tileDrawsTotal ?? 0) - window.__tileDraws0) / ((performance.now() - t0) / 1000),
+             budget: v.budget };
   }, [probeName, start]);
 }
 
@@ -116,11 +127,18 @@ try {
   await cpage.goto(`http://127.0.0.1:${instructor.match[1]}/${a.console_query ? `?${a.console_query}` : ''}`);
   await waitFor(() => cpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
                 `${n} tiles drawn`, 60000);
+  const cpu0 = [cpuSeconds(instructor.child.pid), stations.reduce((s, st) => s + cpuSeconds(st.child.pid), 0)];
   const c = await measurePage(cpage, 'microdexConsole');
+  const cpu1 = [cpuSeconds(instructor.child.pid), stations.reduce((s, st) => s + cpuSeconds(st.child.pid), 0)];
+  const window_s = seconds + 2;
   report.console = { stations: n, width: W, height: H, fps: c.fps, latency: summary(c.latency),
                     received: summary(c.received), tile_draws_per_s: c.tileDrawsPerSecond,
-                    budget: c.budget, load_during: loadavg() };
-  progress(`console: ${c.fps.toFixed(1)} fps, ${c.tileDrawsPerSecond?.toFixed(1)} tile drawings/s`);
+                    budget: c.budget, load_during: loadavg(),
+                    instructor_cpu_share: (cpu1[0] - cpu0[0]) / window_s,
+                    stations_cpu_share: (cpu1[1] - cpu0[1]) / window_s };
+  progress(`console: ${c.fps.toFixed(1)} fps, ${c.tileDrawsPerSecond?.toFixed(1)} tile drawings/s; ` +
+           `CPU: instructor ${(100 * report.console.instructor_cpu_share).toFixed(0)} %, ` +
+           `8 stations ${(100 * report.console.stations_cpu_share).toFixed(0)} % of a core`);
   await cpage.screenshot({ path: join(a.out, 'console_8_stations.png') });
   await cpage.close();
   if (a.replay === '0') {
@@ -140,7 +158,7 @@ try {
   const rec = JSON.parse(readFileSync(recFile, 'utf8'));
   const replay = await startReplay(rec, a.web);
   const rpage = await context.newPage();
-  await rpage.goto(`http://127.0.0.1:${replay.port}/`);
+  await rpage.goto(`http://127.0.0.1:${replay.port}/${a.console_query ? `?${a.console_query}` : ''}`);
   await waitFor(() => rpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
                 `${n} replayed tiles drawn`, 60000);
   const r = await measurePage(rpage, 'microdexConsole');
