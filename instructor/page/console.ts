@@ -47,6 +47,7 @@ class Tile {
   drawn = false; // its picture is on the canvas at its current place
   drawnAt = 0; // performance.now() of its last drawing
   framedVersion = -1; // the thread extent the camera was last fitted to
+  private acksHtml = '';
   readonly acks: HTMLDivElement;
   readonly inForce = new Map<number, HTMLElement>(); // by cue bit
   readonly touched = new Set<string>(); // kinds this console has switched
@@ -166,11 +167,16 @@ class Tile {
         `<div>${score}</div><div>${health} · state age ${age}</div>` +
         (station.scene_error ? `<div class="lost">scene refused: ${esc(station.scene_error)}</div>` : '');
     if (html !== this.label.innerHTML) this.label.innerHTML = html;
-    this.acks.innerHTML = station.cues.slice().reverse().map((c) => {
+    // Rewritten only when changed: a new layout costs a software renderer a repaint.
+    const acks = station.cues.slice().reverse().map((c) => {
       const ack = c.ack === null ? 'waiting for the station…'
           : c.ack.applied ? `applied at step ${c.ack.step}` : `rejected: ${esc(c.ack.text)}`;
       return `<div class="ack" data-cue-id="${c.cue_id}">#${c.cue_id} ${c.kind} ${c.off ? 'off' : c.param} → ${ack}</div>`;
     }).join('');
+    if (acks !== this.acksHtml) {
+      this.acksHtml = acks;
+      this.acks.innerHTML = acks;
+    }
   }
 
   applyPending(): void {
@@ -206,6 +212,7 @@ function main(): void {
   const tbody = document.querySelector('#scores tbody')!;
   const tiles = new Map<string, Tile>();
   let slots: string[] = [];
+  let tableHtml = '';
   const probe = {
     stations: [] as StationJson[], framesReceived: 0, badFrames: 0, fps: 0, tilesDrawn: 0,
     framesBySlot: [] as number[], errors: [] as string[], latencyMs: [] as number[],
@@ -234,11 +241,15 @@ function main(): void {
           if (!slots.includes(id)) { tile.el.remove(); tiles.delete(id); }
         }
         document.getElementById('count')!.textContent = `${list.length} station(s)`;
-        tbody.innerHTML = list.map((s) => `<tr data-station="${esc(s.id)}"><td>${esc(s.id)}</td><td>${esc(s.trainee)}</td>` +
+        const rows = list.map((s) => `<tr data-station="${esc(s.id)}"><td>${esc(s.id)}</td><td>${esc(s.trainee)}</td>` +
             `<td>${esc(s.scene.split('/').pop() ?? '')}</td><td>${esc(s.task ?? '')}</td>` +
             `<td class="num">${s.score?.toFixed(1) ?? '–'}</td><td class="num">${s.progress !== undefined ? (s.progress * 100).toFixed(0) + ' %' : '–'}</td>` +
             `<td>${OUTCOMES[s.outcome ?? 0]}</td><td class="${s.presence === 'alive' ? 'ok' : 'lost'}">${s.presence}</td>` +
             `<td class="num">${s.period_p99_ms?.toFixed(3) ?? '–'}</td><td class="num">${s.overruns ?? '–'}</td></tr>`).join('');
+        if (rows !== tableHtml) {
+          tableHtml = rows;
+          tbody.innerHTML = rows;
+        }
       } else if (m.type === 'error') {
         probe.errors.push(m.error);
         console.warn(`console: ${m.error}`);
