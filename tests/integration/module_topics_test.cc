@@ -139,11 +139,12 @@ TEST(ModuleTopics, StationsPublishOnlyTheirModulesTopics) {
                       << tissues["mt-tissue"].size();
 
   // Writers per station: the common topics, plus exactly the scene's module states.
-  // (CueOverlay: every station, empty while no visual cue is on.)
+  // (CueOverlay: every station, empty while no visual cue is on. SceneDescription: every
+  // station whose scene came from a file, as all of these do.)
   const std::set<std::string> common = {"microdex/station_info", "microdex/device_input",
                                         "microdex/cue_overlay",  "microdex/tool_state",
                                         "microdex/telemetry",    "microdex/task_event",
-                                        "microdex/score"};
+                                        "microdex/score",        "microdex/scene_description"};
   const std::map<std::string, std::set<std::string>> modules = {
       {"mt-needle", {"microdex/needle_state"}},
       {"mt-thread", {"microdex/thread_state"}},
