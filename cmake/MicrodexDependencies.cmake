@@ -33,3 +33,13 @@ find_library(XXHASH_LIBRARY xxhash REQUIRED)
 add_library(microdex::xxhash INTERFACE IMPORTED)
 target_include_directories(microdex::xxhash INTERFACE ${XXHASH_INCLUDE_DIR})
 target_link_libraries(microdex::xxhash INTERFACE ${XXHASH_LIBRARY})
+
+# OpenSSL: DDS Security files checked before use (common/net), the console's HTTPS.
+find_package(OpenSSL 3 REQUIRED)
+# libsodium: the console's password hashes (Argon2id); Debian's libsodium-dev ships no CMake
+# config.
+find_path(SODIUM_INCLUDE_DIR sodium.h REQUIRED)
+find_library(SODIUM_LIBRARY sodium REQUIRED)
+add_library(microdex::sodium INTERFACE IMPORTED)
+target_include_directories(microdex::sodium INTERFACE ${SODIUM_INCLUDE_DIR})
+target_link_libraries(microdex::sodium INTERFACE ${SODIUM_LIBRARY})

@@ -30,7 +30,6 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   double duration_s = 0;
   double table_period_s = 1;
   std::vector<std::string> cue_texts;
-  std::string security;
   int http_port = -1;
   std::string http_address = "127.0.0.1";
   CLI::App app{"microdex-instructor: discovers stations, mirrors their state, sends cues"};
@@ -59,14 +58,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--experiment", experiment_file,
                  "run the cue experiment of this YAML file (needs --db): assigns the trainees "
                  "to conditions, sends each trial's cues; stops when every trial is scored");
-  app.add_option("--security", security, "(not available in this build)");
+  microdex::net::AddSecurityOption(app, o.dds);
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-instructor")) {
     return *status;
-  }
-  if (!security.empty()) {
-    std::fprintf(stderr, "microdex-instructor: --security: not available in this build yet\n");
-    return 2;
   }
   if (!headless && http_port < 0) {
     std::fprintf(stderr, "microdex-instructor: expected --headless and/or --http PORT\n");
@@ -85,6 +80,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 2;
   }
   std::vector<instructor::CueSpec> cues;
+  if (const std::string why = microdex::net::CheckSecurityOption(o.dds); !why.empty()) {
+    std::fprintf(stderr, "microdex-instructor: %s\n", why.c_str());
+    return 2;
+  }
   try {
     for (const auto& t : cue_texts) cues.push_back(instructor::ParseCueSpec(t));
   } catch (const std::exception& e) {

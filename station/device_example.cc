@@ -28,6 +28,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--fault-for", def.fault_for_s, "for how long, s");
   app.add_option("--stats-json", stats_json, "write the round trips and losses as JSON");
   microdex::net::AddDdsOptions(app, dds);
+  microdex::net::AddSecurityOption(app, dds);
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-device-example")) {
     return *status;
@@ -47,6 +48,11 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   }
   if (const std::string why = def.Validate(); !why.empty()) {
     std::fprintf(stderr, "microdex-device-example: --%s\n", why.c_str());
+    return 2;
+  }
+  dds.security_station = def.station_id;  // with --security: the station's partition
+  if (const std::string why = microdex::net::CheckSecurityOption(dds); !why.empty()) {
+    std::fprintf(stderr, "microdex-device-example: %s\n", why.c_str());
     return 2;
   }
   stop_signals.Watch(stop);

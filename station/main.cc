@@ -25,7 +25,6 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   o.station_id = "station-" + std::to_string(getpid());
   o.dds.profile_file = microdex::net::DefaultDdsProfileFile();
   o.dds.participant_name = "microdex-station";
-  std::string window_unused, security_unused;
   bool window = false;
   bool no_realtime = false;
 
@@ -61,14 +60,18 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_flag("--window", window, "open a view window (not available in this build)");
   app.add_option("--screenshot", o.screenshot,
                  "render the view page headless to FILE.png once it has drawn, then stop");
-  app.add_option("--security", security_unused, "(not available in this build)");
+  microdex::net::AddSecurityOption(app, o.dds);
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-station")) {
     return *status;
   }
-  if (window || !security_unused.empty()) {
-    std::fprintf(stderr, "microdex-station: %s: not available in this build yet\n",
-                 window ? "--window" : "--security");
+  if (window) {
+    std::fprintf(stderr, "microdex-station: --window: not available in this build yet\n");
+    return 2;
+  }
+  o.dds.security_station = o.station_id;  // with --security: its partition COURSE/ID
+  if (const std::string why = microdex::net::CheckSecurityOption(o.dds); !why.empty()) {
+    std::fprintf(stderr, "microdex-station: %s\n", why.c_str());
     return 2;
   }
   o.realtime = !no_realtime;

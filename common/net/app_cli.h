@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "common/net/dds_context.h"
+#include "common/net/dds_security.h"
 
 namespace microdex::net {
 
@@ -21,6 +22,25 @@ inline void AddDdsOptions(CLI::App& app, DdsOptions& dds) {
   app.add_option("--dds-profile", dds.profile_file, "DDS XML profiles")->capture_default_str();
   app.add_option("--domain", dds.domain_id, "DDS domain id");
   app.add_option("--partition", dds.partition, "DDS partition (the course)");
+}
+
+// --security DIR: DDS Security with the identity directory DIR (deploy/security/make-course).
+inline void AddSecurityOption(CLI::App& app, DdsOptions& dds) {
+  app.add_option("--security", dds.security_dir,
+                 "DDS Security: this participant's identity directory (deploy/security/make-course"
+                 "); authenticated, access-controlled, encrypted DDS in the course's partitions");
+}
+
+// The --security directory checked (dds_security.h) before anything starts: empty when
+// valid or not given, else "--security: reason" naming the file.
+inline std::string CheckSecurityOption(const DdsOptions& dds) {
+  if (dds.security_dir.empty()) return {};
+  try {
+    LoadSecurityFiles(dds.security_dir);
+  } catch (const std::exception& e) {
+    return std::string("--security: ") + e.what();
+  }
+  return {};
 }
 
 // Parses; on --help returns 0 after printing it, on bad input prints "PROGRAM: reason" and

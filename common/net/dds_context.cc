@@ -8,6 +8,8 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "common/net/dds_security.h"
+
 namespace microdex::net {
 namespace {
 
@@ -90,8 +92,37 @@ DdsContext::DdsContext(const DdsOptions& options) : options_(options) {
   if (std::string why = options_.Validate(); !why.empty()) throw std::runtime_error(why);
   LoadProfilesOnce(options_.profile_file);
   auto* factory = dds::DomainParticipantFactory::get_instance();
-  participant_ = factory->create_participant_with_profile(
-      static_cast<dds::DomainId_t>(options_.domain_id), kParticipantProfile);
+  const auto domain = static_cast<dds::DomainId_t>(options_.domain_id);
+  partition_ = options_.partition;
+  if (options_.security_dir.empty()) {
+    participant_ = factory->create_participant_with_profile(domain, kParticipantProfile);
+  } else {
+    const SecurityFiles files = LoadSecurityFiles(options_.security_dir);
+    if (!options_.partition.empty() && options_.partition != files.course) {
+      throw std::runtime_error("security '" + files.dir + "': its course is '" + files.course +
+                               "', not the partition '" + options_.partition + "'");
+    }
+    partition_ = SecurePartition(files.course, options_.security_station);
+    // The participant profile's QoS as create_participant_with_profile builds it (the
+    // factory's default QoS with the profile's attributes), plus the security properties.
+    dds::DomainParticipantQos qos;
+    if (factory->get_participant_qos_from_profile(kParticipantProfile, qos) !=
+        ReturnCode_t::RETCODE_OK) {
+      throw std::runtime_error("dds profile '" + options_.profile_file +
+                               "': no participant profile '" + kParticipantProfile + "'");
+    }
+    for (const auto& [name, value] : SecurityProperties(files)) {
+      qos.properties().properties().emplace_back(name, value);
+    }
+    participant_ = factory->create_participant(domain, qos);
+    if (participant_ == nullptr) {
+      throw std::runtime_error(
+          "security '" + files.dir + "': Fast DDS refused the secure participant on domain " +
+          std::to_string(options_.domain_id) +
+          " (its files verify; is the certificate or the permissions grant out of its validity "
+          "period, or the grant's subject not cert.pem's?)");
+    }
+  }
   if (participant_ == nullptr) {
     throw std::runtime_error("dds profile '" + options_.profile_file +
                              "': cannot create a participant on domain " +
@@ -99,9 +130,9 @@ DdsContext::DdsContext(const DdsOptions& options) : options_(options) {
   }
   dds::PublisherQos pub_qos = participant_->get_default_publisher_qos();
   dds::SubscriberQos sub_qos = participant_->get_default_subscriber_qos();
-  if (!options_.partition.empty()) {
-    pub_qos.partition().push_back(options_.partition.c_str());
-    sub_qos.partition().push_back(options_.partition.c_str());
+  if (!partition_.empty()) {
+    pub_qos.partition().push_back(partition_.c_str());
+    sub_qos.partition().push_back(partition_.c_str());
   }
   publisher_ = participant_->create_publisher(pub_qos);
   subscriber_ = participant_->create_subscriber(sub_qos);
@@ -134,13 +165,27 @@ dds::Topic* DdsContext::GetTopicImpl(const TopicSpec& spec, dds::TypeSupport (*m
 }
 
 dds::DataWriter* DdsContext::CreateWriterImpl(dds::Topic* topic, const TopicSpec& spec) {
-  return CreatedFromProfile(publisher_->create_datawriter_with_profile(topic, spec.writer_profile),
-                            options_.profile_file, "writer", spec.name, spec.writer_profile);
+  dds::DataWriter* writer = publisher_->create_datawriter_with_profile(topic, spec.writer_profile);
+  if (writer == nullptr && !options_.security_dir.empty()) {
+    throw std::runtime_error("security '" + options_.security_dir +
+                             "': permissions.p7s grants no "
+                             "publishing of " +
+                             spec.name + " in partition '" + partition_ + "'");
+  }
+  return CreatedFromProfile(writer, options_.profile_file, "writer", spec.name,
+                            spec.writer_profile);
 }
 
 dds::DataReader* DdsContext::CreateReaderImpl(dds::Topic* topic, const TopicSpec& spec) {
-  return CreatedFromProfile(subscriber_->create_datareader_with_profile(topic, spec.reader_profile),
-                            options_.profile_file, "reader", spec.name, spec.reader_profile);
+  dds::DataReader* reader = subscriber_->create_datareader_with_profile(topic, spec.reader_profile);
+  if (reader == nullptr && !options_.security_dir.empty()) {
+    throw std::runtime_error("security '" + options_.security_dir +
+                             "': permissions.p7s grants no "
+                             "subscribing to " +
+                             spec.name + " in partition '" + partition_ + "'");
+  }
+  return CreatedFromProfile(reader, options_.profile_file, "reader", spec.name,
+                            spec.reader_profile);
 }
 
 }  // namespace microdex::net

@@ -3,8 +3,11 @@
 // (deploy/dds/*.xml): the participant from the named participant profile
 // (create_participant_with_profile: a copied DomainParticipantQos would drop the XML
 // transports), topics, writers and readers from their named profiles. QoS is never set here,
-// with one exception: the partition (the course), a deployment value given on the command
-// line, is added to the publisher and subscriber QoS loaded from the XML.
+// with two exceptions, both deployment values given on the command line: the partition (the
+// course), added to the publisher and subscriber QoS loaded from the XML; and DDS Security
+// (`--security DIR`, dds_security.h): its plugin properties are added to the participant QoS
+// read from the participant profile, and the partition becomes COURSE/STATION (COURSE/* for
+// the instructor), the unit the permissions grant.
 //
 // Not thread-safe: the thread that owns the context creates, uses and destroys its entities.
 
@@ -29,6 +32,11 @@ struct DdsOptions {
   int domain_id = 0;         // 0..232
   std::string partition;     // empty: the default partition
   std::string participant_name = "microdex";
+  // DDS Security: the identity directory (deploy/security/make-course); empty: plain DDS.
+  std::string security_dir;
+  // With security: the station this participant acts for (a station, a device driver), or
+  // empty for the instructor (every station).
+  std::string security_station;
   // Empty when valid; otherwise a one-line reason naming the field.
   std::string Validate() const;
 };
@@ -62,6 +70,8 @@ class DdsContext {
 
   dds::DomainParticipant* participant() { return participant_; }
   const DdsOptions& options() const { return options_; }
+  // The partition of the publisher and subscriber (empty: the default partition).
+  const std::string& partition() const { return partition_; }
 
  private:
   dds::Topic* GetTopicImpl(const TopicSpec& spec, dds::TypeSupport (*make_type)());
@@ -69,6 +79,7 @@ class DdsContext {
   dds::DataReader* CreateReaderImpl(dds::Topic* topic, const TopicSpec& spec);
 
   DdsOptions options_;
+  std::string partition_;
   dds::DomainParticipant* participant_ = nullptr;
   dds::Publisher* publisher_ = nullptr;
   dds::Subscriber* subscriber_ = nullptr;
