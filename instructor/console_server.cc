@@ -51,11 +51,16 @@ std::string DefaultWebDir() {
 }
 
 ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address, int port,
-                             const std::string& web_dir)
+                             const std::string& web_dir, const ConsoleSecurity& security)
     : instructor_(instructor),
       scene_dir_((std::filesystem::temp_directory_path() /
                   ("microdex-console-scenes-" + std::to_string(getpid())))
                      .string()) {
+  https_ = !security.tls_cert_file.empty();
+  if (!security.users_file.empty()) {
+    if (!https_) throw std::runtime_error("console login: needs HTTPS (a certificate and key)");
+    auth_ = std::make_unique<ConsoleAuth>(LoadUsers(security.users_file), security.session_idle_s);
+  }
   std::map<std::string, view::WebFile> files =
       view::LoadWebFiles(web_dir, {"console.html", "console.js", "frame_worker.js"});
   files["/"] = files["/console.html"];
@@ -65,6 +70,8 @@ ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address,
   // One frame per station per period, up to 8 stations, before the page takes them.
   config.max_queued_frames = 24;
   config.frame_credit = 16;
+  config.tls_cert_file = security.tls_cert_file;
+  config.tls_key_file = security.tls_key_file;
   server_ = std::make_unique<view::ViewServer>(
       config, std::move(files),
       [this](const std::string& target) -> std::optional<view::WebFile> {
@@ -75,6 +82,14 @@ ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address,
         return std::nullopt;
       },
       [this] { Poll(); }, [this](const std::string& m) { return HandleMessage(m); });
+  if (auth_) {
+    server_->SetGate([this](const view::HttpRequestInfo& request, std::string* client) {
+      return auth_->Gate(request, client, MonotonicNowNs());
+    });
+    server_->SetClientTextHandler([this](const std::string& client, const std::string& m) {
+      return HandleClientMessage(client, m);
+    });
+  }
   server_->Start();
 }
 
@@ -144,6 +159,19 @@ std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_
     }
   }
   return view::WebFile{"application/json", it->second};
+}
+
+std::string ConsoleServer::HandleClientMessage(const std::string& session_token,
+                                               const std::string& message) {
+  if (auth_) {
+    const std::optional<ConsoleSession> s = auth_->Session(session_token, MonotonicNowNs());
+    if (!s) throw std::invalid_argument("session expired: log in again");
+    if (message.starts_with("cue") && s->role != Role::kInstructor) {
+      throw std::invalid_argument("cue: user '" + s->user + "' is an " + RoleName(s->role) +
+                                  "; only an instructor sends cues");
+    }
+  }
+  return HandleMessage(message);
 }
 
 std::string ConsoleServer::HandleMessage(const std::string& message) {

@@ -11,6 +11,10 @@
 // under a folder of this console's own and loaded there: the console needs none of the
 // station's files.
 //
+// With ConsoleSecurity's files (microdex-instructor --security DIR): HTTPS only, and the
+// instructor login of console_auth.h in front of every page, scene and WebSocket; cue
+// commands only from a session with the instructor role.
+//
 // Threads: everything here runs on the view server's thread; it reads the Instructor's
 // registry under its lock (VisitStations) and encodes only the stations whose state is new
 // (the instructor has no real-time thread).
@@ -23,9 +27,17 @@
 
 #include "common/view/view_frame.h"
 #include "common/view/view_server.h"
+#include "instructor/console_auth.h"
 #include "instructor/instructor.h"
 
 namespace microdex::instructor {
+
+// HTTPS and login (all empty: plain HTTP, no login, as for the demo on one machine).
+struct ConsoleSecurity {
+  std::string tls_cert_file, tls_key_file;  // PEM
+  std::string users_file;                   // console_auth.h; needs TLS
+  double session_idle_s = 1800;             // a session unused this long ends
+};
 
 class ConsoleServer {
  public:
@@ -36,7 +48,7 @@ class ConsoleServer {
 
   // Throws std::runtime_error when the pages are missing or the port cannot be bound.
   ConsoleServer(Instructor& instructor, const std::string& address, int port,
-                const std::string& web_dir);
+                const std::string& web_dir, const ConsoleSecurity& security = {});
   ~ConsoleServer();
   ConsoleServer(const ConsoleServer&) = delete;
   ConsoleServer& operator=(const ConsoleServer&) = delete;
@@ -49,6 +61,10 @@ class ConsoleServer {
   std::string StatusJsonHead() const;
   void AppendStationJson(const StationView& v, std::size_t slot, std::int64_t now_ns,
                          std::string& out) const;
+  // The same from a logged-in page: its session must still be valid, and a cue needs the
+  // instructor role (throws std::invalid_argument otherwise).
+  std::string HandleClientMessage(const std::string& session_token, const std::string& message);
+  bool https() const { return https_; }
 
  private:
   struct SentCue {
@@ -71,6 +87,8 @@ class ConsoleServer {
   std::vector<std::unique_ptr<view::FrameBytes>> frames_;  // per slot, reused
   std::int64_t next_frames_ns_ = 0, next_status_ns_ = 0;
   std::size_t first_slot_ = 0;
+  std::unique_ptr<ConsoleAuth> auth_;  // login on when set
+  bool https_ = false;
   std::unique_ptr<view::ViewServer> server_;
 };
 

@@ -1,9 +1,13 @@
 // microdex-instructor: the instructor console, headless text view (README.md
 // "Command-line contracts").
 
+#include <termios.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <memory>
 #include <thread>
 
@@ -15,7 +19,43 @@
 
 namespace {
 std::atomic<bool> g_stop{false};
+
+// --add-user NAME: the password from stdin (one line; a terminal does not echo it).
+int AddConsoleUser(const std::string& users_file, const std::string& name,
+                   const std::string& role_text) {
+  if (users_file.empty()) {
+    std::fprintf(stderr,
+                 "microdex-instructor: --add-user: expected --users FILE or --security DIR\n");
+    return 2;
+  }
+  const bool tty = isatty(0) != 0;
+  termios saved{};
+  if (tty) {
+    std::fprintf(stderr, "password for %s: ", name.c_str());
+    tcgetattr(0, &saved);
+    termios quiet = saved;
+    quiet.c_lflag &= ~static_cast<tcflag_t>(ECHO);
+    tcsetattr(0, TCSANOW, &quiet);
+  }
+  std::string password;
+  std::getline(std::cin, password);
+  if (tty) {
+    tcsetattr(0, TCSANOW, &saved);
+    std::fprintf(stderr, "\n");
+  }
+  if (!password.empty() && password.back() == '\r') password.pop_back();
+  try {
+    microdex::instructor::AddUser(users_file, name, microdex::instructor::ParseRole(role_text),
+                                  password);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-instructor: --add-user: %s\n", e.what());
+    return 2;
+  }
+  std::printf("%s: user %s (%s) added\n", users_file.c_str(), name.c_str(), role_text.c_str());
+  return 0;
 }
+
+}  // namespace
 
 // Errors are caught around parsing and the run; what could escape is an allocation failure
 // while setting up, which ends the process as it should.
@@ -59,9 +99,42 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                  "run the cue experiment of this YAML file (needs --db): assigns the trainees "
                  "to conditions, sends each trial's cues; stops when every trial is scored");
   microdex::net::AddSecurityOption(app, o.dds);
+  instructor::ConsoleSecurity web_security;
+  std::string add_user, role = "instructor";
+  app.add_option("--tls-cert", web_security.tls_cert_file,
+                 "console over HTTPS with this PEM certificate (default with --security: "
+                 "DIR/console_cert.pem)");
+  app.add_option("--tls-key", web_security.tls_key_file, "the certificate's PEM private key");
+  app.add_option("--users", web_security.users_file,
+                 "console login: the users file (default with --security: DIR/console_users)");
+  app.add_option("--session-timeout", web_security.session_idle_s,
+                 "console login: a session unused for S seconds ends");
+  app.add_option("--add-user", add_user,
+                 "add (or replace) console user NAME in the users file, the password read from "
+                 "stdin, and exit");
+  app.add_option("--role", role, "with --add-user: instructor (sends cues) or observer");
   if (const std::optional<int> status =
           microdex::net::ParseCommandLine(app, argc, argv, "microdex-instructor")) {
     return *status;
+  }
+  if (!o.dds.security_dir.empty()) {
+    const std::string dir = o.dds.security_dir + "/";
+    if (web_security.tls_cert_file.empty() && web_security.tls_key_file.empty()) {
+      web_security.tls_cert_file = dir + "console_cert.pem";
+      web_security.tls_key_file = dir + "console_key.pem";
+    }
+    if (web_security.users_file.empty()) web_security.users_file = dir + "console_users";
+  }
+  if (!add_user.empty()) return AddConsoleUser(web_security.users_file, add_user, role);
+  if (web_security.tls_cert_file.empty() != web_security.tls_key_file.empty()) {
+    std::fprintf(stderr, "microdex-instructor: --tls-cert and --tls-key go together\n");
+    return 2;
+  }
+  if (!web_security.users_file.empty() && web_security.tls_cert_file.empty()) {
+    std::fprintf(stderr,
+                 "microdex-instructor: --users: the login needs HTTPS (--security DIR, or "
+                 "--tls-cert and --tls-key)\n");
+    return 2;
   }
   if (!headless && http_port < 0) {
     std::fprintf(stderr, "microdex-instructor: expected --headless and/or --http PORT\n");
@@ -116,8 +189,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     std::unique_ptr<instructor::ConsoleServer> web;
     if (http_port >= 0) {
       web = std::make_unique<instructor::ConsoleServer>(console, http_address, http_port,
-                                                        instructor::DefaultWebDir());
-      std::printf("console: http://%s:%u/\n", http_address.c_str(), unsigned{web->port()});
+                                                        instructor::DefaultWebDir(), web_security);
+      std::printf("console: %s://%s:%u/\n", web->https() ? "https" : "http", http_address.c_str(),
+                  unsigned{web->port()});
     }
     std::unique_ptr<instructor::ScoresWriter> scores_db;
     if (!db_url.empty()) {

@@ -7,13 +7,16 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
 #include <cstdlib>
 #include <deque>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 
 #include "common/view/scene_view.h"
 
@@ -26,6 +29,8 @@ namespace asio = boost::asio;
 using tcp = asio::ip::tcp;
 
 class WsSession;
+namespace ssl = asio::ssl;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 
 struct ViewServer::Impl {
   ViewServerConfig config;
@@ -33,6 +38,9 @@ struct ViewServer::Impl {
   DynamicFn dynamic;
   PollFn poll;
   TextFn on_text;
+  ClientTextFn on_client_text;
+  GateFn gate;
+  std::unique_ptr<ssl::context> tls;  // HTTPS when set
   ViewServer* owner = nullptr;
   asio::io_context ioc{1};
   tcp::acceptor acceptor{ioc};
@@ -55,20 +63,28 @@ std::string ErrorJson(const std::string& reason) {
 }  // namespace
 
 // One page's WebSocket: reads its text messages, writes queued frames and replies in order.
-class WsSession : public std::enable_shared_from_this<WsSession> {
+class WsSession {
  public:
-  WsSession(tcp::socket&& socket, ViewServer::Impl& server)
-      : ws_(std::move(socket)), server_(server) {}
+  virtual ~WsSession() = default;
+  virtual void Send(const std::shared_ptr<const std::string>& data, bool binary) = 0;
+};
+
+template <class Stream>
+class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessionT<Stream>> {
+ public:
+  WsSessionT(Stream&& stream, ViewServer::Impl& server, std::string client)
+      : ws_(std::move(stream)), server_(server), client_(std::move(client)) {}
 
   void Run(const http::request<http::string_body>& request) {
     ws_.read_message_max(server_.config.max_message_bytes);
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
-    ws_.async_accept(request, beast::bind_front_handler(&WsSession::OnAccept, shared_from_this()));
+    ws_.async_accept(request,
+                     beast::bind_front_handler(&WsSessionT::OnAccept, this->shared_from_this()));
   }
 
   bool open() const { return open_; }
 
-  void Send(const std::shared_ptr<const std::string>& data, bool binary) {
+  void Send(const std::shared_ptr<const std::string>& data, bool binary) override {
     if (!open_) return;
     if (binary) {
       if (credit_ <= 0 || queued_frames_ >= server_.config.max_queued_frames) {
@@ -101,7 +117,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   }
 
   void DoRead() {
-    ws_.async_read(buffer_, beast::bind_front_handler(&WsSession::OnRead, shared_from_this()));
+    ws_.async_read(buffer_,
+                   beast::bind_front_handler(&WsSessionT::OnRead, this->shared_from_this()));
   }
 
   void OnRead(beast::error_code ec, std::size_t /*bytes*/) {
@@ -128,7 +145,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
           DoRead();
           return;
         }
-        std::string reply = server_.on_text(message);
+        std::string reply = server_.on_client_text ? server_.on_client_text(client_, message)
+                                                   : server_.on_text(message);
         if (!reply.empty()) Send(std::make_shared<const std::string>(std::move(reply)), false);
       } catch (const std::invalid_argument& e) {
         ++server_.owner->rejected_;
@@ -154,7 +172,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void DoWrite() {
     ws_.binary(queue_.front().binary);
     ws_.async_write(asio::buffer(*queue_.front().data),
-                    beast::bind_front_handler(&WsSession::OnWrite, shared_from_this()));
+                    beast::bind_front_handler(&WsSessionT::OnWrite, this->shared_from_this()));
   }
 
   void OnWrite(beast::error_code ec, std::size_t /*bytes*/) {
@@ -175,8 +193,9 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
   }
 
-  websocket::stream<beast::tcp_stream> ws_;
+  websocket::stream<Stream> ws_;
   ViewServer::Impl& server_;
+  std::string client_;  // as the gate named it
   beast::flat_buffer buffer_;
   std::deque<Item> queue_;
   std::size_t queued_frames_ = 0;
@@ -188,18 +207,33 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 };
 
 // One HTTP connection: GET of the pages and the scene, or the upgrade to the WebSocket.
-class HttpSession : public std::enable_shared_from_this<HttpSession> {
+template <class Stream>
+class HttpSessionT : public std::enable_shared_from_this<HttpSessionT<Stream>> {
  public:
-  HttpSession(tcp::socket&& socket, ViewServer::Impl& server)
-      : stream_(std::move(socket)), server_(server) {}
+  HttpSessionT(Stream&& stream, ViewServer::Impl& server)
+      : stream_(std::move(stream)), server_(server) {}
+
+  // TLS: the handshake first (30 s at most), then the requests.
+  void Start() {
+    if constexpr (std::is_same_v<Stream, TlsStream>) {
+      beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(30));
+      stream_.async_handshake(ssl::stream_base::server,
+                              [self = this->shared_from_this()](beast::error_code ec) {
+                                if (ec) return;  // not TLS, or a failed handshake: drop it
+                                self->DoRead();
+                              });
+    } else {
+      DoRead();
+    }
+  }
 
   void DoRead() {
     parser_.emplace();
     parser_->header_limit(8192);
     parser_->body_limit(1024);
-    stream_.expires_after(std::chrono::seconds(30));
+    beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(30));
     http::async_read(stream_, buffer_, *parser_,
-                     beast::bind_front_handler(&HttpSession::OnRead, shared_from_this()));
+                     beast::bind_front_handler(&HttpSessionT::OnRead, this->shared_from_this()));
   }
 
  private:
@@ -218,6 +252,23 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     http::request<http::string_body> req = parser_->release();
     std::string target(req.target());
     if (const auto q = target.find('?'); q != std::string::npos) target.resize(q);
+    std::string client;
+    if (server_.gate) {
+      HttpRequestInfo info;
+      info.method = std::string(req.method_string());
+      info.target = target;
+      info.cookie = std::string(req[http::field::cookie]);
+      info.origin = std::string(req[http::field::origin]);
+      info.host = std::string(req[http::field::host]);
+      info.body = req.body();
+      info.websocket = websocket::is_upgrade(req);
+      if (std::optional<HttpReply> reply = server_.gate(info, &client)) {
+        if (reply->status >= 400) ++server_.owner->rejected_;
+        Reply(static_cast<http::status>(reply->status), reply->content_type, reply->body,
+              req.version(), req.keep_alive() && !info.websocket, reply->headers);
+        return;
+      }
+    }
     if (websocket::is_upgrade(req)) {
       if (target != "/ws") {
         Reply(http::status::not_found, "text/plain", "no WebSocket at " + target + "\n",
@@ -229,8 +280,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
               req.version(), false);
         return;
       }
-      stream_.expires_never();
-      auto ws = std::make_shared<WsSession>(stream_.release_socket(), server_);
+      beast::get_lowest_layer(stream_).expires_never();
+      auto ws = std::make_shared<WsSessionT<Stream>>(std::move(stream_), server_, client);
       ws->GrantInitialCredit();
       server_.sessions.push_back(ws);
       ws->Run(req);
@@ -258,8 +309,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void Reply(http::status status, const std::string& type, const std::string& body,
-             unsigned version, bool keep_alive) {
+             unsigned version, bool keep_alive,
+             const std::vector<std::pair<std::string, std::string>>& headers = {}) {
     auto res = std::make_shared<http::response<http::string_body>>(status, version);
+    for (const auto& [name, value] : headers) res->insert(name, value);
     res->set(http::field::server, "microdex");
     res->set(http::field::content_type, type);
     res->set(http::field::cache_control, "no-store");
@@ -267,12 +320,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     // (SharedArrayBuffer); every resource is same-origin.
     res->set("Cross-Origin-Opener-Policy", "same-origin");
     res->set("Cross-Origin-Embedder-Policy", "require-corp");
+    if (server_.tls) res->set(http::field::strict_transport_security, "max-age=31536000");
     res->keep_alive(keep_alive);
     res->body() = body;
     res->prepare_payload();
     response_ = res;
     http::async_write(stream_, *res,
-                      beast::bind_front_handler(&HttpSession::OnWrite, shared_from_this()));
+                      beast::bind_front_handler(&HttpSessionT::OnWrite, this->shared_from_this()));
   }
 
   void OnWrite(beast::error_code ec, std::size_t /*bytes*/) {
@@ -288,10 +342,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void Shutdown() {
     beast::error_code ignored;
-    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    beast::get_lowest_layer(stream_).socket().shutdown(tcp::socket::shutdown_send, ignored);
   }
 
-  beast::tcp_stream stream_;
+  Stream stream_;
   ViewServer::Impl& server_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
@@ -301,7 +355,16 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 void ViewServer::Impl::Accept() {
   acceptor.async_accept(ioc, [this](beast::error_code ec, tcp::socket socket) {
     if (ec == asio::error::operation_aborted) return;
-    if (!ec) std::make_shared<HttpSession>(std::move(socket), *this)->DoRead();
+    if (!ec) {
+      if (tls) {
+        std::make_shared<HttpSessionT<TlsStream>>(TlsStream(std::move(socket), *tls), *this)
+            ->Start();
+      } else {
+        std::make_shared<HttpSessionT<beast::tcp_stream>>(beast::tcp_stream(std::move(socket)),
+                                                          *this)
+            ->Start();
+      }
+    }
     Accept();
   });
 }
@@ -360,12 +423,33 @@ ViewServer::ViewServer(ViewServerConfig config, std::map<std::string, WebFile> f
 
 ViewServer::~ViewServer() { Stop(); }
 
+void ViewServer::SetGate(GateFn gate) { impl_->gate = std::move(gate); }
+
+void ViewServer::SetClientTextHandler(ClientTextFn on_text) {
+  impl_->on_client_text = std::move(on_text);
+}
+
 void ViewServer::Start() {
   Impl& s = *impl_;
   beast::error_code ec;
   const asio::ip::address address = asio::ip::make_address(s.config.address, ec);
   const std::string where = s.config.address + ":" + std::to_string(s.config.port);
   if (ec) throw std::runtime_error("view server: " + where + ": bad address");
+  if (!s.config.tls_cert_file.empty() || !s.config.tls_key_file.empty()) {
+    s.tls = std::make_unique<ssl::context>(ssl::context::tls_server);
+    s.tls->set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 |
+                       ssl::context::no_sslv3 | ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1);
+    s.tls->use_certificate_chain_file(s.config.tls_cert_file, ec);
+    if (ec) {
+      throw std::runtime_error("view server: TLS certificate '" + s.config.tls_cert_file +
+                               "': " + ec.message());
+    }
+    s.tls->use_private_key_file(s.config.tls_key_file, ssl::context::pem, ec);
+    if (ec) {
+      throw std::runtime_error("view server: TLS key '" + s.config.tls_key_file +
+                               "': " + ec.message());
+    }
+  }
   const tcp::endpoint endpoint(address, s.config.port);
   if (s.acceptor.open(endpoint.protocol(), ec); ec) {
     throw std::runtime_error("view server: " + where + ": " + ec.message());

@@ -14,6 +14,13 @@
 // rejected the same way. Slow readers lose old state frames, never the newest: a page takes
 // frames by credit ("credit N" after it has drawn N; ViewServerConfig::frame_credit), and the
 // server drops the frames it has no credit for.
+//
+// HTTPS (the instructor's console with --security): with tls_cert_file and tls_key_file set,
+// every connection is TLS (OpenSSL through Beast's ssl_stream), pages and WebSocket alike;
+// nothing is served in clear. Access control is the app's: a gate (SetGate) sees every
+// request first, HTTP and WebSocket upgrade, and either answers it itself (a login form, a
+// redirect, 401/403) or lets it through, naming the client (e.g. its session) that the
+// WebSocket's text messages are then handed to (SetClientTextHandler).
 
 #include <atomic>
 #include <chrono>
@@ -23,6 +30,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace microdex::view {
@@ -38,6 +46,26 @@ struct ViewServerConfig {
   // messages after drawing), so a slow page gets the newest frames rather than a backlog
   // held in socket buffers.
   std::size_t frame_credit = 3;
+  // HTTPS: PEM certificate (chain) and private key; both empty: plain HTTP.
+  std::string tls_cert_file;
+  std::string tls_key_file;
+};
+
+// What a gate sees of a request.
+struct HttpRequestInfo {
+  std::string method;  // "GET", "POST", ...
+  std::string target;  // without the query
+  std::string cookie, origin, host;
+  std::string body;        // at most 1 KiB
+  bool websocket = false;  // an upgrade to the WebSocket
+};
+
+// A reply a gate sends instead of the normal handling.
+struct HttpReply {
+  unsigned status = 200;
+  std::string content_type = "text/plain; charset=utf-8";
+  std::string body;
+  std::vector<std::pair<std::string, std::string>> headers;  // e.g. Set-Cookie, Location
 };
 
 struct WebFile {
@@ -60,6 +88,14 @@ class ViewServer {
   // A GET target not among the files (e.g. "/scene.json"); nullopt: 404.
   using DynamicFn = std::function<std::optional<WebFile>(const std::string& target)>;
 
+  // The gate: nullopt lets the request through, with *client set to the name the WebSocket
+  // messages of this connection are handed with; a reply answers it instead.
+  using GateFn =
+      std::function<std::optional<HttpReply>(const HttpRequestInfo&, std::string* client)>;
+  // A page's text message with the client its gate named (replaces TextFn when set).
+  using ClientTextFn =
+      std::function<std::string(const std::string& client, const std::string& message)>;
+
   // files: by target ("/" included when wanted).
   ViewServer(ViewServerConfig config, std::map<std::string, WebFile> files, DynamicFn dynamic,
              PollFn poll, TextFn on_text);
@@ -67,7 +103,12 @@ class ViewServer {
   ViewServer(const ViewServer&) = delete;
   ViewServer& operator=(const ViewServer&) = delete;
 
-  // Binds and starts the thread; throws std::runtime_error("view server: ADDRESS:PORT: why").
+  // Before Start.
+  void SetGate(GateFn gate);
+  void SetClientTextHandler(ClientTextFn on_text);
+
+  // Binds and starts the thread; throws std::runtime_error("view server: ADDRESS:PORT: why"),
+  // or naming the certificate or key file that cannot be loaded.
   void Start();
   void Stop();
   std::uint16_t port() const { return port_; }
@@ -91,7 +132,10 @@ class ViewServer {
   std::uint16_t port_ = 0;
   std::atomic<std::uint64_t> rejected_{0}, dropped_{0}, clients_dropped_{0};
   friend class WsSession;
-  friend class HttpSession;
+  template <class Stream>
+  friend class WsSessionT;
+  template <class Stream>
+  friend class HttpSessionT;
 };
 
 }  // namespace microdex::view
