@@ -13,8 +13,9 @@ const { chromium } = require('playwright-core');
 
 export const CHROMIUM = process.env.MICRODEX_CHROMIUM || '/usr/bin/chromium';
 
-// A fresh profile each time; returns the context (newPage) and close().
-export async function launchBrowser({ width = 1280, height = 720 } = {}) {
+// A fresh profile each time; returns the context (newPage) and close(). ignoreHTTPSErrors: for
+// a console whose certificate comes from a course CA the browser does not know.
+export async function launchBrowser({ width = 1280, height = 720, ignoreHTTPSErrors = false } = {}) {
   if (!existsSync(CHROMIUM)) {
     throw new Error(`${CHROMIUM} not found: deploy/install-deps installs Debian's chromium`);
   }
@@ -23,6 +24,7 @@ export async function launchBrowser({ width = 1280, height = 720 } = {}) {
     executablePath: CHROMIUM,
     headless: true,
     viewport: { width, height },
+    ignoreHTTPSErrors,
     args: [
       '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
       '--disable-background-networking', '--disable-component-update', '--disable-sync',
