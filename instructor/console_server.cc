@@ -321,6 +321,11 @@ void ConsoleServer::Poll() {
   if (!frames_due && !status_due) return;
   if (frames_due) next_frames_ns_ = now + static_cast<std::int64_t>(1e9 / kFrameRate_hz);
   std::vector<std::string> ids;
+  if (auth_ && status_due) {
+    // An open page keeps its session in use; a session that ended (logout, its lifetime)
+    // closes its pages.
+    server_->CloseClientsIf([&](const std::string& token) { return !auth_->Session(token, now); });
+  }
   std::vector<std::size_t> encoded;  // slots with a new frame
   std::string status;
   const std::int64_t sent_ns = RealtimeNowNs();

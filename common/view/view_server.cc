@@ -67,6 +67,8 @@ class WsSession {
  public:
   virtual ~WsSession() = default;
   virtual void Send(const std::shared_ptr<const std::string>& data, bool binary) = 0;
+  virtual const std::string& client() const = 0;
+  virtual void Close() = 0;
 };
 
 template <class Stream>
@@ -187,7 +189,9 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
     if (!queue_.empty() && open_) DoWrite();
   }
 
-  void Close() {
+  const std::string& client() const override { return client_; }
+
+  void Close() override {
     open_ = false;
     beast::error_code ignored;
     beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
@@ -238,8 +242,11 @@ class HttpSessionT : public std::enable_shared_from_this<HttpSessionT<Stream>> {
 
  private:
   void OnRead(beast::error_code ec, std::size_t /*bytes*/) {
+    // A TLS client that leaves without close_notify (most do) truncates the stream: a
+    // normal end, as end_of_stream is in clear.
     if (ec == http::error::end_of_stream || ec == beast::error::timeout ||
-        ec == asio::error::operation_aborted || ec == asio::error::connection_reset) {
+        ec == ssl::error::stream_truncated || ec == asio::error::operation_aborted ||
+        ec == asio::error::connection_reset) {
       Shutdown();
       return;
     }
@@ -498,5 +505,16 @@ void ViewServer::BroadcastText(const std::string& text) {
 }
 
 std::size_t ViewServer::clients() const { return impl_->OpenSessions(); }
+
+std::size_t ViewServer::CloseClientsIf(const std::function<bool(const std::string&)>& close) {
+  std::size_t closed = 0;
+  for (const std::weak_ptr<WsSession>& w : impl_->sessions) {
+    if (const std::shared_ptr<WsSession> s = w.lock(); s && close(s->client())) {
+      s->Close();
+      ++closed;
+    }
+  }
+  return closed;
+}
 
 }  // namespace microdex::view

@@ -117,6 +117,9 @@ class ViewServer {
   void BroadcastBinary(const void* data, std::size_t size);
   void BroadcastText(const std::string& text);
   std::size_t clients() const;  // server thread only
+  // Server thread only: closes the WebSockets whose client (as the gate named it) `close`
+  // picks (e.g. their session ended); returns how many.
+  std::size_t CloseClientsIf(const std::function<bool(const std::string& client)>& close);
 
   // Any thread.
   std::uint64_t messages_rejected() const { return rejected_.load(); }

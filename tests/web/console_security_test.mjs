@@ -4,7 +4,8 @@
 // WebSocket. An observer who logs in sees the station but may not send cues; an instructor
 // sees it and sends a cue that the station acknowledges. The session cookie is HttpOnly,
 // Secure and SameSite=Strict; a WebSocket from another origin is refused even with the
-// cookie; plain HTTP gets nothing. The station's own page listens on loopback only.
+// cookie; plain HTTP gets nothing; logging out closes the open page's WebSocket. The
+// station's own page listens on loopback only.
 // node console_security_test.mjs --bin BUILD/bin --out DIR
 import { spawnSync } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -146,10 +147,17 @@ try {
   await ada.page.screenshot({ path: join(a.out, 'console_secure.png') });
   check(ada.errors.length === 0, `no page errors (${ada.errors.join('; ')})`);
 
-  // Logging out ends the session: the page data is refused again.
+  // Logging out ends the session: the page data is refused again, and the open page's
+  // WebSocket is closed (no more frames).
   await ada.page.evaluate(() => fetch('/logout', { method: 'POST' }));
   const after = await context.request.get(`${origin}/console.js`, { maxRedirects: 0 });
   check(after.status() === 401, `after logging out, /console.js: ${after.status()}`);
+  const frames = () => ada.page.evaluate(() => window.microdexConsole.framesBySlot[0] ?? 0);
+  await new Promise((r) => setTimeout(r, 1000));
+  const f0 = await frames();
+  await new Promise((r) => setTimeout(r, 2000));
+  const f1 = await frames();
+  check(f1 === f0, `after logging out the open page gets no more frames (${f0} → ${f1})`);
 
   // The station's page: loopback only.
   const viewPort = Number(station.match[1]);
