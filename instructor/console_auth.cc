@@ -115,7 +115,9 @@ std::vector<ConsoleUser> LoadUsers(const std::string& path) {
     const std::size_t a = line.find(':');
     const std::size_t b = a == std::string::npos ? a : line.find(':', a + 1);
     const auto bad = [&](const std::string& why) {
-      return std::runtime_error("users file '" + path + "' line " + std::to_string(n) + ": " + why);
+      std::string message = "users file '" + path + "' line " + std::to_string(n) + ": ";
+      message += why;
+      return std::runtime_error(message);
     };
     if (b == std::string::npos) throw bad("expected NAME:ROLE:HASH");
     ConsoleUser u;

@@ -36,10 +36,11 @@ class DdsSecurity : public ::testing::Test {
     fs::remove_all(*root_);
     const std::string script = testing::SourceDir() + "/deploy/security/make-course";
     for (const std::string course : {"c1", "intruder"}) {
-      const std::string cmd = script + " " + *root_ + "/" + course + " --course c1" +
-                              " --station s1 --station s2 --instructor i1 > " + *root_ + "-" +
-                              course + ".log 2>&1";
-      ASSERT_EQ(std::system(cmd.c_str()), 0) << testing::ReadFile(*root_ + "-" + course + ".log");
+      const std::string log = *root_ + "-" + course + ".log";
+      std::string cmd = script;
+      cmd += " " + *root_ + "/" + course;
+      cmd += " --course c1 --station s1 --station s2 --instructor i1 > " + log + " 2>&1";
+      ASSERT_EQ(std::system(cmd.c_str()), 0) << testing::ReadFile(log);
     }
   }
   static void TearDownTestSuite() {
