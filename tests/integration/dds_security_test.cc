@@ -1,8 +1,9 @@
 // DDS Security (deploy/security/README.md): a course made by deploy/security/make-course;
 // participants of this process with and without its identities. Without a valid certificate
 // a participant matches and reads nothing; a station identity cannot publish cue commands nor
-// write into another station's partition; a tampered permissions file stops the app with a
-// clear error. Each check has a positive control with a valid identity, so it can fail.
+// write into another station's partition (nor a device driver drive another station); a tampered
+// permissions file stops the app with a clear error. Each check has a positive control with a valid
+// identity, so it can fail.
 #include "common/net/dds_security.h"
 
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 #include "common/net/dds_context.h"
 #include "common/net/topics.h"
 #include "cue_commandPubSubTypes.h"
+#include "device_inputPubSubTypes.h"
 #include "station_infoPubSubTypes.h"
 #include "tests/integration/process.h"
 
@@ -39,7 +41,8 @@ class DdsSecurity : public ::testing::Test {
       const std::string log = *root_ + "-" + course + ".log";
       std::string cmd = script;
       cmd += " " + *root_ + "/" + course;
-      cmd += " --course c1 --station s1 --station s2 --instructor i1 > " + log + " 2>&1";
+      cmd +=
+          " --course c1 --station s1 --station s2 --instructor i1 --device s1 > " + log + " 2>&1";
       ASSERT_EQ(std::system(cmd.c_str()), 0) << testing::ReadFile(log);
     }
   }
@@ -151,6 +154,15 @@ TEST_F(DdsSecurity, AStationIdentityCannotPublishCuesNorWriteForAnotherStation) 
                std::runtime_error);
   // A station cannot read another station's state either.
   EXPECT_THROW(s1.CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic),
+               std::runtime_error);
+
+  // A device driver's identity drives its own station only.
+  net::DdsContext device(Options(Dir("c1", "device-s1"), "s1", "device-s1"));
+  EXPECT_NE(device.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic), nullptr);
+  EXPECT_THROW(device.CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic),
+               std::runtime_error);
+  net::DdsContext device_as_s2(Options(Dir("c1", "device-s1"), "s2", "device-s1-as-s2"));
+  EXPECT_THROW(device_as_s2.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic),
                std::runtime_error);
 
   // Control: the instructor identity publishes cues, and station s1 receives them.
