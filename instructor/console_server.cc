@@ -133,8 +133,8 @@ std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_
     // StationInfo names, if this machine has it and its files hash to the StationInfo's
     // scene_hash, is certainly the same scene.
     try {
-      auto local = std::make_shared<view::SceneFiles>(
-          view::CollectSceneFiles(scene::LoadScene(info_path)));
+      auto local =
+          std::make_shared<view::SceneFiles>(view::CollectSceneFiles(scene::LoadScene(info_path)));
       if (local->hash == info_hash) files = std::move(local);
     } catch (const std::exception&) {
       // Not here: wait for the description.
