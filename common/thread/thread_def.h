@@ -63,10 +63,11 @@ struct ThreadDef {
   double contact_decay_m = 2.5e-6;
   double contact_cutoff_m = 12.5e-6;
 
-  // Non-penetration guard applied after each step: centreline distance between non-adjacent
-  // links (and link surface to object) is projected back to at least this fraction of the
-  // diameter. 0 disables it (the thesis has no guard).
-  double guard_fraction = 0.75;
+  // Contact projection after each step (ProjectContacts, not in the thesis): centreline
+  // distance between non-adjacent links is projected back to at least this fraction of the
+  // diameter (link surface to object: at least (fraction - 1) radius), with Coulomb friction.
+  // 0 disables it (the thesis has no hard contact).
+  double guard_fraction = 0.97;
 
   // Strain limiting after each linearly implicit step (not in the thesis): link lengths are
   // projected into [1 - strain_limit, 1 + strain_limit] times their rest length by a few

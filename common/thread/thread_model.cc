@@ -84,6 +84,7 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.grasp_slot = Eigen::VectorXi::Constant(n, -1);
   w.spheres = MakeSphereBvhSpheres(model.bvh);
   w.pairs.assign(model.contact_capacity, LinkPair{});
+  w.pair_start.assign(model.contact_capacity, PairStart{});
   w.self_contacts.assign(model.contact_capacity, SelfContact{});
   w.object_contacts.assign(model.contact_capacity, ObjectContact{});
   w.system = BandedSpd(3 * n, model.half_bandwidth);

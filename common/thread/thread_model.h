@@ -57,6 +57,13 @@ struct SelfContact {
   Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();  // unit, from link b to link a
 };
 
+// A candidate pair's closest points at the start of the step (ProjectContacts).
+struct PairStart {
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();
+  double distance_m = 0.0;
+  bool interior = false;
+};
+
 // Link–object contact (5.9): the object pushes along n_W.
 struct ObjectContact {
   int link = 0;
@@ -100,6 +107,12 @@ struct ThreadWorkspace {
   Eigen::VectorXi grasp_slot;  // per node: grasp slot or -1 (from state.grasps, each step)
   SphereBvhSpheres spheres;
   std::vector<LinkPair> pairs;
+  // Per candidate pair, from the start-of-step positions (contact projection): the closest
+  // points' normal (from b to a) and whether both closest points were interior to their links.
+  std::vector<PairStart> pair_start;
+  // The last step's contact projection: sweeps run, and its largest remaining deficit (m).
+  int projection_sweeps = 0;
+  double projection_residual_m = 0.0;
   std::vector<SelfContact> self_contacts;
   std::vector<ObjectContact> object_contacts;
   int num_self_contacts = 0;

@@ -474,45 +474,6 @@ bool IntegrateLinearlyImplicit(const ThreadModel& model, double h, ThreadWorkspa
   return IntegrateTwist(model, h, w, state);
 }
 
-// Strain limiting (see ThreadDef::strain_limit): alternating Gauss-Seidel sweeps over the
-// links, each moving a link's free end nodes along it in inverse proportion to their masses
-// until its length is inside the band; grasped nodes do not move. Velocities follow the
-// positions (x = x_prev + h v), as in the guard.
-int LimitStrain(const ThreadModel& model, double h, ThreadWorkspace& w, ThreadState& state) {
-  constexpr int kSweeps = 32;  // a correction travels one link per sweep; most steps need none
-  const double limit = model.def.strain_limit;
-  if (limit <= 0.0) return 0;
-  Eigen::Matrix3Xd& x = state.x_W;
-  const Eigen::VectorXi& grasped = w.grasp_slot;
-  int corrections = 0;
-  for (int sweep = 0; sweep < kSweeps; ++sweep) {
-    bool changed = false;
-    for (int k = 0; k < model.num_links; ++k) {
-      const int j = sweep % 2 == 0 ? k : model.num_links - 1 - k;
-      const Eigen::Vector3d e = x.col(j + 1) - x.col(j);
-      const double l = e.norm();
-      const double r = model.rest_length_m[j];
-      const double target = std::clamp(l, (1.0 - limit) * r, (1.0 + limit) * r);
-      if (!(l > 0.0) || target == l) continue;
-      const double w0 = grasped[j] >= 0 ? 0.0 : 1.0 / model.mass_kg[j];
-      const double w1 = grasped[j + 1] >= 0 ? 0.0 : 1.0 / model.mass_kg[j + 1];
-      if (!(w0 + w1 > 0.0)) continue;
-      const Eigen::Vector3d corr = ((l - target) / (l * (w0 + w1))) * e;
-      x.col(j) += w0 * corr;
-      x.col(j + 1) -= w1 * corr;
-      ++corrections;
-      changed = true;
-    }
-    if (!changed) break;
-  }
-  if (corrections > 0) {
-    for (int i = 0; i < model.num_nodes; ++i) {
-      if (grasped[i] < 0) state.v_W.col(i) = (x.col(i) - w.x_prev_W.col(i)) / h;
-    }
-  }
-  return corrections;
-}
-
 void RollBack(ThreadWorkspace& w, ThreadState& state) {
   state.x_W = w.x_prev_W;
   state.v_W.setZero();
@@ -554,16 +515,13 @@ void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
     if (!ok) ++state.status.factorization_failures;
   }
   if (ok) {
-    state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, w, state);
-    if (integrator == Integrator::kLinearlyImplicitEuler) {
-      // After the guard: its projections stretch links too; the limit's moves along the
-      // links are small and a second guard pass keeps the pairs apart.
-      const int limited = LimitStrain(model, h, w, state);
-      state.status.strain_corrections += limited;
-      if (limited > 0) {
-        state.status.guard_corrections += ApplyNonPenetrationGuard(model, colliders, h, w, state);
-      }
-    }
+    // Contacts and (implicit step only) link lengths in one projection: the strain limit's
+    // moves along the links and the contacts' moves across them converge together.
+    const double limit =
+        integrator == Integrator::kLinearlyImplicitEuler ? model.def.strain_limit : 0.0;
+    const ContactProjection p = ProjectContacts(model, colliders, h, limit, w, state);
+    state.status.guard_corrections += p.contact_corrections;
+    state.status.strain_corrections += p.strain_corrections;
     ok = state.x_W.allFinite() && state.v_W.allFinite() && state.q_rad.allFinite() &&
          state.qdot_rad_per_s.allFinite();
     if (!ok) ++state.status.nonfinite_resets;

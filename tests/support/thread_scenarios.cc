@@ -1,12 +1,17 @@
 #include "tests/support/thread_scenarios.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "common/base/check.h"
+#include "common/geometry/segment_distance.h"
+#include "common/knot/recognition.h"
 #include "common/thread/grasp.h"
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
@@ -162,11 +167,6 @@ KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state) {
   return hands;
 }
 
-double HoldTensionAfterThrow(const KnotThrowOptions& previous, const KnotThrowOptions& next) {
-  constexpr double kAfterDoubleThrow_N = 1e-3;
-  return previous.passes > 1 ? kAfterDoubleThrow_N : next.hold_tension_N;
-}
-
 void KnotThrowOptions::Validate() const {
   auto require = [](bool ok, const char* field, const char* expected) {
     if (!ok) {
@@ -201,6 +201,8 @@ constexpr double kSecondPegHeight_m = 0.6e-3;
 constexpr double kJawRadius_m = 40e-6;
 constexpr double kJawClearance_m = 15e-6;
 constexpr double kJawOverhang_m = 0.2e-3;
+// Pegs and jaws shrink to nothing over this time at the end of a throw (the instrument opens).
+constexpr double kReleaseTime_s = 0.1;
 // Standing hand: speed per newton of tension error, and its speed limit.
 constexpr double kTensionGain_m_per_s_N = 3.0;
 constexpr double kMaxHandSpeed_m_per_s = 0.02;
@@ -285,6 +287,7 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
   // Away from the knot, passing below peg 1.
   path_.push_back({at(a + 0.6e-3, y_s - 0.4e-3, 0.0), Phase::kExit});
   path_.push_back({at(a + 2.5e-3, y_s - 0.2e-3, 0.0), Phase::kExit});
+  for (const Collider& c : colliders_) radii_.push_back(c.radius_m);
   for (size_t k = 1; k < path_.size(); ++k) {
     path_total_m_ += (path_[k].p_W - path_[k - 1].p_W).norm();
   }
@@ -295,6 +298,27 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
   const double h = model.def.time_step_s;
   Grasp& standing = state.grasps[hands_.standing_slot];
   Grasp& driver = state.grasps[hands_.driver_slot];
+  if (phase_ == Phase::kRelease) {
+    // Pegs and jaws slide out along their axes (the driver holds still, the standing hand keeps
+    // its tension), then are gone: dropping them at once frees the thread pressed against them
+    // within one step.
+    const double tension = sx_ * standing.f_T_W.x();
+    const double v = std::clamp(kTensionGain_m_per_s_N * (tension - options_.hold_tension_N),
+                                -kMaxHandSpeed_m_per_s, kMaxHandSpeed_m_per_s);
+    SetGraspTarget(state, hands_.standing_slot,
+                   standing.p_WT + (sx_ * v * h) * Eigen::Vector3d::UnitX(), standing.roll_rad);
+    // The instruments open: pegs and jaws shrink to nothing over kReleaseTime_s, so the loop
+    // and the wraps close on the thread gradually.
+    released_s_ += h;
+    const double scale = std::max(0.0, 1.0 - released_s_ / kReleaseTime_s);
+    for (size_t k = 0; k < colliders_.size(); ++k) colliders_[k].radius_m = scale * radii_[k];
+    if (released_s_ >= kReleaseTime_s) {
+      for (Collider& c : colliders_) c.enabled = false;
+      phase_ = Phase::kPull;
+    }
+    StepThread(model, colliders_, ws_, state);
+    return true;
+  }
   if (phase_ != Phase::kPull) {
     // The driver follows its path at constant speed.
     double advance = options_.speed_m_per_s * h;
@@ -322,10 +346,7 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
                                 -kMaxHandSpeed_m_per_s, kMaxHandSpeed_m_per_s);
     SetGraspTarget(state, hands_.standing_slot,
                    standing.p_WT + (sx_ * v * h) * Eigen::Vector3d::UnitX(), standing.roll_rad);
-    if (segment_ + 1 >= static_cast<int>(path_.size())) {
-      phase_ = Phase::kPull;
-      for (Collider& c : colliders_) c.enabled = false;
-    }
+    if (segment_ + 1 >= static_cast<int>(path_.size())) phase_ = Phase::kRelease;
     StepThread(model, colliders_, ws_, state);
     return true;
   }
@@ -343,6 +364,240 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
     phase_ = Phase::kDone;
   }
   return phase_ != Phase::kDone;
+}
+
+KnotHoldScript::KnotHoldScript(const ThreadModel& model, KnotTyingHands hands,
+                               const KnotHoldOptions& options)
+    : options_(options),
+      hands_(hands),
+      ws_(MakeThreadWorkspace(model)),
+      steps_left_(static_cast<int>(std::lround(options.duration_s / model.def.time_step_s))) {
+  MICRODEX_CHECK(hands.standing_slot >= 0 && hands.driver_slot >= 0);
+  if (!(options.tension_N > 0.0 && options.tension_N < 1.0)) {
+    throw std::invalid_argument("KnotHoldOptions.tension_N: expected a tension in (0, 1) N");
+  }
+  if (!(options.duration_s >= 0.0 && options.duration_s < 1e3)) {
+    throw std::invalid_argument("KnotHoldOptions.duration_s: expected a duration in [0, 1000) s");
+  }
+}
+
+bool KnotHoldScript::Step(const ThreadModel& model, ThreadState& state) {
+  if (steps_left_ <= 0) return false;
+  const double h = model.def.time_step_s;
+  const std::vector<Collider> none;
+  for (const int slot : {hands_.standing_slot, hands_.driver_slot}) {
+    const int other = slot == hands_.standing_slot ? hands_.driver_slot : hands_.standing_slot;
+    Grasp& g = state.grasps[slot];
+    // Outward: away from the other hand, along x (the thread's direction when pulled).
+    const double out = g.p_WT.x() >= state.grasps[other].p_WT.x() ? 1.0 : -1.0;
+    const double tension = -out * g.f_T_W.x();
+    const double v = std::clamp(kTensionGain_m_per_s_N * (options_.tension_N - tension),
+                                -kMaxHandSpeed_m_per_s, kMaxHandSpeed_m_per_s);
+    SetGraspTarget(state, slot, g.p_WT + (out * v * h) * Eigen::Vector3d::UnitX(), g.roll_rad);
+  }
+  StepThread(model, none, ws_, state);
+  --steps_left_;
+  return steps_left_ > 0;
+}
+
+std::vector<KnotThrowOptions> ParseKnotThrows(const std::string& spec) {
+  std::vector<KnotThrowOptions> throws;
+  std::stringstream in(spec);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const bool ok = item.size() >= 1 && item.size() <= 2 && item[0] >= '1' && item[0] <= '3' &&
+                    (item.size() == 1 || item[1] == 'r' || item[1] == 'l');
+    if (!ok) {
+      throw std::invalid_argument("knot throws '" + spec + "': item '" + item +
+                                  "': expected passes 1-3 and r or l, e.g. 2 or 1r,1l");
+    }
+    KnotThrowOptions t;
+    t.passes = item[0] - '0';
+    t.right = item.size() == 1 || item[1] == 'r';
+    throws.push_back(t);
+  }
+  if (throws.empty() || throws.size() > 3) {
+    throw std::invalid_argument("knot throws '" + spec + "': expected 1 to 3 throws");
+  }
+  return throws;
+}
+
+double BruteForceMinDistance(const Eigen::Matrix3Xd& x, double limit_m) {
+  const int links = static_cast<int>(x.cols()) - 1;
+  std::vector<Eigen::Vector3d> mid(std::max(0, links));
+  std::vector<double> half(std::max(0, links));
+  for (int j = 0; j < links; ++j) {
+    mid[j] = 0.5 * (x.col(j) + x.col(j + 1));
+    half[j] = 0.5 * (x.col(j + 1) - x.col(j)).norm();
+  }
+  double best = limit_m;
+  for (int a = 0; a < links; ++a) {
+    for (int b = a + 2; b < links; ++b) {
+      const double reach = half[a] + half[b] + best;
+      if ((mid[a] - mid[b]).squaredNorm() >= reach * reach) continue;
+      const geometry::SegmentClosest c =
+          geometry::ClosestSegmentSegment(x.col(a), x.col(a + 1), x.col(b), x.col(b + 1));
+      best = std::min(best, c.distance_m);
+    }
+  }
+  return best;
+}
+
+namespace {
+
+const char* PhaseWord(KnotThrowScript::Phase phase) {
+  switch (phase) {
+    case KnotThrowScript::Phase::kLoop:
+      return "loop";
+    case KnotThrowScript::Phase::kHelix:
+      return "helix";
+    case KnotThrowScript::Phase::kExit:
+      return "exit";
+    case KnotThrowScript::Phase::kRelease:
+      return "release";
+    case KnotThrowScript::Phase::kPull:
+      return "pull";
+    case KnotThrowScript::Phase::kDone:
+      return "done";
+  }
+  return "?";
+}
+
+knot::KnotAnalysis AnalyzeThread(const ThreadModel& model, const ThreadState& state, bool locate) {
+  std::vector<Eigen::Vector3d> poly(model.num_nodes);
+  for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
+  knot::KnotOptions options;
+  options.thread_diameter_m = model.def.diameter_m;
+  options.locate = locate;
+  return knot::AnalyzeKnot(poly, options);
+}
+
+// Step times and distances of one phase.
+struct PhaseMeter {
+  std::vector<double> step_us;
+  TiePhaseReport report;
+  void Start(int throw_index, const char* phase) {
+    step_us.clear();
+    report = TiePhaseReport{};
+    report.throw_index = throw_index;
+    report.phase = phase;
+    report.min_distance_over_d = std::numeric_limits<double>::infinity();
+  }
+  void Add(double us, double d_over_d, const ThreadState& state, const ThreadWorkspace* ws,
+           const KnotTyingHands& hands) {
+    step_us.push_back(us);
+    ++report.steps;
+    report.min_distance_over_d = std::min(report.min_distance_over_d, d_over_d);
+    report.max_self_contacts = std::max(report.max_self_contacts, state.status.num_self_contacts);
+    if (ws != nullptr) {
+      report.max_projection_sweeps = std::max(report.max_projection_sweeps, ws->projection_sweeps);
+      report.max_projection_residual_over_d =
+          std::max(report.max_projection_residual_over_d, ws->projection_residual_m);
+    }
+    report.f_standing_max_N =
+        std::max(report.f_standing_max_N, state.grasps[hands.standing_slot].f_T_W.norm());
+    report.f_driver_max_N =
+        std::max(report.f_driver_max_N, state.grasps[hands.driver_slot].f_T_W.norm());
+  }
+  TiePhaseReport Finish(const ThreadModel& model, const ThreadState& state) {
+    std::vector<double> v = step_us;
+    std::sort(v.begin(), v.end());
+    if (!v.empty()) {
+      const size_t m = v.size() / 2;
+      const double median = v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+      report.steps_per_s = 1e6 / median;
+      report.tick_p99_us =
+          v[std::min(v.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(v.size())))];
+    }
+    report.knot = std::string(knot::KnotName(AnalyzeThread(model, state, false).type));
+    report.max_projection_residual_over_d /= model.def.diameter_m;
+    return report;
+  }
+};
+
+}  // namespace
+
+TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
+                     const KnotHoldOptions& hold, void (*on_phase)(const TiePhaseReport&)) {
+  using Clock = std::chrono::steady_clock;
+  const ThreadModel model = MakeThreadModel(def);
+  ThreadState state =
+      MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  KnotTyingHands hands = SetUpKnotTying(model, state);
+  TieReport out;
+  out.min_distance_over_d = std::numeric_limits<double>::infinity();
+  out.pulled_tight = true;
+  const double d = model.def.diameter_m;
+  const long long trouble0 = state.status.nonfinite_resets + state.status.factorization_failures;
+  std::vector<double> all_us;
+  PhaseMeter meter;
+  auto finish_phase = [&] {
+    const TiePhaseReport r = meter.Finish(model, state);
+    all_us.insert(all_us.end(), meter.step_us.begin(), meter.step_us.end());
+    out.min_distance_over_d = std::min(out.min_distance_over_d, r.min_distance_over_d);
+    out.phases.push_back(r);
+    if (on_phase != nullptr) on_phase(r);
+  };
+  double knot_x = 4e-3;
+  for (size_t t = 0; t < throws.size(); ++t) {
+    throws[t].knot_x_m = knot_x;
+    KnotThrowScript script(model, state, hands, throws[t]);
+    KnotThrowScript::Phase last = script.phase();
+    meter.Start(static_cast<int>(t) + 1, PhaseWord(last));
+    while (true) {
+      const Clock::time_point t0 = Clock::now();
+      const bool more = script.Step(model, state);
+      const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+      if (script.phase() != last && script.phase() != KnotThrowScript::Phase::kDone) {
+        finish_phase();
+        last = script.phase();
+        meter.Start(static_cast<int>(t) + 1, PhaseWord(last));
+      }
+      meter.Add(us, BruteForceMinDistance(state.x_W, d) / d, state, &script.workspace(), hands);
+      out.max_strain = std::max(out.max_strain, state.status.max_strain);
+      if (!more) break;
+    }
+    finish_phase();
+    out.pulled_tight = out.pulled_tight && std::min(state.grasps[hands.standing_slot].f_T_W.norm(),
+                                                    state.grasps[hands.driver_slot].f_T_W.norm()) >=
+                                               throws[t].pull_tension_N;
+    // The next throw is tied by the other hand, 3 mm beyond this knot on its side.
+    const knot::KnotAnalysis a = AnalyzeThread(model, state, true);
+    std::swap(hands.standing_slot, hands.driver_slot);
+    const double side = state.grasps[hands.driver_slot].p_WT.x() >= knot_x ? 1.0 : -1.0;
+    knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * 3.0e-3;
+  }
+  const knot::KnotAnalysis before = AnalyzeThread(model, state, true);
+  out.knot_after_pull = std::string(knot::KnotName(before.type));
+  KnotHoldScript hold_script(model, hands, hold);
+  meter.Start(0, "hold");
+  while (true) {
+    const Clock::time_point t0 = Clock::now();
+    const bool more = hold_script.Step(model, state);
+    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    meter.Add(us, BruteForceMinDistance(state.x_W, d) / d, state, &hold_script.workspace(), hands);
+    out.max_strain_hold = std::max(out.max_strain_hold, state.status.max_strain);
+    if (!more) break;
+  }
+  finish_phase();
+  const knot::KnotAnalysis after = AnalyzeThread(model, state, true);
+  out.knot = std::string(knot::KnotName(after.type));
+  const double s_before = 0.5 * (before.core_start_s_m + before.core_end_s_m);
+  const double s_after = 0.5 * (after.core_start_s_m + after.core_end_s_m);
+  out.hold_shift_m = before.located && after.located ? std::abs(s_after - s_before)
+                                                     : std::numeric_limits<double>::infinity();
+  constexpr double kHoldShift_m = 1e-3;
+  out.held = before.type == after.type && before.type != knot::KnotType::kNone &&
+             before.type != knot::KnotType::kUnknown && out.hold_shift_m < kHoldShift_m;
+  std::sort(all_us.begin(), all_us.end());
+  if (!all_us.empty()) {
+    out.steps_per_s = 1e6 / all_us[all_us.size() / 2];
+    out.tick_p99_us = all_us[std::min(
+        all_us.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(all_us.size())))];
+  }
+  out.rollbacks = state.status.nonfinite_resets + state.status.factorization_failures - trouble0;
+  out.x_final_W = state.x_W;
+  return out;
 }
 
 }  // namespace microdex::thread

@@ -3,6 +3,7 @@
 // the swing-and-pull motion of the stability and accuracy studies and the knot-tying script.
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "common/thread/colliders.h"
@@ -67,13 +68,13 @@ KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state);
 // The helix is wrapped on an instrument's jaws: two rigid rods along the standing part, one on
 // either side of it, which keep the standing part (held only by thread tension) inside the
 // wraps, as in an instrument tie. Meanwhile the standing hand keeps the thread taut at
-// hold_tension_N by feeding or taking in thread along x. Then pegs and jaws are withdrawn and
-// both hands pull apart until each feels pull_tension_N. passes = 1 ties an overhand knot
-// (trefoil), 2 a double overhand; right picks the handedness (all crossings positive seen from +z).
-// A second throw on the same thread, next to the first, makes a square (opposite handedness) or
-// granny knot; it is tied with the other end (the hands swap roles), whose tail is the long one
-// after the first throw. With the driver's end towards -x of the knot the jig is turned by pi about
-// the y axis.
+// hold_tension_N by feeding or taking in thread along x. Then pegs and jaws shrink to nothing
+// over 0.1 s (release: the instrument opens) and both hands pull apart until each feels
+// pull_tension_N. passes = 1 ties an overhand knot (trefoil), 2 a double overhand; right picks the
+// handedness (all crossings positive seen from +z). A second throw on the same thread, next to the
+// first, makes a square (opposite handedness) or granny knot; it is tied with the other end (the
+// hands swap roles), whose tail is the long one after the first throw. With the driver's end
+// towards -x of the knot the jig is turned by pi about the y axis.
 struct KnotThrowOptions {
   int passes = 1;
   bool right = true;
@@ -87,15 +88,9 @@ struct KnotThrowOptions {
   void Validate() const;
 };
 
-// The standing hand's hold for `next`, tied after `previous` on the same thread: 1 mN after a
-// double throw (surgeon's knot: at 2 mN the single throw's loop sprang open when pegs and jaws
-// were withdrawn and the end slipped out, 385 nodes), next.hold_tension_N otherwise (at 1 mN the
-// square knot's second throw is the one lost).
-double HoldTensionAfterThrow(const KnotThrowOptions& previous, const KnotThrowOptions& next);
-
 class KnotThrowScript {
  public:
-  enum class Phase { kLoop, kHelix, kExit, kPull, kDone };
+  enum class Phase { kLoop, kHelix, kExit, kRelease, kPull, kDone };
 
   // The jig is placed on the standing part as it lies in `state` (it need not be straight
   // after an earlier throw). Precomputes the driver's path; allocates only here.
@@ -108,6 +103,7 @@ class KnotThrowScript {
   Phase phase() const { return phase_; }
   bool done() const { return phase_ == Phase::kDone; }
   const std::vector<Collider>& colliders() const { return colliders_; }
+  const ThreadWorkspace& workspace() const { return ws_; }
   // Driver path length left before the pull, m.
   double path_left_m() const { return path_total_m_ - path_s_m_; }
 
@@ -126,8 +122,84 @@ class KnotThrowScript {
   double path_total_m_ = 0.0;
   double segment_s_m_ = 0.0;
   double pulled_m_ = 0.0;
-  double sx_ = 1.0;  // +1: the driver's end lies towards +x of the knot, -1: towards -x
+  double released_s_ = 0.0;
+  std::vector<double> radii_;  // of the colliders, before the release
+  double sx_ = 1.0;            // +1: the driver's end lies towards +x of the knot, -1: towards -x
   Phase phase_ = Phase::kLoop;
 };
+
+// ---- Hold ------------------------------------------------------------------------------------
+// After the pull: each hand keeps tension_N along the thread for duration_s (it moves away from
+// the other hand when the pull is below that and towards it when above, as the standing hand
+// of a throw does).
+struct KnotHoldOptions {
+  double tension_N = 20e-3;
+  double duration_s = 2.0;
+};
+
+class KnotHoldScript {
+ public:
+  KnotHoldScript(const ThreadModel& model, KnotTyingHands hands, const KnotHoldOptions& options);
+  // One step of model.def.time_step_s; false when the hold is over.
+  bool Step(const ThreadModel& model, ThreadState& state);
+  const ThreadWorkspace& workspace() const { return ws_; }
+
+ private:
+  KnotHoldOptions options_;
+  KnotTyingHands hands_;
+  ThreadWorkspace ws_;
+  int steps_left_ = 0;
+};
+
+// ---- Tie and hold, measured -------------------------------------------------------------------
+// Throws of a knot as "2" (double overhand), "1r" (overhand), "1r,1l" (square), "1r,1r"
+// (granny), "2r,1l" (surgeon's): passes and r/l handedness per throw. Throws
+// std::invalid_argument naming the bad item.
+std::vector<KnotThrowOptions> ParseKnotThrows(const std::string& spec);
+
+// Smallest centreline distance between non-adjacent links of the polyline x (3 x n), over the
+// pairs closer than limit_m (limit_m if none is): a brute force over all pairs, pruned only by
+// each pair's bounding spheres, independent of the simulation's hierarchy.
+double BruteForceMinDistance(const Eigen::Matrix3Xd& x, double limit_m);
+
+struct TiePhaseReport {
+  int throw_index = 0;  // 1-based; 0 for the hold
+  std::string phase;    // loop, helix, exit, pull, hold
+  std::string knot;     // recognised at the end of the phase
+  int steps = 0;
+  double min_distance_over_d = 0.0;  // over every step of the phase, brute force
+  double steps_per_s = 0.0;          // 1 / median step time
+  double tick_p99_us = 0.0;          // 99th percentile step time
+  int max_self_contacts = 0;
+  int max_projection_sweeps = 0;  // contact projection (ProjectContacts)
+  double max_projection_residual_over_d = 0.0;
+  double f_standing_max_N = 0.0;
+  double f_driver_max_N = 0.0;
+};
+
+struct TieReport {
+  std::vector<TiePhaseReport> phases;
+  std::string knot_after_pull;  // at the end of the last throw's pull
+  std::string knot;             // at the end (after the hold)
+  double min_distance_over_d = 0.0;
+  bool pulled_tight = false;  // every throw's pull ended with both hands at pull_tension_N
+  bool held = false;          // class unchanged by the hold and knot moved < 1 mm along it
+  double hold_shift_m = 0.0;  // knot core's shift along the thread during the hold
+  double steps_per_s = 0.0;   // 1 / median step time over the whole run
+  double tick_p99_us = 0.0;
+  long long rollbacks = 0;
+  double max_strain = 0.0;       // largest link strain up to the end of the last pull
+  double max_strain_hold = 0.0;  // the same during the hold
+  Eigen::Matrix3Xd x_final_W;    // node positions at the end
+};
+
+// Ties the throws on a fresh thread of `def` (laid out and grasped by SetUpKnotTying; a second
+// throw is tied by the other hand 3 mm beyond the knot), each with its script's hold and pull
+// tensions, then holds (`hold`). Times every step; after every step the brute-force distance.
+// The knot is recognised at every phase change. on_phase, when given, is called after each
+// phase with its report (progress output).
+TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
+                     const KnotHoldOptions& hold,
+                     void (*on_phase)(const TiePhaseReport&) = nullptr);
 
 }  // namespace microdex::thread

@@ -5,7 +5,10 @@
 //   microdex-bench thread --stability --json FILE [--plot FILE.png]
 //   microdex-bench thread --accuracy --json FILE
 //   microdex-bench thread --adversarial [--steps 1000000] [--json FILE]
-//   microdex-bench thread --tie 2 | 1r,1l | 2r,1l [--nodes N] [--obj FILE]   tie throws, trace them
+//   microdex-bench thread --tie 2 | 1r,1l | 2r,1l [--nodes N] [--obj FILE] [--json FILE]
+//                         tie the throws, pull, hold 20 mN for 2 s; report per phase
+//   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
+//                         five knots x 129..513 nodes x mu 0.1..0.3 (README table)
 //   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
 //   --quick                                              reduced sizes (CTest)
 #include <algorithm>
@@ -309,7 +312,9 @@ struct ContactOverrides {
   double friction = -1.0;
   double object_friction = -1.0;
   int exact_pairs = -1;
+  double contact_force = -1.0;
   ThreadDef Apply(ThreadDef def) const {
+    if (contact_force >= 0.0) def.contact_force_N = contact_force;
     if (friction >= 0.0) def.friction_coefficient = friction;
     if (object_friction >= 0.0) def.object_friction_coefficient = object_friction;
     if (exact_pairs >= 0) def.exact_contact_pairs = exact_pairs;
@@ -449,208 +454,147 @@ int RunSpeed(bool quick, const std::string& json, const ContactOverrides& contac
 }
 
 // ---- tie -----------------------------------------------------------------------------------
-const char* PhaseName(KnotThrowScript::Phase phase) {
-  switch (phase) {
-    case KnotThrowScript::Phase::kLoop:
-      return "loop";
-    case KnotThrowScript::Phase::kHelix:
-      return "helix";
-    case KnotThrowScript::Phase::kExit:
-      return "exit";
-    case KnotThrowScript::Phase::kPull:
-      return "pull";
-    case KnotThrowScript::Phase::kDone:
-      return "done";
+std::string PhaseJson(const TiePhaseReport& r) {
+  std::ostringstream o;
+  o << "{\"throw\": " << r.throw_index << ", \"phase\": \"" << r.phase << "\", \"knot\": \""
+    << r.knot << "\", \"steps\": " << r.steps
+    << ", \"min_distance_over_d\": " << Num(r.min_distance_over_d)
+    << ", \"steps_per_s\": " << Num(r.steps_per_s) << ", \"tick_p99_us\": " << Num(r.tick_p99_us)
+    << ", \"max_self_contacts\": " << r.max_self_contacts
+    << ", \"f_standing_max_N\": " << Num(r.f_standing_max_N)
+    << ", \"f_driver_max_N\": " << Num(r.f_driver_max_N)
+    << ", \"max_projection_sweeps\": " << r.max_projection_sweeps
+    << ", \"max_projection_residual_over_d\": " << Num(r.max_projection_residual_over_d) << "}";
+  return o.str();
+}
+
+std::string TieJson(const std::string& spec, int nodes, double mu, const TieReport& r) {
+  std::ostringstream o;
+  o << "{\"throws\": \"" << spec << "\", \"nodes\": " << nodes << ", \"friction\": " << Num(mu)
+    << ", \"knot\": \"" << r.knot << "\", \"knot_after_pull\": \"" << r.knot_after_pull
+    << "\", \"min_distance_over_d\": " << Num(r.min_distance_over_d)
+    << ", \"held\": " << (r.held ? "true" : "false")
+    << ", \"hold_shift_m\": " << Num(r.hold_shift_m)
+    << ", \"pulled_tight\": " << (r.pulled_tight ? "true" : "false")
+    << ", \"steps_per_s\": " << Num(r.steps_per_s) << ", \"tick_p99_us\": " << Num(r.tick_p99_us)
+    << ", \"rollbacks\": " << r.rollbacks << ", \"max_strain\": " << Num(r.max_strain)
+    << ", \"max_strain_hold\": " << Num(r.max_strain_hold) << ",\n   \"phases\": [";
+  for (size_t k = 0; k < r.phases.size(); ++k) {
+    o << (k ? ",\n     " : "\n     ") << PhaseJson(r.phases[k]);
   }
-  return "?";
+  o << "]}";
+  return o.str();
 }
 
-std::string KnotOf(const ThreadModel& model, const ThreadState& state, int* crossings) {
-  std::vector<Eigen::Vector3d> poly(model.num_nodes);
-  for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
-  KnotOptions options;
-  options.thread_diameter_m = model.def.diameter_m;
-  options.locate = false;
-  const KnotAnalysis a = AnalyzeKnot(poly, options);
-  if (crossings != nullptr) *crossings = a.crossings;
-  return std::string(KnotName(a.type));
+void PrintPhase(const TiePhaseReport& r) {
+  std::printf(
+      "  %s %-5s %5d steps: knot %-16s min dist %.3f d, %6.0f steps/s (median), tick p99 %5.0f "
+      "us, self contacts max %3d, f max %.3g / %.3g N, projection sweeps max %d residual %.3f d\n",
+      r.throw_index > 0 ? ("throw " + std::to_string(r.throw_index)).c_str() : "       ",
+      r.phase.c_str(), r.steps, r.knot.c_str(), r.min_distance_over_d, r.steps_per_s, r.tick_p99_us,
+      r.max_self_contacts, r.f_standing_max_N, r.f_driver_max_N, r.max_projection_sweeps,
+      r.max_projection_residual_over_d);
+  std::fflush(stdout);
 }
 
-// Ties the throws of `spec` ("2": double overhand; "1r,1l": square; "1r,1r": granny; "2r,1l":
-// surgeon's; a pass
-// count and r/l handedness per throw) and prints the topology at each phase change.
-int RunTie(const std::string& spec, int nodes, const std::string& obj,
+// Ties the throws of `spec` (ParseKnotThrows: "2" double overhand, "1r,1l" square, "1r,1r"
+// granny, "2r,1l" surgeon's), pulls, holds 20 mN for 2 s, and reports per phase.
+int RunTie(const std::string& spec, int nodes, const std::string& obj, const std::string& json,
            const ContactOverrides& contact) {
-  std::vector<KnotThrowOptions> throws;
-  std::stringstream in(spec);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    KnotThrowOptions t;
-    t.passes = std::atoi(item.c_str());
-    t.right = item.find('l') == std::string::npos;
-    t.Validate();
-    throws.push_back(t);
-  }
-  if (throws.empty()) throw std::invalid_argument("--tie: expected throws such as 2 or 1r,1l");
-  const ThreadModel model = MakeThreadModel(contact.Apply(KnotTyingDef(nodes)));
-  std::printf("model: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
-              model.def.exact_contact_pairs, model.def.friction_coefficient,
-              model.def.object_friction_coefficient);
-  ThreadState state =
-      MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-  ThreadWorkspace ws = MakeThreadWorkspace(model);
-  KnotTyingHands hands = SetUpKnotTying(model, state);
-  double min_d = std::numeric_limits<double>::infinity();
-  const char* dump = std::getenv("MICRODEX_TIE_DUMP");
-  const int dump_every = std::getenv("MICRODEX_TIE_DUMP_EVERY") != nullptr
-                             ? std::max(1, std::atoi(std::getenv("MICRODEX_TIE_DUMP_EVERY")))
-                             : 200;
-  int k = 0;
-  double knot_x = 4e-3;
-  for (size_t t = 0; t < throws.size(); ++t) {
-    throws[t].knot_x_m = knot_x;
-    if (t > 0) throws[t].hold_tension_N = HoldTensionAfterThrow(throws[t - 1], throws[t]);
-    KnotThrowScript script(model, state, hands, throws[t]);
-    KnotThrowScript::Phase last = script.phase();
-    std::vector<double> f_standing, f_driver, step_us;
-    int max_contacts = 0;
-    // The rate of each phase, the first steps' beside the tight pull's.
-    const auto rate = [&] { return step_us.empty() ? 0.0 : 1e6 / Median(step_us); };
-    const auto p99 = [&] {
-      std::vector<double> v = step_us;
-      if (v.empty()) return 0.0;
-      std::sort(v.begin(), v.end());
-      return v[std::min(v.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(v.size())))];
-    };
-    if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr) {
-      for (const Collider& c : script.colliders()) {
-        const Eigen::Vector3d m = 0.5 * (c.a_W + c.b_W) * 1e3;
-        std::printf("  peg at (%.4f %.4f %.4f) mm radius %.3f mm\n", m.x(), m.y(), m.z(),
-                    c.radius_m * 1e3);
-      }
-    }
-    while (true) {
-      const Clock::time_point step_start = Clock::now();
-      const bool more = script.Step(model, state);
-      step_us.push_back(
-          std::chrono::duration<double, std::micro>(Clock::now() - step_start).count());
-      if (!more) break;
-      const double d_now = CalcMinNonAdjacentDistance(model, state.x_W);
-      if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr && d_now < 0.5 * model.def.diameter_m &&
-          min_d >= 0.5 * model.def.diameter_m) {
-        for (int a = 0; a < model.num_links; ++a) {
-          for (int b = a + 2; b < model.num_links; ++b) {
-            const SegmentClosest c = ClosestSegmentSegment(state.x_W.col(a), state.x_W.col(a + 1),
-                                                           state.x_W.col(b), state.x_W.col(b + 1));
-            if (c.distance_m < 0.5 * model.def.diameter_m) {
-              std::printf("  t=%.4f pair %d %d dist/d=%.3f s=%.2f t=%.2f at (%.4f %.4f %.4f) mm\n",
-                          state.time_s, a, b, c.distance_m / model.def.diameter_m, c.s, c.t,
-                          c.p.x() * 1e3, c.p.y() * 1e3, c.p.z() * 1e3);
-            }
-          }
-        }
-      }
-      min_d = std::min(min_d, d_now);
-      f_standing.push_back(state.grasps[hands.standing_slot].f_T_W.norm());
-      f_driver.push_back(state.grasps[hands.driver_slot].f_T_W.norm());
-      max_contacts = std::max(max_contacts, state.status.num_self_contacts);
-      if (dump != nullptr && k % dump_every == 0) {
-        std::FILE* f = std::fopen(dump, "a");
-        for (int i = 0; i < model.num_nodes; ++i) {
-          std::fprintf(f, "%g %g %g\n", state.x_W(0, i) * 1e3, state.x_W(1, i) * 1e3,
-                       state.x_W(2, i) * 1e3);
-        }
-        std::fprintf(f, "\n\n");
-        std::fclose(f);
-      }
-      ++k;
-      if (script.phase() != last) {
-        // Grasp forces over the phase just finished (median / max), the figures to set
-        // against the capstan estimate.
-        const double sd_max = *std::max_element(f_standing.begin(), f_standing.end());
-        const double dr_max = *std::max_element(f_driver.begin(), f_driver.end());
-        std::printf(
-            "  %s: f_standing median %.3g max %.3g N, f_driver median %.3g max %.3g N, "
-            "self contacts max %d, %.0f steps/s (median), step p99 %.0f us\n",
-            PhaseName(last), Median(f_standing), sd_max, Median(f_driver), dr_max, max_contacts,
-            rate(), p99());
-        f_standing.clear();
-        f_driver.clear();
-        step_us.clear();
-        max_contacts = 0;
-        int crossings = 0;
-        const std::string knot = KnotOf(model, state, &crossings);
-        std::printf(
-            "throw %zu %s -> %s at t=%.3f s: knot=%s (%d crossings) min_dist/d=%.3f "
-            "strain=%.4f f_standing=%.3g N f_driver=%.3g N self_contacts=%d resets=%lld "
-            "guard=%lld\n",
-            t + 1, PhaseName(last), PhaseName(script.phase()), state.time_s, knot.c_str(),
-            crossings, min_d / model.def.diameter_m, state.status.max_strain,
-            state.grasps[hands.standing_slot].f_T_W.norm(),
-            state.grasps[hands.driver_slot].f_T_W.norm(), state.status.num_self_contacts,
-            static_cast<long long>(state.status.nonfinite_resets +
-                                   state.status.factorization_failures),
-            static_cast<long long>(state.status.guard_corrections));
-        last = script.phase();
-        if (std::getenv("MICRODEX_TIE_DEBUG") != nullptr) {
-          int worst = 0;
-          double worst_strain = 0.0;
-          for (int j = 0; j < model.num_links; ++j) {
-            const double e =
-                (state.x_W.col(j + 1) - state.x_W.col(j)).norm() / model.rest_length_m[j] - 1.0;
-            if (std::abs(e) > std::abs(worst_strain)) {
-              worst = j;
-              worst_strain = e;
-            }
-          }
-          std::printf(
-              "  worst link %d strain %.4f at x=%.3f y=%.3f mm; standing at %.3f, driver at %.3f "
-              "%.3f mm\n",
-              worst, worst_strain, state.x_W(0, worst) * 1e3, state.x_W(1, worst) * 1e3,
-              state.grasps[hands.standing_slot].p_WT.x() * 1e3,
-              state.grasps[hands.driver_slot].p_WT.x() * 1e3,
-              state.grasps[hands.driver_slot].p_WT.y() * 1e3);
-        }
-      }
-    }
-    if (!f_standing.empty()) {
-      std::printf(
-          "  %s: f_standing median %.3g max %.3g N, f_driver median %.3g max %.3g N, "
-          "self contacts max %d, %.0f steps/s (median), step p99 %.0f us\n",
-          PhaseName(last), Median(f_standing),
-          *std::max_element(f_standing.begin(), f_standing.end()), Median(f_driver),
-          *std::max_element(f_driver.begin(), f_driver.end()), max_contacts, rate(), p99());
-    }
-    int crossings = 0;
-    const std::string knot = KnotOf(model, state, &crossings);
-    std::printf(
-        "throw %zu done at t=%.3f s: knot=%s (%d crossings) min_dist/d=%.3f f=%.3g/%.3g N\n", t + 1,
-        state.time_s, knot.c_str(), crossings, min_d / model.def.diameter_m,
-        state.grasps[hands.standing_slot].f_T_W.norm(),
-        state.grasps[hands.driver_slot].f_T_W.norm());
-    std::vector<Eigen::Vector3d> poly(model.num_nodes);
-    for (int i = 0; i < model.num_nodes; ++i) poly[i] = state.x_W.col(i);
-    KnotOptions options;
-    options.thread_diameter_m = model.def.diameter_m;
-    const KnotAnalysis a = AnalyzeKnot(poly, options);
-    // The next throw is tied by the other hand, next to this knot on the other side.
-    std::swap(hands.standing_slot, hands.driver_slot);
-    const double side = state.grasps[hands.driver_slot].p_WT.x() >= knot_x ? 1.0 : -1.0;
-    knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * 3.0e-3;
-  }
+  const ThreadDef def = contact.Apply(KnotTyingDef(nodes));
+  std::printf("tie %s, %d nodes: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
+              spec.c_str(), nodes, def.exact_contact_pairs, def.friction_coefficient,
+              def.object_friction_coefficient);
+  const TieReport r = RunKnotTie(def, ParseKnotThrows(spec), KnotHoldOptions{}, PrintPhase);
+  std::printf(
+      "knot %s (after the pull %s), min distance %.3f d, held %s (knot moved %.3g mm along the "
+      "thread), %.0f steps/s (median), tick p99 %.0f us, rolled back %lld, max strain %.4f (hold "
+      "%.4f)\n",
+      r.knot.c_str(), r.knot_after_pull.c_str(), r.min_distance_over_d, r.held ? "yes" : "no",
+      r.hold_shift_m * 1e3, r.steps_per_s, r.tick_p99_us, r.rollbacks, r.max_strain,
+      r.max_strain_hold);
+  if (!json.empty()) WriteFile(json, TieJson(spec, nodes, def.friction_coefficient, r) + "\n");
   if (!obj.empty()) {
     std::ostringstream out;
     out << "o thread\n";
-    for (int i = 0; i < model.num_nodes; ++i) {
-      out << "v " << Num(state.x_W(0, i)) << " " << Num(state.x_W(1, i)) << " "
-          << Num(state.x_W(2, i)) << "\n";
+    for (int i = 0; i < r.x_final_W.cols(); ++i) {
+      out << "v " << Num(r.x_final_W(0, i)) << " " << Num(r.x_final_W(1, i)) << " "
+          << Num(r.x_final_W(2, i)) << "\n";
     }
     out << "l";
-    for (int i = 1; i <= model.num_nodes; ++i) out << " " << i;
+    for (int i = 1; i <= r.x_final_W.cols(); ++i) out << " " << i;
     out << "\n";
     WriteFile(obj, out.str());
   }
   return 0;
+}
+
+// True when `only` (knot throws separated by ';', empty: all) lists spec.
+bool Selected(const std::string& only, const std::string& spec) {
+  return only.empty() || (";" + only + ";").find(";" + spec + ";") != std::string::npos;
+}
+
+// The matrix of the README: five knots x node counts x thread-on-thread friction, one run each,
+// the same script and tensions. Writes the JSON of every run and a markdown table.
+int RunTieMatrix(bool quick, const std::string& only, const std::string& json,
+                 const std::string& markdown, const ContactOverrides& contact) {
+  struct Knot {
+    const char* name;
+    const char* spec;
+    const char* expected;
+  };
+  const std::vector<Knot> knots = {{"overhand", "1r", "overhand-right"},
+                                   {"double overhand", "2r", "double-overhand"},
+                                   {"square", "1r,1l", "square"},
+                                   {"granny", "1r,1r", "granny"},
+                                   {"surgeon's", "2r,1l", "surgeons"}};
+  const std::vector<int> nodes =
+      quick ? std::vector<int>{129} : std::vector<int>{129, 257, 385, 513};
+  const std::vector<double> mus =
+      quick ? std::vector<double>{0.2} : std::vector<double>{0.1, 0.2, 0.3};
+  std::ostringstream runs, table;
+  table
+      << "| knot | nodes | mu | knot after hold | tied + held | min dist / d | steps/s (median) | "
+         "tick p99 [us] |\n|---|---:|---:|---|---|---:|---:|---:|\n";
+  int ok = 0, total = 0;
+  const auto t0 = Clock::now();
+  int selected = 0;
+  for (const Knot& k : knots) selected += Selected(only, k.spec) ? 1 : 0;
+  const int count = static_cast<int>(selected * nodes.size() * mus.size());
+  for (const Knot& k : knots) {
+    if (!Selected(only, k.spec)) continue;
+    for (const int n : nodes) {
+      for (const double mu : mus) {
+        ContactOverrides c = contact;
+        c.friction = mu;
+        const ThreadDef def = c.Apply(KnotTyingDef(n));
+        const TieReport r = RunKnotTie(def, ParseKnotThrows(k.spec), KnotHoldOptions{});
+        const bool good = r.knot == k.expected && r.held && r.min_distance_over_d >= 0.95;
+        ok += good ? 1 : 0;
+        ++total;
+        const double elapsed = Seconds(t0, Clock::now());
+        std::printf(
+            "[%d/%d, %.0f s, ETA %.0f s] %-15s %3d nodes mu %.1f: %-16s held %-3s min %.3f d "
+            "%6.0f steps/s p99 %5.0f us %s\n",
+            total, count, elapsed, elapsed / total * (count - total), k.name, n, mu, r.knot.c_str(),
+            r.held ? "yes" : "no", r.min_distance_over_d, r.steps_per_s, r.tick_p99_us,
+            good ? "ok" : "FAIL");
+        std::fflush(stdout);
+        runs << (total > 1 ? ",\n  " : "\n  ") << TieJson(k.spec, n, mu, r);
+        char row[256];
+        std::snprintf(row, sizeof(row), "| %s | %d | %.1f | %s | %s | %.3f | %.0f | %.0f |\n",
+                      k.name, n, mu, r.knot.c_str(), good ? "yes" : "**no**", r.min_distance_over_d,
+                      r.steps_per_s, r.tick_p99_us);
+        table << row;
+      }
+    }
+  }
+  std::printf("%d of %d tied and held with min distance >= 0.95 d\n%s", ok, total,
+              table.str().c_str());
+  if (!json.empty())
+    WriteFile(json, "{\"study\": \"tie matrix\", \"runs\": [" + runs.str() + "\n]}\n");
+  if (!markdown.empty()) WriteFile(markdown, table.str());
+  return ok == total ? 0 : 1;
 }
 
 // ---- adversarial -----------------------------------------------------------------------------
@@ -743,7 +687,8 @@ int Main(int argc, char** argv) {
   bool stability = false, accuracy = false, quick = false, adversarial = false;
   std::int64_t steps = 1000000;
   int nodes = 257;
-  std::string json, plot, tie, obj;
+  bool tie_matrix = false;
+  std::string json, plot, tie, obj, markdown, only;
   ContactOverrides contact;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -770,6 +715,12 @@ int Main(int argc, char** argv) {
       plot = value("--plot");
     } else if (arg == "--tie") {
       tie = value("--tie");
+    } else if (arg == "--tie-matrix") {
+      tie_matrix = true;
+    } else if (arg == "--only") {
+      only = value("--only");
+    } else if (arg == "--markdown") {
+      markdown = value("--markdown");
     } else if (arg == "--friction") {
       contact.friction = std::atof(value("--friction").c_str());
       if (!(contact.friction >= 0.0)) throw std::invalid_argument("--friction: expected mu >= 0");
@@ -777,6 +728,11 @@ int Main(int argc, char** argv) {
       contact.object_friction = std::atof(value("--object-friction").c_str());
       if (!(contact.object_friction >= 0.0)) {
         throw std::invalid_argument("--object-friction: expected mu >= 0");
+      }
+    } else if (arg == "--contact-force") {
+      contact.contact_force = std::atof(value("--contact-force").c_str());
+      if (!(contact.contact_force >= 0.0)) {
+        throw std::invalid_argument("--contact-force: expected a force >= 0 N");
       }
     } else if (arg == "--exact-pairs") {
       contact.exact_pairs = std::atoi(value("--exact-pairs").c_str());
@@ -788,14 +744,17 @@ int Main(int argc, char** argv) {
       std::printf(
           "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --adversarial "
           "[--steps N] | --tie THROWS "
-          "[--nodes N] [--obj FILE]] [--friction MU] [--object-friction MU] [--exact-pairs N] "
+          "[--nodes N] [--obj FILE] | --tie-matrix [--only SPEC;SPEC] [--markdown FILE]] "
+          "[--friction MU] "
+          "[--object-friction MU] [--exact-pairs N] "
           "[--json FILE] [--quick]\n");
       return 0;
     } else {
       throw std::invalid_argument("unknown option '" + arg + "'");
     }
   }
-  if (!tie.empty()) return RunTie(tie, nodes, obj, contact);
+  if (!tie.empty()) return RunTie(tie, nodes, obj, json, contact);
+  if (tie_matrix) return RunTieMatrix(quick, only, json, markdown, contact);
   if (stability) return RunStability(quick, json, plot);
   if (adversarial) return RunAdversarial(quick ? 20000 : steps, json);
   if (accuracy) return RunAccuracy(quick, json);
