@@ -408,8 +408,12 @@ std::vector<KnotThrowOptions> ParseKnotThrows(const std::string& spec) {
     const bool ok = item.size() >= 1 && item.size() <= 2 && item[0] >= '1' && item[0] <= '3' &&
                     (item.size() == 1 || item[1] == 'r' || item[1] == 'l');
     if (!ok) {
-      throw std::invalid_argument("knot throws '" + spec + "': item '" + item +
-                                  "': expected passes 1-3 and r or l, e.g. 2 or 1r,1l");
+      std::string message = "knot throws '";
+      message += spec;
+      message += "': item '";
+      message += item;
+      message += "': expected passes 1-3 and r or l, e.g. 2 or 1r,1l";
+      throw std::invalid_argument(message);
     }
     KnotThrowOptions t;
     t.passes = item[0] - '0';
