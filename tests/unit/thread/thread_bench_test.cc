@@ -53,4 +53,27 @@ TEST(ThreadBench, AccuracyJsonShape) {
   }
 }
 
+// --tie: per phase and at the end the knot, the brute-force minimum distance, held, the median
+// rate and the tick p99 (the report contract).
+TEST(ThreadBench, TieJsonShape) {
+  const YAML::Node root = RunBench("--tie 1r --nodes 129 --friction 0.1", "tie");
+  EXPECT_EQ(root["throws"].as<std::string>(), "1r");
+  EXPECT_EQ(root["nodes"].as<int>(), 129);
+  EXPECT_FALSE(root["knot"].as<std::string>().empty());
+  EXPECT_GT(root["min_distance_over_d"].as<double>(), 0.0);
+  (void)root["held"].as<bool>();
+  EXPECT_GT(root["steps_per_s"].as<double>(), 0.0);
+  EXPECT_GT(root["tick_p99_us"].as<double>(), 0.0);
+  ASSERT_TRUE(root["phases"].IsSequence());
+  ASSERT_GE(root["phases"].size(), 6u);  // loop, helix, exit, release, pull, hold
+  for (const auto& phase : root["phases"]) {
+    EXPECT_FALSE(phase["phase"].as<std::string>().empty());
+    EXPECT_FALSE(phase["knot"].as<std::string>().empty());
+    EXPECT_GT(phase["min_distance_over_d"].as<double>(), 0.0);
+    EXPECT_GT(phase["steps_per_s"].as<double>(), 0.0);
+    EXPECT_GT(phase["tick_p99_us"].as<double>(), 0.0);
+  }
+  EXPECT_EQ(root["phases"][root["phases"].size() - 1]["phase"].as<std::string>(), "hold");
+}
+
 }  // namespace
