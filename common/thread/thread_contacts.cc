@@ -195,6 +195,8 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     move(nodes, g, count, rel / slip, -std::min(slip, mu * normal_m));
   };
   const int num_pairs = state.status.num_candidate_pairs;
+  const int capacity = static_cast<int>(w.object_candidates.size());
+  int num_candidates = 0;
   int sweep = 0;
   double residual = 0.0;
   for (; sweep < kMaxProjectionSweeps; ++sweep) {
@@ -231,22 +233,38 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
           rub(nodes, g, 4, n, deficit, mu_self);
         }
       }
-      for (int ci = 0; ci < static_cast<int>(colliders.size()); ++ci) {
-        const Collider& col = colliders[ci];
-        if (!col.enabled) continue;
-        for (int j = 0; j < model.num_links; ++j) {
-          if (ColliderIgnoresLink(col, j)) continue;
-          const LinkColliderGap gap =
-              CalcLinkColliderGap(col, x.col(j), x.col(j + 1), model.radius_m);
-          if (gap.gap_m >= min_gap) continue;
-          const double deficit = min_gap - gap.gap_m;
-          residual = std::max(residual, deficit);
-          const int nodes[2] = {j, j + 1};
-          const double g[2] = {1.0 - gap.s, gap.s};
-          if (move(nodes, g, 2, gap.n_W, deficit)) {
-            ++result.contact_corrections;
-            rub(nodes, g, 2, gap.n_W, deficit, mu_object);
+      // Objects: the first sweep tests every link against every collider and keeps the
+      // links within a diameter of their constraint (or all, if more than the capacity); the
+      // later sweeps visit only those.
+      auto object = [&](int ci, int j) {
+        const LinkColliderGap gap =
+            CalcLinkColliderGap(colliders[ci], x.col(j), x.col(j + 1), model.radius_m);
+        if (sweep == 0 && gap.gap_m < min_gap + def.diameter_m) {
+          if (num_candidates < capacity) {
+            w.object_candidates[num_candidates] = LinkPair{j, ci};
           }
+          ++num_candidates;
+        }
+        if (gap.gap_m >= min_gap) return;
+        const double deficit = min_gap - gap.gap_m;
+        residual = std::max(residual, deficit);
+        const int nodes[2] = {j, j + 1};
+        const double g[2] = {1.0 - gap.s, gap.s};
+        if (move(nodes, g, 2, gap.n_W, deficit)) {
+          ++result.contact_corrections;
+          rub(nodes, g, 2, gap.n_W, deficit, mu_object);
+        }
+      };
+      if (sweep == 0 || num_candidates > capacity) {
+        for (int ci = 0; ci < static_cast<int>(colliders.size()); ++ci) {
+          if (!colliders[ci].enabled) continue;
+          for (int j = 0; j < model.num_links; ++j) {
+            if (!ColliderIgnoresLink(colliders[ci], j)) object(ci, j);
+          }
+        }
+      } else {
+        for (int k = 0; k < num_candidates; ++k) {
+          object(w.object_candidates[k].b, w.object_candidates[k].a);
         }
       }
     }

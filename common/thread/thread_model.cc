@@ -85,6 +85,7 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.spheres = MakeSphereBvhSpheres(model.bvh);
   w.pairs.assign(model.contact_capacity, LinkPair{});
   w.pair_start.assign(model.contact_capacity, PairStart{});
+  w.object_candidates.assign(model.contact_capacity, LinkPair{});
   w.self_contacts.assign(model.contact_capacity, SelfContact{});
   w.object_contacts.assign(model.contact_capacity, ObjectContact{});
   w.system = BandedSpd(3 * n, model.half_bandwidth);

@@ -110,6 +110,9 @@ struct ThreadWorkspace {
   // Per candidate pair, from the start-of-step positions (contact projection): the closest
   // points' normal (from b to a) and whether both closest points were interior to their links.
   std::vector<PairStart> pair_start;
+  // (link, collider) pairs the contact projection's first sweep found near (within a diameter
+  // of their constraint): the only object constraints its later sweeps visit.
+  std::vector<LinkPair> object_candidates;
   // The last step's contact projection: sweeps run, and its largest remaining deficit (m).
   int projection_sweeps = 0;
   double projection_residual_m = 0.0;
