@@ -27,8 +27,6 @@
 #include <vector>
 
 #include "bench_registry.h"
-#include "common/geometry/segment_distance.h"
-#include "common/knot/recognition.h"
 #include "common/thread/grasp.h"
 #include "common/thread/sphere_bvh.h"
 #include "common/thread/thread_contacts.h"
@@ -38,13 +36,6 @@
 
 namespace microdex::thread {
 namespace {
-
-using geometry::ClosestSegmentSegment;
-using geometry::SegmentClosest;
-using knot::AnalyzeKnot;
-using knot::KnotAnalysis;
-using knot::KnotName;
-using knot::KnotOptions;
 
 using Clock = std::chrono::steady_clock;
 
@@ -388,8 +379,7 @@ int RunSpeed(bool quick, const std::string& json, const ContactOverrides& contac
       const double sps = 1.0 / Median(step_s);
       const double cns = Median(bvh_s) * 1e9;
       const double ans = Median(all_s) * 1e9;
-      const long long resets = static_cast<long long>(state.status.nonfinite_resets +
-                                                      state.status.factorization_failures);
+      const long long resets = state.status.nonfinite_resets + state.status.factorization_failures;
       std::printf("%-24s %6d %12.0f %14.0f %14.0f %7.1f %8lld\n", IntegratorName(integ), n, sps,
                   cns, ans, ans / cns, resets);
       runs << (first ? "" : ",\n") << "    {\"integrator\": \"" << IntegratorName(integ)
@@ -656,8 +646,7 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
       break;
     }
   }
-  const long long rollbacks =
-      static_cast<long long>(state.status.nonfinite_resets + state.status.factorization_failures);
+  const long long rollbacks = state.status.nonfinite_resets + state.status.factorization_failures;
   std::printf(
       "adversarial: %lld steps (%.1f s simulated, %.1f s wall, %.0f steps/s), %lld teleports\n"
       "non-finite states %lld, non-finite tool forces %lld, rolled-back steps %lld, largest "
