@@ -199,6 +199,32 @@ void Instructor::MarkLost(StationView& v, LossSignal signal, std::int64_t now_ns
   v.lost_by = signal;
 }
 
+void Instructor::Heard(StationView& v, std::int64_t now_ns) {
+  v.last_heard_ns = now_ns;
+  if (v.presence == Presence::kLost &&
+      (v.lost_by == LossSignal::kSilence || v.lost_by == LossSignal::kLiveliness)) {
+    // Its data resumed within the DDS lease (a network partition, not a dead station: its
+    // writers are still matched, so its StationInfo is not sent again).
+    v.presence = Presence::kAlive;
+    v.presence_changed_ns = now_ns;
+    ++v.comebacks;
+  }
+}
+
+void Instructor::Reject(const char* topic, const std::string& why) {
+  ++rejected_.by_topic[topic];
+  ++rejected_.total;
+  rejected_.last_reason = std::string(topic) + ": " + why;
+}
+
+bool Instructor::Admit(const std::string& station_id, const char* topic) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stations_.count(station_id) > 0 || stations_.size() < kMaxStations) return true;
+  Reject(topic, "station_id: a new station beyond the " + std::to_string(kMaxStations) +
+                    " the registry admits");
+  return false;
+}
+
 StationView& Instructor::ViewFor(const std::string& station_id) {
   auto it = stations_.find(station_id);
   if (it == stations_.end()) {
@@ -248,12 +274,20 @@ void Instructor::HandleStationInfo() {
   msg::StationInfo m;
   dds::SampleInfo si;
   while (dds_->info->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (si.valid_data) Record(static_cast<int>(record::TopicIndex::kStationInfo), m, &si);
+    net::StationInfo info;
+    if (si.valid_data) {
+      std::string why;
+      if (!net::FromMsg(m, info, &why)) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        Reject("station_info", why);
+        continue;
+      }
+      if (!Admit(info.header.station_id, "station_info")) continue;
+      Record(static_cast<int>(record::TopicIndex::kStationInfo), m, &si);
+    }
     const std::int64_t now = MonotonicNowNs();
     std::lock_guard<std::mutex> lock(mutex_);
     if (si.valid_data) {
-      net::StationInfo info;
-      if (!net::FromMsg(m, info)) continue;
       dds_->instance_to_station[HandleKey(si.instance_handle)] = info.header.station_id;
       writer_to_station_[HandleKey(si.publication_handle)] = info.header.station_id;
       StationView& v = ViewFor(info.header.station_id);
@@ -262,7 +296,7 @@ void Instructor::HandleStationInfo() {
       if (v.presence != Presence::kAlive || !known) v.presence_changed_ns = now;
       v.presence = Presence::kAlive;
       v.last_heard_ns = now;
-      v.info = info;
+      v.info = std::move(info);
       continue;
     }
     auto it = dds_->instance_to_station.find(HandleKey(si.instance_handle));
@@ -325,9 +359,15 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
   dds::SampleInfo si;
   while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
     if (!si.valid_data) continue;
-    Record(record::FindTopic(reader->get_topicdescription()->get_name()), m, &si);
     Plain p;
-    if (!net::FromMsg(m, p)) continue;
+    std::string why;
+    if (!net::FromMsg(m, p, &why)) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      Reject(topic, why);
+      continue;
+    }
+    if (!Admit(p.header.station_id, topic)) continue;
+    Record(record::FindTopic(reader->get_topicdescription()->get_name()), m, &si);
     const std::int64_t now = MonotonicNowNs();
     const std::int64_t now_rt = RealtimeNowNs();
     std::lock_guard<std::mutex> lock(mutex_);
@@ -339,7 +379,7 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
       latency_.transport_us.push_back(static_cast<double>(now_rt - si.source_timestamp.to_ns()) *
                                       1e-3);
     }
-    v.last_heard_ns = now;
+    Heard(v, now);
     if constexpr (std::is_same_v<Plain, net::Score>) {
       // For the scores database (a few per station run; bounded for a console without one).
       if (p.is_final && final_scores_.size() < 10000) final_scores_.push_back(p);
@@ -367,16 +407,36 @@ void Instructor::HandleInputs() {
   dds::SampleInfo si;
   net::DeviceInput p;
   while (dds_->input->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (si.valid_data) Record(static_cast<int>(record::TopicIndex::kDeviceInput), m, &si);
-    if (!si.valid_data || !net::FromMsg(m, p)) continue;
-    std::lock_guard<std::mutex> lock(mutex_);
+    if (!si.valid_data) continue;
+    std::string why;
+    if (!net::FromMsg(m, p, &why)) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      Reject("device_input", why);
+      continue;
+    }
+    if (!Admit(p.header.station_id, "device_input")) continue;
+    std::unique_lock<std::mutex> lock(mutex_);
     StationView& v = ViewFor(p.header.station_id);
+    if (v.input_session == p.header.session_id && p.header.step <= v.last_input_step) {
+      // A step already taken: sent again after a station's writer matched this reader anew
+      // (a partition around the lease), or a replayed sample. Recorded once only.
+      Reject("device_input", "step " + std::to_string(p.header.step) + " already received");
+      continue;
+    }
+    lock.unlock();
+    Record(static_cast<int>(record::TopicIndex::kDeviceInput), m, &si);
+    lock.lock();
     ++v.inputs_received;
-    v.last_heard_ns = MonotonicNowNs();
+    Heard(v, MonotonicNowNs());
     if (v.input_session != p.header.session_id) {
       v.input_session = p.header.session_id;  // a new run: no gap before its first sample
     } else if (p.header.step > v.last_input_step + 1) {
+      // Steps missing (a partition longer than the lease dropped the match): counted, and
+      // marked in the recording.
       v.inputs_lost += p.header.step - v.last_input_step - 1;
+      gaps_.push_back({p.header.station_id, p.header.session_id, v.last_input_step + 1,
+                       p.header.step - 1, RealtimeNowNs()});
+      if (recorder_) recorder_->SetMetadata("input_gaps", FormatInputGaps(gaps_));
     }
     v.last_input_step = p.header.step;
   }
@@ -386,11 +446,19 @@ void Instructor::HandleEvents() {
   msg::TaskEvent m;
   dds::SampleInfo si;
   while (dds_->events->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (si.valid_data) Record(static_cast<int>(record::TopicIndex::kTaskEvent), m, &si);
+    if (!si.valid_data) continue;
     net::TaskEvent e;
-    if (!si.valid_data || !net::FromMsg(m, e)) continue;
+    std::string why;
+    if (!net::FromMsg(m, e, &why)) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      Reject("task_event", why);
+      continue;
+    }
+    if (!Admit(e.header.station_id, "task_event")) continue;
+    Record(static_cast<int>(record::TopicIndex::kTaskEvent), m, &si);
     std::lock_guard<std::mutex> lock(mutex_);
     StationView& v = ViewFor(e.header.station_id);
+    Heard(v, MonotonicNowNs());
     v.events.push_back(e);
     if (v.events.size() > kMaxEventsPerStation) v.events.pop_front();
     new_events_.push_back(std::move(e));
@@ -548,6 +616,25 @@ LatencySamples Instructor::TakeLatency() {
   std::lock_guard<std::mutex> lock(mutex_);
   LatencySamples out;
   std::swap(out, latency_);
+  return out;
+}
+
+RejectedSamples Instructor::Rejected() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return rejected_;
+}
+
+std::vector<InputGap> Instructor::InputGaps() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return gaps_;
+}
+
+std::string FormatInputGaps(const std::vector<InputGap>& gaps) {
+  std::string out;
+  for (const auto& g : gaps) {
+    out += g.station_id + " " + g.session_id + " " + std::to_string(g.first_missing_step) + " " +
+           std::to_string(g.last_missing_step) + " " + std::to_string(g.receive_ns) + "\n";
+  }
   return out;
 }
 

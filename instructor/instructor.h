@@ -96,6 +96,25 @@ struct StationView {
   std::string scene_error;
 };
 
+// Missing DeviceInput steps of one station's run, seen when its steps resumed (a partition
+// longer than the DDS lease, a writer history overflow). Also written to the recording's
+// metadata ("input_gaps", instructor/README.md "Recording").
+struct InputGap {
+  std::string station_id;
+  std::string session_id;
+  std::uint64_t first_missing_step = 0;
+  std::uint64_t last_missing_step = 0;
+  std::int64_t receive_ns = 0;  // CLOCK_REALTIME, when the first step after the gap arrived
+};
+
+// Received samples dropped before use: invalid (FromMsg's reason) or from a station beyond
+// kMaxStations. By topic ("device_input", "tool_state", ...).
+struct RejectedSamples {
+  std::map<std::string, std::uint64_t> by_topic;
+  std::uint64_t total = 0;
+  std::string last_reason;  // "TOPIC: reason" of the latest
+};
+
 struct LatencySamples {
   std::vector<double> state_age_us;  // receive − stamp_ns (tick start of the state)
   std::vector<double> transport_us;  // receive − the writer's source timestamp
@@ -110,6 +129,10 @@ class Instructor {
   // participant lease (1 s, deploy/dds) makes the liveliness path report a killed station
   // first (0.75-1 s after the kill), so this is set longer than that.
   static constexpr std::int64_t kSilenceLimit_ns = 1'500'000'000;
+  // Stations the registry admits (the DeviceInput reader's max_instances, deploy/dds): a
+  // sample naming a new station beyond this is dropped and counted, so that a hostile
+  // participant cannot grow the registry without bound.
+  static constexpr std::size_t kMaxStations = 64;
 
   // Creates the participant (throws std::runtime_error naming the profile) and starts the
   // DDS thread.
@@ -143,6 +166,11 @@ class Instructor {
 
   std::string session_id() const { return session_id_; }
 
+  // Samples dropped before use so far.
+  RejectedSamples Rejected() const;
+  // DeviceInput gaps seen so far, in arrival order.
+  std::vector<InputGap> InputGaps() const;
+
   // The recorder's counters (record_file only); nullopt without a recording.
   std::optional<record::RecorderStats> RecorderStats() const;
   // Writes what the recorder holds and waits for the commit (record_file only).
@@ -169,6 +197,14 @@ class Instructor {
   template <class Msg>
   void Record(int topic, Msg& m, const void* sample_info);
   StationView& ViewFor(const std::string& station_id);
+  // Counts a dropped sample (mutex_ held).
+  void Reject(const char* topic, const std::string& why);
+  // True when a valid sample from station_id may be used: the station is known or the
+  // registry has room; otherwise counts it rejected. Takes mutex_.
+  bool Admit(const std::string& station_id, const char* topic);
+  // A sample from v arrived: a station lost by silence or liveliness (not by its writers'
+  // removal) is alive again (mutex_ held).
+  static void Heard(StationView& v, std::int64_t now_ns);
   // Marks v lost by `signal` if it is alive (mutex_ held).
   static void MarkLost(StationView& v, LossSignal signal, std::int64_t now_ns);
 
@@ -186,12 +222,18 @@ class Instructor {
   std::vector<net::Score> final_scores_;
   std::vector<net::CueCommand> queued_cues_;
   LatencySamples latency_;
+  RejectedSamples rejected_;
+  std::vector<InputGap> gaps_;
 
   std::thread thread_;
 };
 
 // The text view: one line per station.
 std::string FormatStationTable(const std::vector<StationView>& stations, std::int64_t now_ns);
+
+// The recording's "input_gaps" metadata: one line per gap, "STATION SESSION FIRST_MISSING_STEP
+// LAST_MISSING_STEP RECEIVE_NS".
+std::string FormatInputGaps(const std::vector<InputGap>& gaps);
 
 // CLOCK_MONOTONIC now, ns (the clock of the *_ns fields above).
 std::int64_t MonotonicNowNs();

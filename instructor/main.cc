@@ -271,6 +271,15 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                   v.info.header.station_id.c_str(), s.score, s.is_final ? " final" : "",
                   s.time_in_contact_s, s.contacts, clearance, s.tremor_rms_m * 1e6);
     }
+    if (const auto rej = console.Rejected(); rej.total > 0) {
+      std::printf("rejected %llu received samples (latest: %s)\n",
+                  static_cast<unsigned long long>(rej.total), rej.last_reason.c_str());
+    }
+    for (const auto& g : console.InputGaps()) {
+      std::printf("input gap %s: steps %llu..%llu missing\n", g.station_id.c_str(),
+                  static_cast<unsigned long long>(g.first_missing_step),
+                  static_cast<unsigned long long>(g.last_missing_step));
+    }
     if (const auto rs = console.RecorderStats()) {
       console.FlushRecording();
       const auto r = *console.RecorderStats();

@@ -1,6 +1,7 @@
 #include "common/net/convert.h"
 
 #include <cmath>
+#include <cstdio>
 #include <string_view>
 
 #include "common/base/check.h"
@@ -43,14 +44,33 @@ class Checker {
     const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
     if (ok_ && std::abs(n2 - 1.0) > 1e-6) Fail(std::string(field) + ": not a unit quaternion");
   }
+  // Finite values outside a plausible range (a corrupt or hostile sample).
+  void Range(double v, double lo, double hi, const char* field) {
+    if (std::isfinite(v) && !(v >= lo && v <= hi)) {
+      Fail(std::string(field) + ": outside " + Num(lo) + " .. " + Num(hi));
+    }
+  }
+  template <std::size_t N>
+  void Range(const std::array<double, N>& v, double max_abs, const char* field) {
+    for (double x : v) Range(x, -max_abs, max_abs, field);
+  }
   void Flag(std::uint8_t v, const char* field) {
     if (v > 1) Fail(std::string(field) + ": flag other than 0 or 1");
   }
 
  private:
+  static std::string Num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+  }
   std::string* why_;
   bool ok_ = true;
 };
+
+// Every position of the trainer lies within a few decimetres of its origin; 10 m is far beyond
+// any scene and any device workspace.
+constexpr double kMaxAbsPosition_m = 10.0;
 
 template <class Msg>
 void HeaderToMsg(const Header& in, Msg& out) {
@@ -66,6 +86,13 @@ void HeaderFromMsg(const Msg& in, Header& out, Checker& c) {
   c.String(S(in.station_id()), kMaxIdLength, "station_id");
   c.String(S(in.session_id()), kMaxIdLength, "session_id");
   if (S(in.station_id()).empty()) c.Fail("station_id: empty");
+  // Ids are shown in tables and pages and used as file and map keys: printable ASCII only.
+  for (const char ch : S(in.station_id())) {
+    if (ch <= ' ' || ch > '~') {
+      c.Fail("station_id: a character other than printable ASCII");
+      break;
+    }
+  }
   out.station_id = S(in.station_id());
   out.session_id = S(in.session_id());
   out.step = in.step();
@@ -277,6 +304,8 @@ bool FromMsg(const msg::StationInfo& in, StationInfo& out, std::string* why) {
   c.Finite(in.haptic_rate_hz(), "haptic_rate_hz");
   c.Finite(in.mirror_rate_hz(), "mirror_rate_hz");
   c.Finite(in.skill(), "skill");
+  c.Range(in.haptic_rate_hz(), 0.0, 100e3, "haptic_rate_hz");
+  c.Range(in.mirror_rate_hz(), 0.0, 10e3, "mirror_rate_hz");
   out.trainee = S(in.trainee());
   out.scene = S(in.scene());
   out.modules.clear();
@@ -311,6 +340,8 @@ bool FromMsg(const msg::DeviceInput& in, DeviceInput& out, std::string* why) {
   c.Finite(in.p_WT(), "p_WT");
   c.Unit(in.q_WT(), "q_WT");
   c.Finite(in.gripper(), "gripper");
+  c.Range(in.p_WT(), kMaxAbsPosition_m, "p_WT");
+  c.Range(in.gripper(), 0.0, 1.0, "gripper");
   out.p_WT = V(in.p_WT());
   out.q_WT = Q(in.q_WT());
   out.gripper = in.gripper();

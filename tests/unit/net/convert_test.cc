@@ -131,6 +131,32 @@ TEST(NetConvert, DeviceInputRejectsNonFiniteAndNonUnit) {
   EXPECT_NE(why.find("q_WT"), std::string::npos) << why;
 }
 
+TEST(NetConvert, DeviceInputRejectsOutOfRangeAndBadStationId) {
+  DeviceInput in;
+  in.header = MakeHeader();
+  msg::DeviceInput m;
+  ToMsg(in, m);
+  DeviceInput out;
+  std::string why;
+  m.p_WT({0, 11.0, 0});  // 11 m: beyond any scene
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("p_WT: outside"), std::string::npos) << why;
+  m.p_WT({0, 9.0, 0});
+  EXPECT_TRUE(FromMsg(m, out, &why)) << why;
+  m.gripper(1.5);
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("gripper"), std::string::npos) << why;
+  m.gripper(1.0);
+  EXPECT_TRUE(FromMsg(m, out, &why)) << why;
+  for (const char* bad : {"st 1", "st\n1", "st\x1b[2J", "st\xc3\xa9"}) {
+    m.station_id(bad);
+    EXPECT_FALSE(FromMsg(m, out, &why)) << bad;
+    EXPECT_NE(why.find("station_id"), std::string::npos) << why;
+  }
+  m.station_id("st-1_a.b");
+  EXPECT_TRUE(FromMsg(m, out, &why)) << why;
+}
+
 TEST(NetConvert, ThreadStateBoundIsEnforcedOnReceipt) {
   ThreadState in;
   in.header = MakeHeader();
