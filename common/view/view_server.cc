@@ -79,7 +79,10 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
 
   void Run(const http::request<http::string_body>& request) {
     ws_.read_message_max(server_.config.max_message_bytes);
-    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    auto timeout = websocket::stream_base::timeout::suggested(beast::role_type::server);
+    timeout.idle_timeout = server_.config.idle_timeout;
+    timeout.keep_alive_pings = true;
+    ws_.set_option(timeout);
     ws_.async_accept(request,
                      beast::bind_front_handler(&WsSessionT::OnAccept, this->shared_from_this()));
   }
@@ -130,8 +133,20 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
         ++server_.owner->clients_dropped_;
         spdlog::warn("view: a page sent a message over {} bytes; dropped it",
                      server_.config.max_message_bytes);
+      } else if (ec == beast::error::timeout) {
+        ++server_.owner->clients_dropped_;
+        spdlog::warn("view: a page answered no ping for {} ms; dropped it",
+                     server_.config.idle_timeout.count());
       }
       open_ = false;
+      return;
+    }
+    if (Flooding()) {
+      ++server_.owner->rejected_;
+      ++server_.owner->clients_dropped_;
+      spdlog::warn("view: a page sent over {} messages in a second; dropped it",
+                   server_.config.max_messages_per_s);
+      Close();
       return;
     }
     if (!ws_.got_text()) {
@@ -157,6 +172,16 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
     }
     buffer_.consume(buffer_.size());
     if (open_) DoRead();
+  }
+
+  // Counts a message into the current one-second window; true beyond max_messages_per_s.
+  bool Flooding() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - window_start_ >= std::chrono::seconds(1)) {
+      window_start_ = now;
+      window_messages_ = 0;
+    }
+    return ++window_messages_ > server_.config.max_messages_per_s;
   }
 
   // "credit N": the page has taken N more frames (1..ViewServer::kMaxCredit).
@@ -205,6 +230,8 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
   std::size_t queued_frames_ = 0;
   long credit_ = 0;  // frames this page may still be sent before it takes some
   bool open_ = false;
+  std::chrono::steady_clock::time_point window_start_{};
+  std::size_t window_messages_ = 0;
 
  public:
   void GrantInitialCredit() { credit_ = static_cast<long>(server_.config.frame_credit); }

@@ -8,8 +8,9 @@
 // the publisher thread, an SpscRing of device input to the haptic thread).
 //
 // Hostile or broken clients: a request header over 8 KiB, a body over 1 KiB, a WebSocket
-// message over max_message_bytes, or a client that stops reading (more than
-// kMaxQueuedTexts replies waiting) is dropped; a text message the handler rejects gets
+// message over max_message_bytes, a client that stops reading (more than kMaxQueuedTexts
+// replies waiting, or no answer to pings for idle_timeout), or one that floods (more than
+// max_messages_per_s messages in a second) is dropped; a text message the handler rejects gets
 // {"type":"error","error":REASON} and the connection stays; binary messages from a page are
 // rejected the same way. Slow readers lose old state frames, never the newest: a page takes
 // frames by credit ("credit N" after it has drawn N; ViewServerConfig::frame_credit), and the
@@ -49,6 +50,12 @@ struct ViewServerConfig {
   // HTTPS: PEM certificate (chain) and private key; both empty: plain HTTP.
   std::string tls_cert_file;
   std::string tls_key_file;
+  // A page that answers no WebSocket ping for this long (it stopped reading, or its network
+  // went away) is dropped; pings go out after half of it without traffic.
+  std::chrono::milliseconds idle_timeout{10000};
+  // A page that sends more messages than this in one second (a flood: a page sends its
+  // device input and frame credits at display rate, ~120 a second) is dropped.
+  std::size_t max_messages_per_s = 1000;
 };
 
 // What a gate sees of a request.
