@@ -1,7 +1,7 @@
 #pragma once
-// Support of the tests run by netns_run.sh on a virtual network: the namespaces and addresses
-// it made, processes started in a namespace, the WAN profiles for each host, and what a
-// recording holds of a station's device input.
+// Support of the fault tests, on loopback and on the virtual network of netns_run.sh: the
+// namespaces and addresses it made, processes started in a namespace, the WAN profiles for
+// each host, and what a recording holds of a station.
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -99,6 +99,16 @@ inline RecordedInputs ReadRecordedInputs(const std::string& file, const std::str
   out.problems = reader.problems();
   out.metadata = reader.metadata();
   return out;
+}
+
+// Messages of `topic` from `station` in a recording.
+inline std::size_t CountRecorded(const std::string& file, record::TopicIndex topic,
+                                 const std::string& station) {
+  record::SessionReader reader(file);
+  record::MessageFilter filter;
+  filter.topic = static_cast<int>(topic);
+  filter.station = station;
+  return reader.ForEach(filter, [](const record::MessageView&) { return true; });
 }
 
 }  // namespace microdex::testing
