@@ -5,7 +5,7 @@ set(MICRODEX_SANITIZE "" CACHE STRING "Sanitizers: '', 'address,undefined' or 't
 # microdex_warnings: an interface target every first-party target links to.
 add_library(microdex_warnings INTERFACE)
 target_compile_options(microdex_warnings INTERFACE
-  -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor
+  -Wall -Wextra -Wpedantic $<$<CXX_COMPILER_ID:GNU>:-Wshadow=local> -Wnon-virtual-dtor
   -Wno-missing-field-initializers
   $<$<BOOL:${MICRODEX_WERROR}>:-Werror>)
 

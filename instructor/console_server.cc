@@ -16,6 +16,7 @@
 #include "common/scene/scene.h"
 #include "common/view/scene_files.h"
 #include "common/view/scene_view.h"
+#include "instructor/console_message.h"
 
 namespace microdex::instructor {
 namespace {
@@ -175,35 +176,11 @@ std::string ConsoleServer::HandleClientMessage(const std::string& session_token,
 }
 
 std::string ConsoleServer::HandleMessage(const std::string& message) {
-  std::istringstream in(message);
-  std::string verb, station, kind_name, param_text;
-  in >> verb;
-  if (verb != "cue") {
-    throw std::invalid_argument("unknown message '" + verb.substr(0, 32) + "' (expected cue)");
-  }
-  if (!(in >> station >> kind_name >> param_text)) {
-    throw std::invalid_argument("cue: expected 'cue STATION KIND PARAM|off'");
-  }
-  std::string extra;
-  if (in >> extra) throw std::invalid_argument("cue: unexpected '" + extra.substr(0, 32) + "'");
-  cues::CueKind kind{};
-  if (!cues::ParseCueKind(kind_name, &kind)) {
-    throw std::invalid_argument("cue: unknown kind '" + kind_name.substr(0, 32) + "' (" +
-                                cues::CueKindNames() + ")");
-  }
-  const bool off = param_text == "off";
-  double param = 0;
-  if (!off) {
-    char* end = nullptr;
-    param = std::strtod(param_text.c_str(), &end);
-    if (end == param_text.c_str() || *end != '\0' || !std::isfinite(param)) {
-      throw std::invalid_argument("cue: PARAM '" + param_text.substr(0, 32) +
-                                  "' is neither a number nor off");
-    }
-  }
-  if (const std::string why = cues::CheckCue(kind, param, off); !why.empty()) {
-    throw std::invalid_argument("cue: " + why);
-  }
+  const ConsoleCue cue = ParseConsoleMessage(message);
+  const std::string& station = cue.station;
+  const cues::CueKind kind = cue.kind;
+  const double param = cue.param;
+  const bool off = cue.off;
   if (!instructor_.Station(station)) {
     throw std::invalid_argument("cue: no station '" + station.substr(0, 64) + "'");
   }

@@ -11,6 +11,7 @@
 //
 // Not thread-safe: the thread that owns the context creates, uses and destroys its entities.
 
+#include <exception>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -45,6 +46,23 @@ struct DdsOptions {
 // deploy/dds/loopback.xml under the working directory, else under the source tree.
 std::string DefaultDdsProfileFile();
 
+// A generated type support whose deserialize never throws: Fast CDR throws on a malformed
+// payload (e.g. "Unexpected CDR type received in Cdr::read_encapsulation" for a bad
+// encapsulation header, found by tests/fuzz/sample_validator_fuzz.cc), and the generated code
+// lets it out of DataReader::take_next_sample, which would end the receiving thread and the
+// app on one hostile sample. Such a sample is refused (false) and Fast DDS drops it.
+template <class PubSubType>
+class CheckedPubSubType : public PubSubType {
+ public:
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    try {
+      return PubSubType::deserialize(payload, data);
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
+};
+
 class DdsContext {
  public:
   // Throws std::runtime_error naming the file, profile or entity that failed.
@@ -56,7 +74,7 @@ class DdsContext {
   // Registers PubSubType (once) and creates the topic from spec.topic_profile (once).
   template <class PubSubType>
   dds::Topic* GetTopic(const TopicSpec& spec) {
-    return GetTopicImpl(spec, [] { return dds::TypeSupport(new PubSubType()); });
+    return GetTopicImpl(spec, [] { return dds::TypeSupport(new CheckedPubSubType<PubSubType>()); });
   }
   // Writer/reader from the spec's XML profile; throws when the profile is missing.
   template <class PubSubType>

@@ -10,6 +10,7 @@
 #include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <boost/beast/websocket/ssl.hpp>
+#include <cerrno>
 #include <cstdlib>
 #include <deque>
 #include <fstream>
@@ -61,6 +62,22 @@ std::string ErrorJson(const std::string& reason) {
 }
 
 }  // namespace
+
+long ParseCredit(const std::string& message) {
+  constexpr std::size_t kPrefix = 7;  // "credit "
+  if (message.compare(0, kPrefix, "credit ") != 0) {
+    throw std::invalid_argument("credit: expected 'credit N'");
+  }
+  char* end = nullptr;
+  errno = 0;
+  const long n = std::strtol(message.c_str() + kPrefix, &end, 10);
+  if (end == message.c_str() + kPrefix || *end != '\0' || errno != 0 || n < 1 ||
+      n > static_cast<long>(ViewServer::kMaxCredit)) {
+    throw std::invalid_argument("credit: expected an integer 1.." +
+                                std::to_string(ViewServer::kMaxCredit));
+  }
+  return n;
+}
 
 // One page's WebSocket: reads its text messages, writes queued frames and replies in order.
 class WsSession {
@@ -184,16 +201,10 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
     return ++window_messages_ > server_.config.max_messages_per_s;
   }
 
-  // "credit N": the page has taken N more frames (1..ViewServer::kMaxCredit).
+  // "credit N": the page has taken N more frames.
   void TakeCredit(const std::string& message) {
-    char* end = nullptr;
-    const long n = std::strtol(message.c_str() + 7, &end, 10);
-    if (end == message.c_str() + 7 || *end != '\0' || n < 1 ||
-        n > static_cast<long>(ViewServer::kMaxCredit)) {
-      throw std::invalid_argument("credit: expected an integer 1.." +
-                                  std::to_string(ViewServer::kMaxCredit));
-    }
-    credit_ = std::min<long>(credit_ + n, static_cast<long>(server_.config.frame_credit));
+    credit_ = std::min<long>(credit_ + ParseCredit(message),
+                             static_cast<long>(server_.config.frame_credit));
   }
 
   void DoWrite() {

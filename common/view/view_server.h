@@ -85,6 +85,9 @@ struct WebFile {
 std::map<std::string, WebFile> LoadWebFiles(const std::string& dir,
                                             const std::vector<std::string>& names);
 
+// A page's "credit N" message: N (1..ViewServer::kMaxCredit). Throws std::invalid_argument.
+long ParseCredit(const std::string& message);
+
 class ViewServer {
  public:
   // Called on the server thread every poll period.
