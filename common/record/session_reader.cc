@@ -40,12 +40,14 @@ SessionReader::SessionReader(const std::string& path) : path_(path) {
   if (!S_ISREG(st.st_mode)) throw RecordError(path + ": not a regular file");
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
-    sqlite3_close(db_);
+    sqlite3_close_v2(db_);
     db_ = nullptr;
     throw RecordError(path + ": cannot open: " + why);
   }
+  // close_v2: fail() runs while a Statement is still alive; sqlite3_close would refuse (BUSY)
+  // and leak the connection (found by tests/fuzz/record_reader_fuzz.cc).
   auto fail = [&](const std::string& what) {
-    sqlite3_close(db_);
+    sqlite3_close_v2(db_);
     db_ = nullptr;
     throw RecordError(path + ": " + what);
   };
@@ -110,7 +112,7 @@ SessionReader::SessionReader(const std::string& path) : path_(path) {
   if (!s.ok()) fail(std::string("messages: ") + sqlite3_errmsg(db_));
 }
 
-SessionReader::~SessionReader() { sqlite3_close(db_); }
+SessionReader::~SessionReader() { sqlite3_close_v2(db_); }
 
 void SessionReader::AddProblem(const std::string& what) {
   const std::string line = path_ + ": " + what;

@@ -64,7 +64,7 @@ TEST(RecordReaderCorpus, TheValidSeedReadsAndDecodesEveryMessage) {
 
 TEST(RecordReaderCorpus, EverySeedFailsCleanlyOrReads) {
   for (const char* name : {"valid.db", "empty.db", "text.db", "truncated.db", "future.db",
-                           "unknown_hash.db", "bad_cdr.db"}) {
+                           "unknown_hash.db", "bad_cdr.db", "regression_leak_on_fail.db"}) {
     const std::string path = CorpusDir() + "/" + name;
     ASSERT_FALSE(ReadBytes(path).empty() && std::string(name) != "empty.db") << path;
     const ExerciseResult r = ExerciseReader(path);
