@@ -539,6 +539,12 @@ void Instructor::HandleSceneDescriptions() {
   while (dds_->scene->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
     if (!si.valid_data) continue;
     const std::string station = m.station_id().to_string();
+    if (station.empty() || std::any_of(station.begin(), station.end(),
+                                       [](char ch) { return ch <= ' ' || ch > '~'; })) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      Reject("scene_description", "station_id: empty or not printable ASCII");
+      continue;
+    }
     auto files = std::make_shared<view::SceneFiles>();
     files->scene_path = m.scene_path();
     files->hash = m.hash();
@@ -561,9 +567,11 @@ void Instructor::HandleSceneDescriptions() {
     if (!why.empty()) {
       spdlog::error("instructor: station '{}': scene description refused: {}", station, why);
     }
+    if (!Admit(station, "scene_description")) continue;
     std::lock_guard<std::mutex> lock(mutex_);
+    if (!why.empty()) Reject("scene_description", why);
     StationView& v = ViewFor(station);
-    v.last_heard_ns = MonotonicNowNs();
+    Heard(v, MonotonicNowNs());
     if (why.empty()) {
       v.scene_files = std::move(files);
       v.scene_error.clear();
@@ -579,12 +587,18 @@ void Instructor::HandleOverlays() {
   OverlayMirror o;
   while (dds_->overlay->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
     if (!si.valid_data) continue;
+    std::string why;
+    if (!net::FromMsg(m, o.header, o.active_cues, o.overlay, &why)) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      Reject("cue_overlay", why);
+      continue;
+    }
+    if (!Admit(o.header.station_id, "cue_overlay")) continue;
     Record(static_cast<int>(record::TopicIndex::kCueOverlay), m, &si);
-    if (!net::FromMsg(m, o.header, o.active_cues, o.overlay)) continue;
     const std::int64_t now = MonotonicNowNs();
     std::lock_guard<std::mutex> lock(mutex_);
     StationView& v = ViewFor(o.header.station_id);
-    v.last_heard_ns = now;
+    Heard(v, now);
     v.overlay.latest = o;
     v.overlay.received_ns = now;
     ++v.overlay.count;
