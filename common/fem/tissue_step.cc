@@ -26,31 +26,6 @@ bool ToolIsFinite(const ToolContact& tool) {
   return true;
 }
 
-// Liang–Barsky: the parameter range [t0, t1] ⊂ [0, 1] of a + t (b − a) inside the box.
-bool ClipSegment(double ax, double ay, double bx, double by, double x0, double y0, double x1,
-                 double y1, double* t0, double* t1) {
-  double lo = 0, hi = 1;
-  const double d[2] = {bx - ax, by - ay};
-  const double a[2] = {ax, ay};
-  const double mins[2] = {x0, y0};
-  const double maxs[2] = {x1, y1};
-  for (int k = 0; k < 2; ++k) {
-    if (d[k] == 0) {
-      if (a[k] < mins[k] || a[k] > maxs[k]) return false;
-      continue;
-    }
-    double ta = (mins[k] - a[k]) / d[k];
-    double tb = (maxs[k] - a[k]) / d[k];
-    if (ta > tb) std::swap(ta, tb);
-    lo = std::max(lo, ta);
-    hi = std::min(hi, tb);
-    if (lo > hi) return false;
-  }
-  *t0 = lo;
-  *t1 = hi;
-  return true;
-}
-
 // LSD radix sort of (rank << 32 | node) keys on the rank bits, 11 bits per pass (ranks are
 // below 2^22 for max_level ≤ 10): a few µs for the ~10³ free nodes of a step, where
 // std::sort took several times that.
@@ -125,7 +100,7 @@ class ContactFinder {
       const Eigen::Vector3d& a = tool_.p_SP[k];
       const Eigen::Vector3d& b = tool_.p_SP[std::min(k + 1, tool_.num_points - 1)];
       double t0 = 0, t1 = 1;
-      if (ClipSegment(a.x(), a.y(), b.x(), b.y(), 0, 0, lx, ly, &t0, &t1)) {
+      if (ClipSegmentToBox(a.x(), a.y(), b.x(), b.y(), 0, 0, lx, ly, &t0, &t1)) {
         const double len = (t1 - t0) * std::hypot(b.x() - a.x(), b.y() - a.y());
         for (double s = 0;;) {
           const bool last = s >= len;
