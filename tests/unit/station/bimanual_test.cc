@@ -14,6 +14,7 @@
 #include "station/haptic_loop.h"
 #include "station/sim_trainee.h"
 #include "station/station_step.h"
+#include "tests/support/alloc_counter.h"
 
 namespace microdex::station {
 namespace {
@@ -229,6 +230,11 @@ TEST(Bimanual, TheHapticLoopNeedsOneDevicePerHand) {
   ASSERT_TRUE(loop.state().second_tool.has_value());
   EXPECT_EQ(loop.last_snapshot().has_second_tool, 1);
   EXPECT_EQ(loop.last_snapshot().second.gripper, 1);
+  // The two-handed tick allocates nothing after warm-up (the ring fills and counts drops).
+  for (int k = 1; k < 200; ++k) loop.Tick(k * 1'000'000LL, 1'000'000, 0, false);
+  testing::StartCountingAllocations();
+  for (int k = 200; k < 1200; ++k) loop.Tick(k * 1'000'000LL, 1'000'000, 0, false);
+  EXPECT_EQ(testing::StopCountingAllocations(), 0u);
 }
 
 }  // namespace
