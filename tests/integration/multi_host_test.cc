@@ -231,7 +231,9 @@ TEST_F(PartitionTest, FiveSecondCutLosesNothing) {
   // The station ran on: every period kept, every step handed to its writer.
   EXPECT_EQ(testing::JsonNumber(r.json, "ring_dropped"), 0);
   EXPECT_EQ(testing::JsonNumber(r.json, "input_write_failed"), 0);
-  EXPECT_LE(testing::JsonNumber(r.json, "period_p99_ms"), 1.1);
+  // As in fault_test: a period stretched by the cut is several periods; p99 within a quarter.
+  EXPECT_LE(testing::JsonNumber(r.json, "period_p99_ms"), 1.25);
+  EXPECT_LE(testing::JsonNumber(r.json, "overruns"), 0.005 * testing::JsonNumber(r.json, "steps"));
   // Within the 6 s WAN lease: the cue arrives after the heal, no step is missing.
   EXPECT_FALSE(std::isnan(r.cue_after_heal_s)) << "the cue sent during the cut never arrived";
   EXPECT_TRUE(r.lost_during_cut) << "the console did not show the silent station lost";
@@ -247,7 +249,9 @@ TEST_F(PartitionTest, CutLongerThanHistoryIsMarkedInRecording) {
   const PartitionRun r = Run(12000ms);
   ASSERT_FALSE(r.json.empty());
   EXPECT_EQ(testing::JsonNumber(r.json, "ring_dropped"), 0);
-  EXPECT_LE(testing::JsonNumber(r.json, "period_p99_ms"), 1.1);
+  // As in fault_test: a period stretched by the cut is several periods; p99 within a quarter.
+  EXPECT_LE(testing::JsonNumber(r.json, "period_p99_ms"), 1.25);
+  EXPECT_LE(testing::JsonNumber(r.json, "overruns"), 0.005 * testing::JsonNumber(r.json, "steps"));
   EXPECT_TRUE(r.alive_after_heal) << "the station was not found again after the heal";
   // Steps are missing, and exactly those are marked (in one gap or more: the writer may
   // lose steps more than once while its history is full).
