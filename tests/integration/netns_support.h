@@ -61,8 +61,10 @@ inline std::string MakeTempDir(const char* stem) {
 inline void WriteWanProfiles(const std::string& dir, const std::string& ds_address) {
   const std::string gen = SourceDir() + "/deploy/dds/gen-profiles";
   for (const char* role : {"server", "instructor", "station"}) {
-    ASSERT_TRUE(Shell(gen + " --wan " + role + " --server " + ds_address + ":11811 > " + dir + "/" +
-                      role + ".xml"))
+    const char* transport = std::getenv("MICRODEX_WAN_TRANSPORT");
+    ASSERT_TRUE(Shell(gen + " --wan " + role + " --server " + ds_address + ":11811" +
+                      (transport != nullptr ? std::string(" --transport ") + transport : "") +
+                      " > " + dir + "/" + role + ".xml"))
         << role;
   }
 }
