@@ -125,11 +125,17 @@ DeviceSample DdsDevice::Read(std::uint64_t step) {
 }
 
 void DdsDevice::WriteForce(const Eigen::Vector3d& f_T_W) {
+  WriteWrench(f_T_W, Eigen::Vector3d::Zero());
+}
+
+void DdsDevice::WriteWrench(const Eigen::Vector3d& f_T_W, const Eigen::Vector3d& tau_T_W) {
   const Eigen::Vector3d f_D = mapping_.ForceToDevice(f_T_W);
+  const Eigen::Vector3d tau_D = mapping_.TorqueToDevice(tau_T_W);
   ForceOut f{step_,
              raw_.sample_step,
              raw_.sample_stamp_ns,
              {f_D.x(), f_D.y(), f_D.z()},
+             {tau_D.x(), tau_D.y(), tau_D.z()},
              static_cast<std::uint8_t>(fault_)};
   if (!forces_.TryPush(f)) dropped_.fetch_add(1, std::memory_order_relaxed);
   force_event_.Notify();
@@ -153,7 +159,7 @@ void DdsDevice::RunPublisher() {
       m.sample_step(f.sample_step);
       m.sample_stamp_ns(f.sample_stamp_ns);
       m.f_D({f.f_D[0], f.f_D[1], f.f_D[2]});
-      m.tau_D({0, 0, 0});
+      m.tau_D({f.tau_D[0], f.tau_D[1], f.tau_D[2]});
       m.fault(f.fault);
       writer->write(&m);
     }

@@ -48,6 +48,7 @@ class DdsDevice final : public Device {
 
   DeviceSample Read(std::uint64_t step) override;
   void WriteForce(const Eigen::Vector3d& f_T_W) override;
+  void WriteWrench(const Eigen::Vector3d& f_T_W, const Eigen::Vector3d& tau_T_W) override;
   bool paces_loop() const override { return true; }
   bool WaitForSample(std::int64_t until_ns) override;
 
@@ -70,6 +71,7 @@ class DdsDevice final : public Device {
     std::uint64_t sample_step;
     std::int64_t sample_stamp_ns;
     double f_D[3];
+    double tau_D[3];
     std::uint8_t fault;
   };
   class Listener;

@@ -32,6 +32,11 @@ class Device {
   virtual DeviceSample Read(std::uint64_t step) = 0;
   // The force on the tool, expressed in world (finite and limited by the caller).
   virtual void WriteForce(const Eigen::Vector3d& f_T_W) = 0;
+  // Force and torque (about the tool point), both in world, finite and limited by the caller:
+  // what the haptic loop calls. A device that renders no torque keeps this default.
+  virtual void WriteWrench(const Eigen::Vector3d& f_T_W, const Eigen::Vector3d& /*tau_T_W*/) {
+    WriteForce(f_T_W);
+  }
   // A device that paces the loop (an external driver's 1 kHz servo loop): WaitForSample
   // returns as soon as a new sample has arrived (true) or at until_ns on the monotonic clock
   // (false). Others are paced by the loop's own deadlines.

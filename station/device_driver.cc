@@ -42,6 +42,10 @@ class ForceListener final : public dds::DataReaderListener {
       const double f = std::sqrt(msg_.f_D()[0] * msg_.f_D()[0] + msg_.f_D()[1] * msg_.f_D()[1] +
                                  msg_.f_D()[2] * msg_.f_D()[2]);
       stats_.force_max_N = std::max(stats_.force_max_N, f);
+      const double tau =
+          std::sqrt(msg_.tau_D()[0] * msg_.tau_D()[0] + msg_.tau_D()[1] * msg_.tau_D()[1] +
+                    msg_.tau_D()[2] * msg_.tau_D()[2]);
+      stats_.torque_max_Nm = std::max(stats_.torque_max_Nm, tau);
       const std::uint64_t k = msg_.sample_step();
       if (k < answered_.size() && !answered_[k] && msg_.sample_stamp_ns() > 0) {
         answered_[k] = 1;

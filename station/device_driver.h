@@ -41,8 +41,9 @@ struct DriverStats {
   std::uint64_t fault_forces = 0;     // forces flagged with a device fault
   std::vector<double> round_trip_us;  // send → the force that echoes it
   double force_max_N = 0;
-  bool matched = false;   // the station's bridge was found
-  bool realtime = false;  // the sending thread ran SCHED_FIFO
+  double torque_max_Nm = 0;  // largest |tau_D| received
+  bool matched = false;      // the station's bridge was found
+  bool realtime = false;     // the sending thread ran SCHED_FIFO
 };
 
 // Runs the driver until duration_s has passed or `stop`; throws std::runtime_error (DDS

@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 
 #include "station/device_guard.h"
 
@@ -24,10 +25,23 @@ struct DeviceMappingDef {
   double motion_scale = 0.1;                             // world metres per hand metre
   double force_scale = 1.0;                              // device newtons per world newton
   double max_force_N = 3.0;                              // the device's own limit
+  // Rotations map one to one (the tool turns as the hand), so a torque about the tool point
+  // goes to the handle only rotated and scaled by torque_scale, then limited to the device's
+  // max_torque_Nm (0: the device renders no torque, e.g. a 3-DOF Touch or Falcon).
+  double torque_scale = 1.0;
+  double max_torque_Nm = 0.5;
   std::uint32_t clutch_button = 1u << 7;
   // Throws std::invalid_argument("field: reason").
   void Validate() const;
 };
+
+// A device's mapping from a YAML file (`microdex-station --device-map FILE`, station/README.md):
+// the keys of DeviceMappingDef (rpy_rad for R_WD, motion_scale, force_scale, max_force_N,
+// torque_scale, max_torque_Nm, clutch_button as a bit index) at the top level for the first
+// device and under `second:` for the second device of a bimanual scene; what a file leaves out
+// keeps `defaults`. device: 0 first, 1 second. Throws InputError "FILE:LINE: field: reason".
+DeviceMappingDef LoadDeviceMapping(const std::string& path, int device,
+                                   const DeviceMappingDef& defaults);
 
 class DeviceMapping {
  public:
@@ -39,6 +53,8 @@ class DeviceMapping {
   void Recentre() { recentre_ = true; }
   // The force for the device: rotated into its frame, scaled, limited (finite in, finite out).
   Eigen::Vector3d ForceToDevice(const Eigen::Vector3d& f_T_W) const;
+  // The same for a torque about the tool point.
+  Eigen::Vector3d TorqueToDevice(const Eigen::Vector3d& tau_T_W) const;
   bool clutched() const { return clutched_; }
 
  private:

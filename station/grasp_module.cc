@@ -26,6 +26,10 @@ void GraspModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vecto
   f_T_W += s.grasp->grasp.out.f_T_W;
 }
 
+Eigen::Vector3d GraspModule::ToolTorque(const state::StationState& s) const {
+  return s.grasp->grasp.out.tau_T_W;
+}
+
 ModuleStatus GraspModule::Status(const state::StationState& s) const {
   const grasp::GraspState& g = s.grasp->grasp;
   ModuleStatus st;

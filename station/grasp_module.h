@@ -17,6 +17,8 @@ class GraspModule final : public Module {
   void InitState(state::StationState& state) const override;
   void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) override;
   ModuleStatus Status(const state::StationState& state) const override;
+  // The object's contacts on the jaws about the tool origin (common/grasp, GraspOutput).
+  Eigen::Vector3d ToolTorque(const state::StationState& state) const override;
 
  private:
   grasp::GraspModel model_;

@@ -49,8 +49,10 @@ void HapticLoop::Tick(std::int64_t tick_start_ns, std::int64_t period_ns, std::i
   in.cues = std::span<const state::CueRequest>(arrived_.data(), static_cast<std::size_t>(n));
 
   StepStation(sim_, in, state_);
-  device_.WriteForce(state_.tool.f_T_W);
-  if (second_device_ != nullptr) second_device_->WriteForce(state_.second_tool->f_T_W);
+  device_.WriteWrench(state_.tool.f_T_W, state_.tool.tau_T_W);
+  if (second_device_ != nullptr) {
+    second_device_->WriteWrench(state_.second_tool->f_T_W, state_.second_tool->tau_T_W);
+  }
 
   if (step % static_cast<std::uint64_t>(config_.frame_period_steps) == 0) {
     for (std::size_t i = 0; i < sim_.module_count(); ++i) {

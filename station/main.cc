@@ -50,6 +50,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                              "one of ") +
                      microdex::cues::CueKindNames());
   app.add_option("--audio-out", o.audio_out, "render the audio cues that are on to FILE.wav");
+  app.add_option("--device-map", o.device_map,
+                 "--device dds: workspace mapping, scaling and limits of the device(s) (YAML)");
   app.add_option("--wait-for-recorder", o.wait_for_recorder_s,
                  "before the first step, wait up to S seconds for a DeviceInput reader (a "
                  "recording instructor) so that the recording holds every step from step 0");

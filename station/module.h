@@ -55,6 +55,12 @@ class Module {
   // trouble is counted in the section's warnings.
   virtual void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) = 0;
   virtual ModuleStatus Status(const state::StationState& state) const = 0;
+  // This module's torque on the (first) tool about the tool point (X_WT's origin), world, N m,
+  // after its last Step, read from its section of the state: a force pushing off-centre (the
+  // needle's wall contact at the needle point, a grasped object's contacts on the jaws).
+  virtual Eigen::Vector3d ToolTorque(const state::StationState& /*state*/) const {
+    return Eigen::Vector3d::Zero();
+  }
   // Bimanual scenes: this module's force on the second tool after its last Step, read from
   // its section of the state (zero for a module the second tool does not touch).
   virtual Eigen::Vector3d SecondToolForce(const state::StationState& /*state*/) const {

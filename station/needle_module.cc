@@ -34,13 +34,7 @@ void NeedleModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
     ++n.warnings;
     return;  // no force from a query that failed
   }
-  if (c.status == geometry::ClearanceStatus::kOk && c.clearance_m < 0) {
-    // Outside the tube by -clearance: push the deepest needle point D back towards the wall
-    // point B nearest to it (inwards), proportionally to the depth.
-    const Eigen::Vector3d inward = c.p_WB - c.p_WD;
-    const double norm = inward.norm();
-    if (norm > 0) f_T_W += WallStiffness(s) * (-c.clearance_m) * (inward / norm);
-  }
+  f_T_W += WallForce(s);
   if (in.step % kErrorCheckPeriod == 0) {
     const geometry::ArcTorusClearance sampled =
         geometry::CalcArcTorusClearanceSampled(arc, torus_, kErrorCheckSamples);
@@ -49,6 +43,25 @@ void NeedleModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
                              ? std::abs(sampled.clearance_m - c.clearance_m)
                              : std::numeric_limits<double>::quiet_NaN();
   }
+}
+
+Eigen::Vector3d NeedleModule::WallForce(const state::StationState& s) const {
+  const geometry::ArcTorusClearance& c = s.needle->clearance;
+  if (c.status != geometry::ClearanceStatus::kOk || !(c.clearance_m < 0)) {
+    return Eigen::Vector3d::Zero();
+  }
+  // Outside the tube by -clearance: push the deepest needle point D back towards the wall
+  // point B nearest to it (inwards), proportionally to the depth.
+  const Eigen::Vector3d inward = c.p_WB - c.p_WD;
+  const double norm = inward.norm();
+  if (!(norm > 0)) return Eigen::Vector3d::Zero();
+  return WallStiffness(s) * (-c.clearance_m) * (inward / norm);
+}
+
+Eigen::Vector3d NeedleModule::ToolTorque(const state::StationState& s) const {
+  const Eigen::Vector3d f = WallForce(s);
+  if (f.isZero(0)) return Eigen::Vector3d::Zero();
+  return (s.needle->clearance.p_WD - s.tool.X_WT.translation()).cross(f);
 }
 
 ModuleStatus NeedleModule::Status(const state::StationState& s) const {

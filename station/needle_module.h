@@ -23,8 +23,13 @@ class NeedleModule final : public Module {
   void InitState(state::StationState& state) const override;
   void Step(const ToolInput& in, state::StationState& state, Eigen::Vector3d& f_T_W) override;
   ModuleStatus Status(const state::StationState& state) const override;
+  // The wall force acts at the deepest needle point D: (p_WD - p_WT) x f.
+  Eigen::Vector3d ToolTorque(const state::StationState& state) const override;
 
  private:
+  // The wall's force on the needle at D for the state's clearance (zero without contact or
+  // for a failed query).
+  Eigen::Vector3d WallForce(const state::StationState& s) const;
   Eigen::Isometry3d X_TN_;
   // The scene's wall stiffness scaled by the wall cue (0 when it is off).
   double WallStiffness(const state::StationState& s) const {

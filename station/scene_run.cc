@@ -41,8 +41,8 @@ SceneRunResult RunSceneWithTrainee(const scene::SceneModel& scene, const SimTrai
       CanonicalizeDeviceSample(in.second);
     }
     StepStation(sim, in, state);
-    device.WriteForce(state.tool.f_T_W);
-    if (state.second_tool) second.WriteForce(state.second_tool->f_T_W);
+    device.WriteWrench(state.tool.f_T_W, state.tool.tau_T_W);
+    if (state.second_tool) second.WriteWrench(state.second_tool->f_T_W, state.second_tool->tau_T_W);
     for (std::size_t i = 0; i < sim.module_count(); ++i)
       times[i].push_back(sim.last_step_time_s(i));
   }

@@ -154,6 +154,19 @@ pid_t StartScreenshot(std::uint16_t port, const std::string& out) {
   return pid;
 }
 
+// A DDS device's mapping: the hand's motion scaled for the scene's microscope (1 / its
+// magnification), the device's origin at `p_W_centre`, the force limited at the scene's limit;
+// then whatever --device-map FILE says for this device (0 first, 1 second).
+DeviceMappingDef DdsDeviceMapping(const scene::SceneModel& scene, const std::string& file,
+                                  int device, const Eigen::Vector3d& p_W_centre) {
+  DeviceMappingDef d;
+  d.motion_scale = 1.0 / scene.microscope.magnification;
+  d.max_force_N = scene.haptic.max_force_N;
+  if (!file.empty()) d = LoadDeviceMapping(file, device, d);
+  d.p_W_centre = p_W_centre;
+  return d;
+}
+
 }  // namespace
 
 std::string StationOptions::Validate() const {
@@ -173,6 +186,7 @@ std::string StationOptions::Validate() const {
   if (device != "playback" && !device_file2.empty()) {
     return "--device " + device + ": takes no FILE2";
   }
+  if (!device_map.empty() && device != "dds") return "--device-map: only with --device dds";
   if (!(view_port >= -1 && view_port <= 65535)) return "--view: expected a port 0..65535";
   if (device == "page" && view_port < 0 && screenshot.empty()) {
     return "--device page: needs --view PORT";
@@ -221,9 +235,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     device_owner = std::make_unique<PlaybackDevice>(o.device_file);
   } else if (o.device == "dds") {
     // The driver's hand at the device origin puts the tool at the task's start.
-    DeviceMappingDef mapping;
-    mapping.p_W_centre = scene.CalcIdealToolPose(0).translation();
-    mapping.max_force_N = scene.haptic.max_force_N;
+    const DeviceMappingDef mapping =
+        DdsDeviceMapping(scene, o.device_map, 0, scene.CalcIdealToolPose(0).translation());
     device_owner =
         std::make_unique<DdsDevice>(o.dds, o.station_id, session_id.substr(0, 64), mapping);
   } else {
@@ -244,9 +257,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
       second_device = std::make_unique<PlaybackDevice>(o.device_file2);
     } else if (o.device == "dds") {
       // The second device's driver publishes and reads under the key STATION/2.
-      DeviceMappingDef mapping;
-      mapping.p_W_centre = X_WT2_start.translation();
-      mapping.max_force_N = scene.haptic.max_force_N;
+      const DeviceMappingDef mapping =
+          DdsDeviceMapping(scene, o.device_map, 1, X_WT2_start.translation());
       second_device = std::make_unique<DdsDevice>(o.dds, SecondDeviceKey(o.station_id),
                                                   session_id.substr(0, 64), mapping);
     } else {

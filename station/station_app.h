@@ -17,6 +17,7 @@ struct StationOptions {
   std::string device_file;     // --device playback FILE: the CSV (station/playback_device.h)
   // --device playback FILE FILE2: the second tool's CSV (bimanual scenes).
   std::string device_file2;
+  std::string device_map;  // --device-map FILE.yaml: the dds devices' mapping ("" defaults)
   double skill = 0.5;
   std::uint64_t seed = 1;
   double duration_s = 0;   // 0: until SIGINT/SIGTERM

@@ -158,16 +158,23 @@ Eigen::Vector3d LimitCueForce(const Eigen::Vector3d& f_cue, double max_force_N, 
   return r.f_N;
 }
 
-// Reads a tool; writes its f_T_W: finite and saturated, always; during a device fault it ramps
-// to zero at the limiter's rate.
-void LimitToolForce(const Eigen::Vector3d& f, double max_force_N, double dt_s,
-                    state::ToolState& tool) {
+// Reads a tool; writes its f_T_W and tau_T_W: finite and saturated, always; during a device
+// fault both ramp to zero at the limiter's rate (the torque in the same time as the force:
+// its rate scaled by max_torque / max_force).
+void LimitToolWrench(const Eigen::Vector3d& f, const Eigen::Vector3d& tau,
+                     const scene::HapticDef& haptic, double dt_s, state::ToolState& tool) {
   const bool fault = tool.device_fault != 0;
-  const double rate = fault ? cues::kMaxForceRate_N_per_s : std::numeric_limits<double>::infinity();
-  const cues::ForceLimitResult r =
-      cues::LimitForce(fault ? Eigen::Vector3d::Zero() : f, tool.f_T_W, max_force_N, rate, dt_s);
-  if (r.non_finite) ++tool.force_warnings;
-  tool.f_T_W = r.f_N;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double rate = fault ? cues::kMaxForceRate_N_per_s : inf;
+  const cues::ForceLimitResult rf = cues::LimitForce(fault ? Eigen::Vector3d::Zero() : f,
+                                                     tool.f_T_W, haptic.max_force_N, rate, dt_s);
+  const double torque_rate =
+      fault ? cues::kMaxForceRate_N_per_s * haptic.max_torque_Nm / haptic.max_force_N : inf;
+  const cues::ForceLimitResult rt = cues::LimitForce(
+      fault ? Eigen::Vector3d::Zero() : tau, tool.tau_T_W, haptic.max_torque_Nm, torque_rate, dt_s);
+  if (rf.non_finite || rt.non_finite) ++tool.force_warnings;
+  tool.f_T_W = rf.f_N;
+  tool.tau_T_W = rt.f_N;
 }
 
 // Reads the tool, the needle and tremor sections and this step's fault; writes state.score.
@@ -405,11 +412,13 @@ void StepStation(Simulation& sim, const StationInput& in, state::StationState& s
 
   // A device fault: the device gave the last valid pose again (held); the force goes to zero,
   // at the limiter's rate.
-  LimitToolForce(f, scene.haptic.max_force_N, sim.dt_s_, s.tool);
+  Eigen::Vector3d tau = Eigen::Vector3d::Zero();
+  for (const auto& m : sim.modules_) tau += m->ToolTorque(s);
+  LimitToolWrench(f, tau, scene.haptic, sim.dt_s_, s.tool);
   if (s.second_tool) {
     Eigen::Vector3d f2 = Eigen::Vector3d::Zero();
     for (const auto& m : sim.modules_) f2 += m->SecondToolForce(s);
-    LimitToolForce(f2, scene.haptic.max_force_N, sim.dt_s_, *s.second_tool);
+    LimitToolWrench(f2, Eigen::Vector3d::Zero(), scene.haptic, sim.dt_s_, *s.second_tool);
   }
   if (s.score.outcome == 0) {  // the scores freeze when the task ends
     UpdateScore(scene, sim.dt_s_, s);

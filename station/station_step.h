@@ -13,7 +13,8 @@
 //                      saturated and rate-limited (state.cues.f_cue_W)
 //     StepModules      each module of the scene, in the scene's order (module sections; the
 //                      wall forces scaled by the wall cue)
-//     LimitToolForce   finite and saturated, always; ramped to zero at the limiter's rate
+//     LimitToolWrench  force and torque (the modules' ToolTorque, about the tool point):
+//                      finite and saturated, always; ramped to zero at the limiter's rate
 //                      during a device fault (state.tool; bimanual: state.second_tool too,
 //                      from the modules' SecondToolForce)
 //     UpdateScore      running totals and fault episodes (state.score)

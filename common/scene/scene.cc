@@ -186,9 +186,10 @@ SceneModel ReadScene(const YamlReader& reader) {
     s.task.end_azimuth_rad = t->FiniteDouble("end_azimuth_rad", s.task.end_azimuth_rad);
   }
   if (const std::optional<YamlSection> h = root.OptionalMap("haptic")) {
-    h->CheckNoUnknownKeys({"rate_hz", "max_force_N", "wall_stiffness_N_per_m"});
+    h->CheckNoUnknownKeys({"rate_hz", "max_force_N", "max_torque_Nm", "wall_stiffness_N_per_m"});
     s.haptic.rate_hz = h->FiniteDouble("rate_hz", s.haptic.rate_hz);
     s.haptic.max_force_N = h->FiniteDouble("max_force_N", s.haptic.max_force_N);
+    s.haptic.max_torque_Nm = h->FiniteDouble("max_torque_Nm", s.haptic.max_torque_Nm);
     s.haptic.wall_stiffness_N_per_m =
         h->FiniteDouble("wall_stiffness_N_per_m", s.haptic.wall_stiffness_N_per_m);
   }
@@ -802,6 +803,8 @@ void ValidateScene(const SceneModel& s) {
   if (!(h.rate_hz >= 100 && h.rate_hz <= 10000)) Invalid("haptic.rate_hz", "expected 100..10000");
   if (!(h.max_force_N > 0 && h.max_force_N <= 20))
     Invalid("haptic.max_force_N", "expected (0, 20] N");
+  if (!(h.max_torque_Nm > 0 && h.max_torque_Nm <= 1))
+    Invalid("haptic.max_torque_Nm", "expected (0, 1] N m");
   if (!(h.wall_stiffness_N_per_m >= 0 && h.wall_stiffness_N_per_m <= 1e5)) {
     Invalid("haptic.wall_stiffness_N_per_m", "expected 0..1e5 N/m");
   }

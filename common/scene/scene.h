@@ -190,6 +190,7 @@ struct PlacementSceneDef {
 struct HapticDef {
   double rate_hz = 1000;
   double max_force_N = 2.0;                // every force sent to a device is saturated here
+  double max_torque_Nm = 0.05;             // and every torque (about the tool point) here
   double wall_stiffness_N_per_m = 1000.0;  // penalty force of the tube wall on contact
 };
 

@@ -58,6 +58,9 @@ struct ToolState {
   std::uint32_t buttons = 0;
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  // tool after cues (what modules see)
   Eigen::Vector3d f_T_W = Eigen::Vector3d::Zero();  // force sent to the device: finite, saturated
+  // Torque sent to the device about the tool point (X_WT's origin), world, N m: finite,
+  // saturated at haptic.max_torque_Nm (zero where no module pushes off-centre).
+  Eigen::Vector3d tau_T_W = Eigen::Vector3d::Zero();
   std::uint32_t force_warnings = 0;  // non-finite forces replaced by zero, running count
   // The device's fault this step (station::DeviceFault: 0 none; 1 timeout, 2 non-finite,
   // 3 jump): the pose is the last valid one, held, and the force is ramped to zero.

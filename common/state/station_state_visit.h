@@ -48,11 +48,12 @@ void Counted(C& c, int count, F f) {
 }
 
 // A tool's fields under the names of the first tool ("tool.…") or of the second ("second_tool.…").
-inline constexpr const char* kToolNames[2][7] = {
-    {"tool.X_WT_device", "tool.gripper", "tool.buttons", "tool.X_WT", "tool.f_T_W",
+inline constexpr const char* kToolNames[2][8] = {
+    {"tool.X_WT_device", "tool.gripper", "tool.buttons", "tool.X_WT", "tool.f_T_W", "tool.tau_T_W",
      "tool.force_warnings", "tool.device_fault"},
     {"second_tool.X_WT_device", "second_tool.gripper", "second_tool.buttons", "second_tool.X_WT",
-     "second_tool.f_T_W", "second_tool.force_warnings", "second_tool.device_fault"}};
+     "second_tool.f_T_W", "second_tool.tau_T_W", "second_tool.force_warnings",
+     "second_tool.device_fault"}};
 
 template <typename S, typename V>
 void Tool(S& t, V& v, int hand = 0) {
@@ -62,8 +63,9 @@ void Tool(S& t, V& v, int hand = 0) {
   v(n[2], &t.buttons, 1);
   Pose(n[3], t.X_WT, v);
   Matrix(n[4], t.f_T_W, v);
-  v(n[5], &t.force_warnings, 1);
-  v(n[6], &t.device_fault, 1);
+  Matrix(n[5], t.tau_T_W, v);
+  v(n[6], &t.force_warnings, 1);
+  v(n[7], &t.device_fault, 1);
 }
 
 template <typename S, typename V>

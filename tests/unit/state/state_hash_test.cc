@@ -133,7 +133,7 @@ TEST(StateHash, ChangingAnyFieldAnywhereChangesHashAndEquality) {
        {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step", "cues.acks[].cue_id",
         "score.contacts", "needle.X_WN", "tremor.mean_square_m2", "thread.x_W",
         "thread.grasps[].p_WT", "tissue.field_w_m", "tissue.leaves[].ci", "tissue.contact_force_N",
-        "second_tool.X_WT", "second_tool.f_T_W", "thread.f_T2_W"}) {
+        "second_tool.X_WT", "second_tool.f_T_W", "thread.f_T2_W", "tool.tau_T_W"}) {
     EXPECT_TRUE(p.names.count(field)) << field;
   }
   EXPECT_GT(p.elements, 500u);

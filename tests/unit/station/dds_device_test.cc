@@ -1,6 +1,7 @@
 // The DDS device bridge on the haptic thread's side: while a driver (in another thread of this
 // process) sends samples at 1 kHz, WaitForSample, Read and WriteForce allocate nothing on the
-// calling thread, a sample wakes the wait before its timeout, and the forces reach the driver.
+// calling thread, a sample wakes the wait before its timeout, and the forces and torques reach
+// the driver.
 #include "station/dds_device.h"
 
 #include <gtest/gtest.h>
@@ -45,7 +46,7 @@ TEST(DdsDevice, HapticSideNeverAllocatesAndSamplesWakeTheWait) {
     if (device.WaitForSample(clock.NowNs() + 5'000'000)) ++woken;
     const DeviceSample s = device.Read(step++);
     if (s.fault == DeviceFault::kNone) ++valid;
-    device.WriteForce(Eigen::Vector3d(0.2, 0, 0));
+    device.WriteWrench(Eigen::Vector3d(0.2, 0, 0), Eigen::Vector3d(0, 0, 2e-3));
   }
   const std::uint64_t allocations = testing::StopCountingAllocations();
   EXPECT_EQ(allocations, 0u);
@@ -53,6 +54,8 @@ TEST(DdsDevice, HapticSideNeverAllocatesAndSamplesWakeTheWait) {
   EXPECT_GT(valid, 400);
   driver.join();
   EXPECT_GT(stats.answered, 300u) << "the forces reached the driver";
+  // And the torque with them (identity mapping: the same vector in the device frame).
+  EXPECT_NEAR(stats.torque_max_Nm, 2e-3, 1e-15);
   EXPECT_EQ(device.forces_dropped(), 0u);
 }
 

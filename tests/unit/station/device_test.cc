@@ -124,6 +124,47 @@ std::string WriteTemp(const std::string& name, const std::string& text) {
   return path;
 }
 
+TEST(DeviceMapping, LoadedFromAFileWithDefaultsErrorsNamingFileLineAndField) {
+  DeviceMappingDef defaults;
+  defaults.motion_scale = 1.0 / 15;  // the scene's magnification
+  defaults.max_force_N = 2.0;
+  const std::string path = WriteTemp("microdex_device_map.yaml", R"(# a Touch turned on its side
+rpy_rad: [0, 0, 1.5707963267948966]
+motion_scale: 0.05
+max_torque_Nm: 0
+clutch_button: 3
+second:
+  force_scale: 0.5
+)");
+  const DeviceMappingDef first = LoadDeviceMapping(path, 0, defaults);
+  EXPECT_TRUE((first.R_WD * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
+  EXPECT_EQ(first.motion_scale, 0.05);
+  EXPECT_EQ(first.max_force_N, 2.0) << "not in the file: the default";
+  EXPECT_EQ(first.max_torque_Nm, 0.0);
+  EXPECT_EQ(first.clutch_button, 1u << 3);
+  EXPECT_EQ(first.force_scale, 1.0);
+  const DeviceMappingDef second = LoadDeviceMapping(path, 1, defaults);
+  EXPECT_EQ(second.force_scale, 0.5);
+  EXPECT_EQ(second.motion_scale, defaults.motion_scale) << "the second section only";
+  EXPECT_TRUE(second.R_WD.isIdentity(0));
+  auto error = [&](const std::string& text) {
+    const std::string bad = WriteTemp("microdex_device_map_bad.yaml", text);
+    try {
+      LoadDeviceMapping(bad, 0, defaults);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string unknown = error("motion_scale: 0.1\nmotion_scal: 0.2\n");
+  EXPECT_NE(unknown.find("microdex_device_map_bad.yaml:2"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("motion_scal"), std::string::npos) << unknown;
+  const std::string zero = error("force_scale: 1\nmotion_scale: 0\n");
+  EXPECT_NE(zero.find("motion_scale"), std::string::npos) << zero;
+  EXPECT_NE(error("clutch_button: 40\n").find("clutch_button"), std::string::npos);
+  EXPECT_NE(error("rpy_rad: [0, .nan, 0]\n").find("rpy_rad"), std::string::npos);
+}
+
 TEST(PlaybackDevice, PlaysRowsInOrderThenHoldsAndFlagsBadRows) {
   const std::string path = WriteTemp("microdex_playback_test.csv",
                                      "p_x,p_y,p_z,q_w,q_x,q_y,q_z,gripper,buttons\n"
