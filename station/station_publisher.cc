@@ -390,6 +390,12 @@ void StationPublisher::PublishMirror() {
   w_->tool_plain.f_T_W = E(s.f_T_W);
   w_->tool_plain.tremor_rms_m = s.has_tremor ? s.tremor_rms_m : 0.0;
   w_->tool_plain.active_cues = s.active_cues;
+  w_->tool_plain.has_second_tool = s.has_second_tool != 0;
+  if (s.has_second_tool != 0) {
+    w_->tool_plain.p_WT2 = E(s.second.p_WT_device);
+    w_->tool_plain.q_WT2 = Q(s.second.q_WT_device);
+    w_->tool_plain.f_T2_W = E(s.second.f_T_W);
+  }
   net::ToMsg(w_->tool_plain, w_->tool_msg);
   w_->tool->write(&w_->tool_msg);
   PublishOverlay();

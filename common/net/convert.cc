@@ -475,6 +475,10 @@ void ToMsg(const ToolState& in, msg::ToolState& out) {
   out.f_T_W(V(in.f_T_W));
   out.tremor_rms_m(in.tremor_rms_m);
   out.active_cues(ActiveCuesToMsg(in.active_cues));
+  out.has_second_tool(in.has_second_tool);
+  out.p_WT2(V(in.p_WT2));
+  out.q_WT2(Q(in.q_WT2));
+  out.f_T2_W(V(in.f_T2_W));
 }
 
 bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
@@ -490,6 +494,19 @@ bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
   out.tremor_rms_m = in.tremor_rms_m();
   if (!ActiveCuesFromMsg(in.active_cues(), &out.active_cues)) {
     c.Fail("active_cues: a bit that names no cue kind");
+  }
+  out.has_second_tool = in.has_second_tool();
+  if (out.has_second_tool) {
+    c.Finite(in.p_WT2(), "p_WT2");
+    c.Unit(in.q_WT2(), "q_WT2");
+    c.Finite(in.f_T2_W(), "f_T2_W");
+    out.p_WT2 = V(in.p_WT2());
+    out.q_WT2 = Q(in.q_WT2());
+    out.f_T2_W = V(in.f_T2_W());
+  } else {
+    out.p_WT2.setZero();
+    out.q_WT2.setIdentity();
+    out.f_T2_W.setZero();
   }
   return c.ok();
 }

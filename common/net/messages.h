@@ -64,6 +64,11 @@ struct ToolState {
   double tremor_rms_m = 0;
   std::uint32_t active_cues =
       0;  // bit (1 << cues::CueKind); on the wire, bit (1 << msg::CueKind) of the same name
+  // Bimanual scenes: the second tool (its device's pose) and the force sent to it.
+  bool has_second_tool = false;
+  Eigen::Vector3d p_WT2 = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_WT2 = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d f_T2_W = Eigen::Vector3d::Zero();
 };
 
 enum class ClearanceStatus : std::uint8_t { kOk = 0, kEmptyRange = 1, kInvalidInput = 2 };

@@ -130,6 +130,7 @@ std::string SceneViewJson(const scene::SceneModel& s) {
   j << ",\"tolerance\":" << Num(s.task.tolerance_m);
   j << ",\"path\":" << IdealPath(s);
   j << ",\"tool_start\":" << Pose(s.CalcIdealToolPose(0));
+  if (s.hands() == 2) j << ",\"second_tool_start\":" << Pose(s.CalcIdealSecondToolPose(0));
   if (s.HasModule("needle")) {
     j << ",\"vessel\":{\"core_radius\":" << Num(s.vessel.core_radius_m)
       << ",\"tube_radius\":" << Num(s.vessel.tube_radius_m)

@@ -33,9 +33,16 @@ void EncodeFrame(const FrameSource& src, FrameBytes& out) {
     Put3(s.data(), kToolForce, t.f_T_W);
     s[kActiveCues] = t.active_cues;
     s[kTremorRms] = t.tremor_rms_m;
+    if (t.has_second_tool) {
+      flags |= kHasSecondTool;
+      Put3(s.data(), kTool2P, t.p_WT2);
+      PutQ(s.data(), kTool2Q, t.q_WT2);
+      Put3(s.data(), kTool2Force, t.f_T2_W);
+    }
   } else {
     s[kToolQ] = 1;
   }
+  if ((flags & kHasSecondTool) == 0) s[kTool2Q] = 1;
   s[kSentMs] = static_cast<double>(src.sent_realtime_ns) * 1e-6;
   if (src.needle != nullptr) {
     flags |= kHasNeedle;

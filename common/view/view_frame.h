@@ -25,7 +25,7 @@
 namespace microdex::view {
 
 inline constexpr std::uint32_t kFrameMagic = 0x4658444d;  // "MDXF" read as little-endian u32
-inline constexpr std::uint16_t kFrameVersion = 2;
+inline constexpr std::uint16_t kFrameVersion = 3;
 inline constexpr std::size_t kFrameHeaderBytes = 16;
 
 // Section flags.
@@ -35,6 +35,7 @@ inline constexpr std::uint16_t kHasTissue = 4;
 inline constexpr std::uint16_t kHasScore = 8;
 inline constexpr std::uint16_t kHasTelemetry = 16;
 inline constexpr std::uint16_t kHasOverlay = 32;
+inline constexpr std::uint16_t kHasSecondTool = 64;
 
 // Scalar indices (float64).
 enum Scalar : int {
@@ -66,7 +67,10 @@ enum Scalar : int {
   kOverruns = 42,     // in that window
   kPresence = 43,     // console: 0 alive, 1 lost, 2 departed
   kToolAgeMs = 44,    // console: age of the mirrored tool state when encoded
-  kScalarCount = 48,
+  kTool2P = 48,       // bimanual: the second tool's p_WT x, y, z (m)
+  kTool2Q = 51,       // its q_WT w, x, y, z
+  kTool2Force = 55,   // the force sent to it, x, y, z (N)
+  kScalarCount = 58,
 };
 
 inline constexpr std::size_t kMaxFrameThreadNodes = net::kMaxThreadNodes;

@@ -162,9 +162,9 @@ class Tile {
     const age = f ? `${f.scalars[S.toolAgeMs].toFixed(0)} ms` : '–';
     const html =
         `<div><span class="name">${esc(station.trainee)}</span> <span style="opacity:.7">${esc(station.id)}</span>` +
-        ` · <span class="${lost ? 'lost' : 'ok'}">${lost ? `${station.presence.toUpperCase()} (${station.lost_by})` : 'alive'}</span>` +
-        ` · ${esc(station.scene.split('/').pop() ?? '')}</div>` +
-        `<div>${score}</div><div>${health} · state age ${age}</div>` +
+        ` · <span class="${lost ? 'lost' : 'ok'}">${lost ? `${station.presence.toUpperCase()} (${station.lost_by})` : 'alive'}</span></div>` +
+        `<div><span class="scene">${esc(sceneName(station.scene))}</span> · ${score}</div>` +
+        `<div>${health} · state age ${age}</div>` +
         (station.scene_error ? `<div class="lost">scene refused: ${esc(station.scene_error)}</div>` : '');
     if (html !== this.label.innerHTML) this.label.innerHTML = html;
     // Rewritten only when changed: a new layout costs a software renderer a repaint.
@@ -194,6 +194,11 @@ class Tile {
     }
     this.pending = null;
   }
+}
+
+// A scene's name for a caption: its file name without the folder and the .yaml extension.
+function sceneName(path: string): string {
+  return (path.split('/').pop() ?? '').replace(/\.ya?ml$/, '');
 }
 
 function esc(s: string): string {

@@ -3,9 +3,9 @@
 // message: no copies, nothing drawn here.
 
 export const FRAME_MAGIC = 0x4658444d; // "MDXF"
-export const FRAME_VERSION = 2;
+export const FRAME_VERSION = 3;
 export const HEADER_BYTES = 16;
-export const SCALAR_COUNT = 48;
+export const SCALAR_COUNT = 58;
 
 export const HAS_NEEDLE = 1;
 export const HAS_THREAD = 2;
@@ -13,6 +13,7 @@ export const HAS_TISSUE = 4;
 export const HAS_SCORE = 8;
 export const HAS_TELEMETRY = 16;
 export const HAS_OVERLAY = 32;
+export const HAS_SECOND_TOOL = 64;
 
 // The cue overlay's bounds (common/cues/cue_overlay.h).
 export const MAX_OVERLAY_POLYLINES = 8;
@@ -50,6 +51,9 @@ export const S = {
   overruns: 42,
   presence: 43,
   toolAgeMs: 44,
+  tool2P: 48,
+  tool2Q: 51,
+  tool2Force: 55,
 } as const;
 
 // The visual cues as drawing data (common/cues/cue_overlay.h): world points, colours 0..1.

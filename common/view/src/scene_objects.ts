@@ -5,7 +5,7 @@
 import * as THREE from 'three';
 import {
   Frame, HAS_NEEDLE, HAS_SCORE, HAS_THREAD, HAS_TISSUE, MAX_OVERLAY_LABELS, MAX_OVERLAY_POINTS,
-  MAX_OVERLAY_POLYLINES, Overlay, S,
+  MAX_OVERLAY_POLYLINES, HAS_SECOND_TOOL, Overlay, S,
 } from './frame';
 
 export type V3 = [number, number, number];
@@ -20,6 +20,8 @@ export interface SceneJson {
   tolerance: number;
   path: V3[];
   tool_start: Pose;
+  // Bimanual scenes: the second tool (forceps) at the task's start.
+  second_tool_start?: Pose;
   vessel?: { core_radius: number; tube_radius: number; segment_angle: number; pose: Pose };
   needle?: { radius: number; sweep: number; X_TN: Pose };
   target?: { p: V3; radius: number };
@@ -41,6 +43,7 @@ export interface SceneJson {
 export const NEEDLE_COLOR = 0x00e5ff;
 export const CONTACT_COLOR = 0xff2020;
 export const TOOL_COLOR = 0xc8c8d0;
+export const TOOL2_COLOR = 0xa8b4c8; // the second tool (forceps), a cooler steel
 export const THREAD_COLOR = 0x3050ff;
 export const PATH_COLOR = 0xd0d080; // the task's ideal path, faint
 export const KNOT_COLOR = 0x2040ff; // the quiz's knot (a blue suture)
@@ -233,6 +236,8 @@ export function tissueColours(positions: Float32Array, colours: Float32Array): v
 export class SceneView {
   readonly root = new THREE.Group();
   readonly tool = new THREE.Group();
+  // Bimanual scenes: the second tool (forceps: a shaft and two closed jaws); null with one hand.
+  readonly tool2: THREE.Group | null = null;
   needle: THREE.Mesh | null = null;
   needleMaterial: THREE.MeshBasicMaterial | null = null;
   thread: PolylineTube | null = null;
@@ -393,6 +398,25 @@ export class SceneView {
     }
     setPose(this.tool, scene.tool_start.p, 0, scene.tool_start.q, 0);
     this.root.add(this.tool);
+    if (scene.second_tool_start) {
+      const tool2 = new THREE.Group();
+      const shaft2 = new THREE.Mesh(
+          new THREE.CylinderGeometry(shaftRadius, shaftRadius * 0.4, shaftLength, d.radial),
+          material(TOOL2_COLOR, { metal: true }));
+      shaft2.rotateX(Math.PI / 2);
+      shaft2.position.z = shaftLength / 2;
+      tool2.add(shaft2);
+      for (const side of [1, -1]) {  // the forceps' closed jaws, tips at the tool point
+        const jaw = new THREE.Mesh(
+            new THREE.BoxGeometry(shaftRadius * 0.5, shaftRadius * 0.4, shaftLength * 0.2),
+            material(TOOL2_COLOR, { metal: true }));
+        jaw.position.set(0, side * shaftRadius * 0.25, shaftLength * 0.1);
+        tool2.add(jaw);
+      }
+      setPose(tool2, scene.second_tool_start.p, 0, scene.second_tool_start.q, 0);
+      this.root.add(tool2);
+      this.tool2 = tool2;
+    }
     this.overlay = new CueOverlayView(fieldOfView(scene));
     this.root.add(this.overlay.root);
     // The tool tip's shadow on the table (a depth cue under a microscope's vertical light).
@@ -417,6 +441,7 @@ export class SceneView {
     this.lastFrame = f;
     const s = f.scalars;
     setPose(this.tool, s, S.toolP, s, S.toolQ);
+    if (this.tool2 && (f.flags & HAS_SECOND_TOOL)) setPose(this.tool2, s, S.tool2P, s, S.tool2Q);
     this.placeShadow();
     if (this.needle && (f.flags & HAS_NEEDLE)) {
       setPose(this.needle, s, S.needleP, s, S.needleQ);

@@ -298,6 +298,34 @@ TEST(NetConvert, ActiveCuesCrossByKindName) {
   EXPECT_NE(why.find("active_cues"), std::string::npos) << why;
 }
 
+TEST(NetConvert, SecondToolCrossesAndIsCheckedOnlyWhenPresent) {
+  ToolState in;
+  in.header = MakeHeader();
+  in.has_second_tool = true;
+  in.p_WT2 = {1e-3, 2e-3, -3e-3};
+  in.q_WT2 = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()));
+  in.f_T2_W = {0.1, 0, -0.2};
+  msg::ToolState m;
+  ToMsg(in, m);
+  ToolState out;
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_TRUE(out.has_second_tool);
+  EXPECT_EQ(out.p_WT2, in.p_WT2);
+  EXPECT_TRUE(out.q_WT2.isApprox(in.q_WT2, 1e-15));
+  EXPECT_EQ(out.f_T2_W, in.f_T2_W);
+  // A hostile second pose is refused, naming the field.
+  m.p_WT2({0, std::nan(""), 0});
+  std::string why;
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("p_WT2"), std::string::npos) << why;
+  // Without a second tool its fields are ignored (a one-handed station sends zeros).
+  m.has_second_tool(false);
+  m.q_WT2({0, 0, 0, 0});
+  ASSERT_TRUE(FromMsg(m, out, &why)) << why;
+  EXPECT_FALSE(out.has_second_tool);
+  EXPECT_EQ(out.q_WT2.w(), 1.0);
+}
+
 TEST(NetConvert, EmptyStationIdIsRejectedOverlongIsCut) {
   msg::Score m;
   Score out;

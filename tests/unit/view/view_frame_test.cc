@@ -60,6 +60,26 @@ TEST(ViewFrame, ToolOnlyFrame) {
   EXPECT_EQ(Scalar(*f, kToolQ), tool.q_WT.w());
   EXPECT_EQ(Scalar(*f, kToolQ + 3), tool.q_WT.z());
   EXPECT_EQ(Scalar(*f, kActiveCues), 4);
+  EXPECT_EQ(Scalar(*f, kTool2Q), 1) << "no second tool: its rotation is the identity";
+}
+
+TEST(ViewFrame, SecondToolOfABimanualScene) {
+  net::ToolState tool;
+  tool.has_second_tool = true;
+  tool.p_WT2 = {-5e-3, 1e-3, 2e-3};
+  tool.q_WT2 = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()));
+  tool.f_T2_W = {0.01, -0.02, 0.03};
+  FrameSource src;
+  src.tool = &tool;
+  auto f = std::make_unique<FrameBytes>();
+  EncodeFrame(src, *f);
+  EXPECT_EQ(U16(*f, 6), kHasSecondTool);
+  EXPECT_EQ(Scalar(*f, kTool2P), -5e-3);
+  EXPECT_EQ(Scalar(*f, kTool2P + 2), 2e-3);
+  EXPECT_EQ(Scalar(*f, kTool2Q), tool.q_WT2.w());
+  EXPECT_EQ(Scalar(*f, kTool2Q + 1), tool.q_WT2.x());
+  EXPECT_EQ(Scalar(*f, kTool2Force + 1), -0.02);
+  EXPECT_LT(kTool2Force + 3, kScalarCount);
 }
 
 TEST(ViewFrame, ThreadAndTissueFollowTheScalars) {

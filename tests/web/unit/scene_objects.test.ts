@@ -3,7 +3,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import * as THREE from 'three';
-import { HAS_NEEDLE, HAS_SCORE, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame, Overlay } from '../../../common/view/src/frame';
+import { HAS_NEEDLE, HAS_SCORE, HAS_SECOND_TOOL, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame, Overlay } from '../../../common/view/src/frame';
 import {
   SceneJson, SceneView, HIGH_DETAIL, LOW_DETAIL, NEEDLE_COLOR, CONTACT_COLOR, gridIndices,
   needleCurve, polylineCurve, sampleTissue, fieldOfView, TISSUE_REST,
@@ -24,6 +24,7 @@ function frame(flags: number, set: Record<number, number>, thread: number[] = []
   scalars[S.toolQ] = 1;
   scalars[S.needleQ] = 1;
   scalars[S.tissueQ] = 1;
+  scalars[S.tool2Q] = 1;
   for (const [k, v] of Object.entries(set)) scalars[Number(k)] = v;
   return { flags, slot: 0, scalars, threadNodes: new Float32Array(thread),
            tissue: new Float32Array(tissue), tissueNodesX: nx, tissueNodesY: ny, overlay: null };
@@ -122,6 +123,23 @@ test('the tool takes the frame pose', () => {
   assert.deepEqual(v.tool.position.toArray(), [0.001, 0, 0]);
   v.apply(frame(0, { [S.toolP]: 3e-3, [S.toolP + 1]: -1e-3, [S.toolP + 2]: 2e-3 }));
   assert.deepEqual(v.tool.position.toArray(), [3e-3, -1e-3, 2e-3]);
+});
+
+test('a bimanual scene draws the second tool at its start, then where its frames put it', () => {
+  assert.equal(new SceneView(base, LOW_DETAIL).tool2, null, 'one hand: no second tool');
+  const v = new SceneView({ ...base, second_tool_start: { p: [-0.002, 0, 0], q: [1, 0, 0, 0] } },
+                         LOW_DETAIL);
+  assert.ok(v.tool2);
+  assert.deepEqual(v.tool2!.position.toArray(), [-0.002, 0, 0]);
+  // A frame without the section leaves it; one with it moves it (and not the first tool).
+  v.apply(frame(0, { [S.tool2P]: 5e-3 }));
+  assert.deepEqual(v.tool2!.position.toArray(), [-0.002, 0, 0]);
+  const h = Math.SQRT1_2;
+  v.apply(frame(HAS_SECOND_TOOL, { [S.tool2P]: -4e-3, [S.tool2P + 1]: 1e-3, [S.tool2P + 2]: 2e-3,
+                                   [S.tool2Q]: h, [S.tool2Q + 3]: h }));
+  assert.deepEqual(v.tool2!.position.toArray(), [-4e-3, 1e-3, 2e-3]);
+  assert.ok(Math.abs(v.tool2!.quaternion.z - h) < 1e-12);
+  assert.deepEqual(v.tool.position.toArray(), [0, 0, 0]);
 });
 
 test('the thread tube is rebuilt in place around the frame\'s nodes', () => {
