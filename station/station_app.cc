@@ -318,13 +318,25 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   // A recorded station (--wait-for-recorder) leaves only once the recorder has every step.
   if (o.wait_for_recorder_s > 0) pc.input_ack_wait_s = std::max(2.0, o.wait_for_recorder_s);
   pc.mirror_rate_hz = o.mirror_rate_hz;
-  if (audio) pc.on_snapshot = [&audio](const TickSnapshot& s) { audio->Add(s); };
-  StationPublisher publisher(pc, o.dds, scene, rings, loop);
+  // The page's audio (--view): blocks of the audio cues for the pages that ask for them.
   std::unique_ptr<StationView> view;
+  std::unique_ptr<AudioBlockStream> live_audio;
   if (o.view_port >= 0 || !o.screenshot.empty()) {
     view = std::make_unique<StationView>(scene, std::max(o.view_port, 0),
                                          o.web_dir.empty() ? DefaultWebDir() : o.web_dir,
                                          o.station_id, page_device);
+    live_audio = std::make_unique<AudioBlockStream>(
+        scene.haptic.rate_hz,
+        [v = view.get()](const view::AudioBlock& b) { return v->PushAudio(b); });
+  }
+  if (audio || live_audio) {
+    pc.on_snapshot = [&audio, &live_audio, &view](const TickSnapshot& s) {
+      if (audio) audio->Add(s);
+      if (live_audio) live_audio->Add(s, view->audio_wanted());
+    };
+  }
+  StationPublisher publisher(pc, o.dds, scene, rings, loop);
+  if (view) {
     publisher.SetViewFrames(&view->frames());
     // One line a script can wait for (the port is the bound one when --view 0).
     spdlog::info("view: http://127.0.0.1:{}/", view->port());
@@ -383,6 +395,10 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   haptic.join();
   publisher.RequestStop();
   pub_thread.join();
+  if (live_audio && live_audio->blocks() > 0) {
+    spdlog::info("view audio: {} blocks, {} dropped at the ring, {} dropped for slow pages",
+                 live_audio->blocks(), live_audio->dropped(), view->audio_dropped());
+  }
   view.reset();
   if (o.realtime && !o.unpaced && !fifo) {
     spdlog::warn("haptic thread not SCHED_FIFO: {}", fifo_why);

@@ -20,7 +20,7 @@ StationView::StationView(const scene::SceneModel& scene, int port, const std::st
   info_json_ = "{\"station_id\":" + view::JsonQuote(station_id) +
                ",\"device\":" + (device != nullptr ? "\"page\"" : "\"watch\"") + "}";
   std::map<std::string, view::WebFile> files =
-      view::LoadWebFiles(web_dir, {"station.html", "station.js", "frame_worker.js"});
+      view::LoadWebFiles(web_dir, {"station.html", "station.js", "frame_worker.js", "audio_worklet.js"});
   files["/"] = files["/station.html"];
   view::ViewServerConfig config;
   config.port = static_cast<std::uint16_t>(port);
@@ -33,6 +33,11 @@ StationView::StationView(const scene::SceneModel& scene, int port, const std::st
   auto poll = [this] {
     if (frames_.Update())
       server_->BroadcastBinary(frames_.front().bytes.data(), frames_.front().size);
+    view::AudioBlock block;
+    while (audio_.TryPop(block)) {
+      const std::string bytes = view::EncodeAudioBlock(block);
+      server_->BroadcastAudio(bytes.data(), bytes.size());
+    }
   };
   server_ = std::make_unique<view::ViewServer>(config, std::move(files), dynamic, poll,
                                                [this](const std::string& m) { return OnText(m); });

@@ -6,6 +6,8 @@
 //
 // Threads: the publisher thread fills frames() (TripleBuffer: producer publisher thread,
 // consumer the view server's thread, which polls it every 2 ms and broadcasts a new frame);
+// the audio cue blocks go the same way through an SpscRing (producer: the publisher thread's
+// AudioBlockStream, consumer: the poll, which sends each to the pages that asked for audio);
 // the view server's thread pushes device input into the PageDevice's SpscRing (consumer: the
 // haptic thread). The haptic thread never meets the server.
 
@@ -15,7 +17,9 @@
 #include "common/scene/scene.h"
 #include "common/view/view_frame.h"
 #include "common/view/view_server.h"
+#include "common/view/view_audio.h"
 #include "station/page_device.h"
+#include "station/rt/spsc_ring.h"
 #include "station/rt/triple_buffer.h"
 
 namespace microdex::station {
@@ -34,6 +38,12 @@ class StationView {
   StationView& operator=(const StationView&) = delete;
 
   rt::TripleBuffer<view::FrameBytes>& frames() { return frames_; }
+  // Publisher thread: some page has asked for audio (as of the server's last poll).
+  bool audio_wanted() const { return server_->audio_clients() > 0; }
+  // Publisher thread: hands an audio block to the pages; false when the ring is full (the
+  // server's thread has not kept up: the block is dropped).
+  bool PushAudio(const view::AudioBlock& block) { return audio_.TryPush(block); }
+  std::uint64_t audio_dropped() const { return server_->audio_dropped(); }
   std::uint16_t port() const { return server_->port(); }
   std::uint64_t inputs_dropped() const { return inputs_dropped_.load(); }
 
@@ -41,6 +51,8 @@ class StationView {
   std::string OnText(const std::string& message);
 
   rt::TripleBuffer<view::FrameBytes> frames_;  // producer: publisher; consumer: view server
+  // 32 blocks: 320 ms of 10 ms blocks; producer: publisher thread; consumer: view server.
+  rt::SpscRing<view::AudioBlock> audio_{32};
   PageDevice* device_;
   std::string scene_json_;
   std::string info_json_;

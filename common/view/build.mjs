@@ -22,6 +22,7 @@ await esbuild.build({
   entryPoints: {
     ...Object.fromEntries(pages.map((p) => [p.name, join(p.dir, `${p.name}.ts`)])),
     frame_worker: join(here, 'src/frame_worker.ts'),
+    audio_worklet: join(here, 'src/audio_worklet.ts'),
   },
   bundle: true,
   format: 'iife',

@@ -84,6 +84,8 @@ class WsSession {
  public:
   virtual ~WsSession() = default;
   virtual void Send(const std::shared_ptr<const std::string>& data, bool binary) = 0;
+  virtual void SendAudio(const std::shared_ptr<const std::string>& data) = 0;
+  virtual bool audio() const = 0;  // open and asked for audio
   virtual const std::string& client() const = 0;
   virtual void Close() = 0;
 };
@@ -115,21 +117,35 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
       }
       --credit_;
       ++queued_frames_;
-    } else if (queue_.size() - queued_frames_ >= ViewServer::kMaxQueuedTexts) {
+    } else if (queue_.size() - queued_frames_ - queued_audio_ >= ViewServer::kMaxQueuedTexts) {
       // A page that stops reading its replies: drop it rather than queue without bound.
       ++server_.owner->clients_dropped_;
       spdlog::warn("view: a page stopped reading; closing it");
       Close();
       return;
     }
-    queue_.push_back({data, binary});
+    queue_.push_back({data, binary, false});
     if (queue_.size() == 1) DoWrite();
   }
+
+  void SendAudio(const std::shared_ptr<const std::string>& data) override {
+    if (!open_ || !audio_) return;
+    if (queued_audio_ >= server_.config.max_queued_audio) {
+      ++server_.owner->audio_dropped_;
+      return;
+    }
+    ++queued_audio_;
+    queue_.push_back({data, true, true});
+    if (queue_.size() == 1) DoWrite();
+  }
+
+  bool audio() const override { return open_ && audio_; }
 
  private:
   struct Item {
     std::shared_ptr<const std::string> data;
     bool binary = false;
+    bool audio = false;  // an audio block (no credit; its own bound)
   };
 
   void OnAccept(beast::error_code ec) {
@@ -179,6 +195,12 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
           DoRead();
           return;
         }
+        if (message == "audio on" || message == "audio off") {
+          audio_ = message == "audio on";
+          buffer_.consume(buffer_.size());
+          DoRead();
+          return;
+        }
         std::string reply = server_.on_client_text ? server_.on_client_text(client_, message)
                                                    : server_.on_text(message);
         if (!reply.empty()) Send(std::make_shared<const std::string>(std::move(reply)), false);
@@ -218,9 +240,14 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
       open_ = false;
       queue_.clear();
       queued_frames_ = 0;
+      queued_audio_ = 0;
       return;
     }
-    if (queue_.front().binary) --queued_frames_;
+    if (queue_.front().audio) {
+      --queued_audio_;
+    } else if (queue_.front().binary) {
+      --queued_frames_;
+    }
     queue_.pop_front();
     if (!queue_.empty() && open_) DoWrite();
   }
@@ -239,6 +266,8 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
   beast::flat_buffer buffer_;
   std::deque<Item> queue_;
   std::size_t queued_frames_ = 0;
+  std::size_t queued_audio_ = 0;
+  bool audio_ = false;  // the page asked for audio
   long credit_ = 0;  // frames this page may still be sent before it takes some
   bool open_ = false;
   std::chrono::steady_clock::time_point window_start_{};
@@ -418,6 +447,11 @@ void ViewServer::Impl::ArmTimer() {
   timer.expires_after(config.poll_period);
   timer.async_wait([this](beast::error_code ec) {
     if (ec) return;
+    std::size_t audio = 0;
+    for (const std::weak_ptr<WsSession>& w : sessions) {
+      if (const std::shared_ptr<WsSession> s = w.lock(); s && s->audio()) ++audio;
+    }
+    owner->audio_clients_.store(audio, std::memory_order_relaxed);
     if (poll) poll();
     ArmTimer();
   });
@@ -531,6 +565,17 @@ void ViewServer::BroadcastBinary(const void* data, std::size_t size) {
   auto bytes = std::make_shared<const std::string>(static_cast<const char*>(data), size);
   for (const std::weak_ptr<WsSession>& w : impl_->sessions) {
     if (const std::shared_ptr<WsSession> s = w.lock()) s->Send(bytes, true);
+  }
+}
+
+void ViewServer::BroadcastAudio(const void* data, std::size_t size) {
+  if (impl_->OpenSessions() == 0) return;
+  std::shared_ptr<const std::string> bytes;
+  for (const std::weak_ptr<WsSession>& w : impl_->sessions) {
+    if (const std::shared_ptr<WsSession> s = w.lock(); s && s->audio()) {
+      if (!bytes) bytes = std::make_shared<const std::string>(static_cast<const char*>(data), size);
+      s->SendAudio(bytes);
+    }
   }
 }
 

@@ -16,6 +16,12 @@
 // frames by credit ("credit N" after it has drawn N; ViewServerConfig::frame_credit), and the
 // server drops the frames it has no credit for.
 //
+// A second binary stream, audio (the station's audio cue blocks, view_audio.h), goes only to the
+// pages that asked for it ("audio on"; "audio off" ends it) and takes no credit: a page is
+// sent at most max_queued_audio blocks it has not read, newer blocks are dropped beyond (the
+// page sees the gap in their sequence numbers), so a slow page loses audio, never holds the
+// station.
+//
 // HTTPS (the instructor's console with --security): with tls_cert_file and tls_key_file set,
 // every connection is TLS (OpenSSL through Beast's ssl_stream), pages and WebSocket alike;
 // nothing is served in clear. Access control is the app's: a gate (SetGate) sees every
@@ -47,6 +53,9 @@ struct ViewServerConfig {
   // messages after drawing), so a slow page gets the newest frames rather than a backlog
   // held in socket buffers.
   std::size_t frame_credit = 3;
+  // Audio blocks waiting to be written to one page (view_audio.h); newer ones are dropped
+  // beyond.
+  std::size_t max_queued_audio = 8;
   // HTTPS: PEM certificate (chain) and private key; both empty: plain HTTP.
   std::string tls_cert_file;
   std::string tls_key_file;
@@ -126,6 +135,8 @@ class ViewServer {
   // Server thread only (the poll and text handlers): send to every open page.
   void BroadcastBinary(const void* data, std::size_t size);
   void BroadcastText(const std::string& text);
+  // Server thread only: send to every open page that asked for audio ("audio on").
+  void BroadcastAudio(const void* data, std::size_t size);
   std::size_t clients() const;  // server thread only
   // Server thread only: closes the WebSockets whose client (as the gate named it) `close`
   // picks (e.g. their session ended); returns how many.
@@ -135,6 +146,9 @@ class ViewServer {
   std::uint64_t messages_rejected() const { return rejected_.load(); }
   std::uint64_t frames_dropped() const { return dropped_.load(); }
   std::uint64_t clients_dropped() const { return clients_dropped_.load(); }
+  // Pages that asked for audio, as of the last poll period.
+  std::size_t audio_clients() const { return audio_clients_.load(std::memory_order_relaxed); }
+  std::uint64_t audio_dropped() const { return audio_dropped_.load(); }
 
   static constexpr std::size_t kMaxQueuedTexts = 64;
   static constexpr std::size_t kMaxCredit = 1024;
@@ -143,7 +157,8 @@ class ViewServer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::uint16_t port_ = 0;
-  std::atomic<std::uint64_t> rejected_{0}, dropped_{0}, clients_dropped_{0};
+  std::atomic<std::uint64_t> rejected_{0}, dropped_{0}, clients_dropped_{0}, audio_dropped_{0};
+  std::atomic<std::size_t> audio_clients_{0};
   friend class WsSession;
   template <class Stream>
   friend class WsSessionT;

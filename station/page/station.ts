@@ -11,6 +11,7 @@ import { SceneJson, SceneView, HIGH_DETAIL, fieldOfView } from '../../common/vie
 import { microscopeCamera, screenAxes, softwareGl } from '../../common/view/src/microscope';
 import { socketUrl } from '../../common/view/src/socket';
 import { FrameLink } from '../../common/view/src/frame_link';
+import { AudioPlayer } from '../../common/view/src/audio_player';
 
 const OUTCOMES = ['running', 'completed', 'time limit'];
 type StereoMode = 'mono' | 'anaglyph' | 'side-by-side';
@@ -130,9 +131,42 @@ async function main(): Promise<void> {
     onText(m) { if (m.type === 'error') console.warn(`station: ${m.error}`); },
     onStatus(open) {
       document.getElementById('link')!.innerHTML = open ? '' : '<span class="warn">disconnected</span>';
+      if (open) audio.relink();
     },
   });
   probe.sharedFrames = link.shared;
+
+  // The station's audio cues (the toggle: browsers start audio on a user gesture; ?audio=1
+  // tries at once). ?audio_buffer=MS: the jitter buffer's target (30), ?audio_adapt=0 keeps it
+  // fixed, ?audio_rate=HZ asks the AudioContext for that rate.
+  const num = (k: string) => (params.get(k) !== null ? Number(params.get(k)) : undefined);
+  const audio = new AudioPlayer(link, {
+    targetMs: num('audio_buffer'), adaptive: params.get('audio_adapt') !== '0', sampleRate: num('audio_rate'),
+  });
+  (window as any).__audioStats = audio;
+  const audioButton = document.getElementById('audio') as HTMLButtonElement;
+  const hudAudio = document.getElementById('audio-status')!;
+  const setAudio = async (on: boolean) => {
+    try {
+      if (on) await audio.start();
+      else await audio.stop();
+    } catch (e) {
+      hudAudio.innerHTML = `<span class="warn">audio: ${String(e)}</span>`;
+    }
+    audioButton.textContent = `audio: ${audio.stats.on ? 'on' : 'off'}`;
+  };
+  audioButton.onclick = () => { void setAudio(!audio.stats.on); };
+  if (params.get('audio') === '1') void setAudio(true);
+  const showAudio = () => {
+    const a = audio.stats;
+    if (!a.on) { hudAudio.textContent = ''; return; }
+    const j = a.jitter;
+    const f = (x: number) => (Number.isFinite(x) ? x.toFixed(1) : '–');
+    hudAudio.textContent = `audio: cause → sound p50 ${f(a.p50)} ms · p99 ${f(a.p99)} ms · ` +
+        `buffer ${j ? j.targetMs.toFixed(0) : '–'} ms · underruns ${j ? j.underruns : 0}` +
+        (a.lastMeta && a.lastMeta.toneHz > 0 ? ` · tone ${a.lastMeta.toneHz.toFixed(0)} Hz` : '');
+  };
+  setInterval(showAudio, 500);
   // The newest frame, decoded (null: none new, or a bad one, counted).
   const takeFrame = (): Frame | null => {
     const t = link.take(0);

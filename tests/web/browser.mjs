@@ -14,8 +14,10 @@ const { chromium } = require('playwright-core');
 export const CHROMIUM = process.env.MICRODEX_CHROMIUM || '/usr/bin/chromium';
 
 // A fresh profile each time; returns the context (newPage) and close(). ignoreHTTPSErrors: for
-// a console whose certificate comes from a course CA the browser does not know.
-export async function launchBrowser({ width = 1280, height = 720, ignoreHTTPSErrors = false } = {}) {
+// a console whose certificate comes from a course CA the browser does not know. extraArgs:
+// more Chromium switches (e.g. --autoplay-policy=no-user-gesture-required).
+export async function launchBrowser({ width = 1280, height = 720, ignoreHTTPSErrors = false,
+                                      extraArgs = [] } = {}) {
   if (!existsSync(CHROMIUM)) {
     throw new Error(`${CHROMIUM} not found: deploy/install-deps installs Debian's chromium`);
   }
@@ -30,7 +32,7 @@ export async function launchBrowser({ width = 1280, height = 720, ignoreHTTPSErr
       '--disable-background-networking', '--disable-component-update', '--disable-sync',
       '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
       '--disable-background-timer-throttling', '--disable-renderer-backgrounding',
-      '--disable-backgrounding-occluded-windows',
+      '--disable-backgrounding-occluded-windows', ...extraArgs,
     ],
   });
   const close = async () => {

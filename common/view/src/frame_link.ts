@@ -6,6 +6,7 @@
 // Elsewhere the main thread's own WebSocket does the same job, later.
 
 import { AppSocket } from './socket';
+import { isAudioBlock } from './audio_block';
 
 export const MAX_SLOTS = 8;
 // Header (seq i32, length i32, received-at f64) + the largest frame (view_frame.h kMaxFrameBytes).
@@ -27,6 +28,7 @@ export class FrameLink {
   private lastSeq = new Int32Array(MAX_SLOTS);
   private pending: (TakenFrame | null)[] = new Array(MAX_SLOTS).fill(null);
   private taken = 0;
+  private audioPort: MessagePort | null = null;
 
   constructor(url: string, workerUrl: string, handlers: LinkHandlers) {
     this.shared = typeof SharedArrayBuffer !== 'undefined' && (self as any).crossOriginIsolated === true;
@@ -42,6 +44,11 @@ export class FrameLink {
     } else {
       this.socket = new AppSocket(url, {
         onFrame: (data) => {
+          if (isAudioBlock(data)) {
+            const receivedMs = performance.timeOrigin + performance.now();
+            this.audioPort?.postMessage({ type: 'block', buf: data, receivedMs }, [data]);
+            return;
+          }
           ++this.taken;
           const slot = data.byteLength >= 12 ? new DataView(data).getUint32(8, true) : 0;
           if (slot < MAX_SLOTS) {
@@ -52,6 +59,13 @@ export class FrameLink {
         onStatus: handlers.onStatus,
       });
     }
+  }
+
+  // Where the station's audio blocks go (the AudioWorklet's end of a MessageChannel); with the
+  // worker, they go there straight from the worker.
+  setAudioPort(port: MessagePort): void {
+    if (this.worker) this.worker.postMessage({ type: 'audio-port', port }, [port]);
+    else this.audioPort = port;
   }
 
   send(text: string): boolean {

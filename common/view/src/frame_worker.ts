@@ -1,15 +1,19 @@
 // The frame worker (frame_link.ts): owns the page's WebSocket, writes each binary frame into
 // its SharedArrayBuffer slot the moment it arrives, and returns the credit of the frames
-// received whenever the page has drawn; text messages go to the page.
+// received whenever the page has drawn; text messages go to the page. Audio blocks
+// (audio_block.ts) go straight to the page's AudioWorklet through the port the page handed
+// over, stamped with their arrival, never through the page's busy main thread.
 import { writeSlot } from './frame_link';
+import { isAudioBlock } from './audio_block';
 
 let ws: WebSocket | null = null;
 let sab: SharedArrayBuffer | null = null;
 let url = '';
 let delayMs = 250;
 let received = 0; // frames since the page last drew
+let audioPort: MessagePort | null = null;
 // Counters for diagnosis (a test can read them from the worker).
-const stats = { frames: 0, credited: 0, drew: 0, texts: 0, refused: 0, error: '' };
+const stats = { frames: 0, credited: 0, drew: 0, texts: 0, refused: 0, audio: 0, error: '' };
 (self as any).microdexWorker = stats;
 
 function connect(): void {
@@ -26,8 +30,14 @@ function connect(): void {
       }
       return;
     }
+    const receivedMs = performance.timeOrigin + performance.now();
+    if (isAudioBlock(e.data as ArrayBuffer)) {
+      ++stats.audio;
+      audioPort?.postMessage({ type: 'block', buf: e.data, receivedMs }, [e.data as ArrayBuffer]);
+      return;
+    }
     try {
-      if (!writeSlot(sab!, e.data as ArrayBuffer, performance.timeOrigin + performance.now())) {
+      if (!writeSlot(sab!, e.data as ArrayBuffer, receivedMs)) {
         ++stats.refused;
       }
     } catch (err) {
@@ -50,6 +60,8 @@ self.onmessage = (e: MessageEvent) => {
     sab = m.sab;
     url = m.url;
     connect();
+  } else if (m.type === 'audio-port') {
+    audioPort = m.port;
   } else if (m.type === 'send' && ws && ws.readyState === WebSocket.OPEN) {
     ws.send(m.text);
   } else if (m.type === 'drew') {
