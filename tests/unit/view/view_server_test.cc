@@ -27,6 +27,7 @@ using tcp = asio::ip::tcp;
 struct Fixture {
   std::atomic<int> polls{0};
   std::atomic<bool> broadcast{false};
+  std::atomic<int> audio_burst{0};  // audio messages of 64 KiB to broadcast at the next poll
   std::unique_ptr<ViewServer> server;
 
   Fixture() {
@@ -47,6 +48,10 @@ struct Fixture {
           if (broadcast.exchange(false)) {
             const std::string frame(100, 'f');
             for (int i = 0; i < 5; ++i) server->BroadcastBinary(frame.data(), frame.size());
+          }
+          if (const int n = audio_burst.exchange(0); n > 0) {
+            const std::string audio(65536, 'a');
+            for (int i = 0; i < n; ++i) server->BroadcastAudio(audio.data(), audio.size());
           }
         },
         [](const std::string& m) -> std::string {
@@ -156,6 +161,60 @@ TEST(ViewServer, FramesNeedCredit) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   EXPECT_EQ(f.server->frames_dropped(), 7u);
+}
+
+// Audio goes only to the pages that asked ("audio on"), without frame credit; a page that
+// stops reading loses audio beyond max_queued_audio (8) instead of queueing it.
+TEST(ViewServer, AudioOnlyToPagesThatAskAndBounded) {
+  Fixture f;
+  asio::io_context ioc;
+  websocket::stream<tcp::socket> asks(ioc), quiet(ioc);
+  for (auto* ws : {&asks, &quiet}) {
+    ws->next_layer().connect(
+        tcp::endpoint(asio::ip::make_address("127.0.0.1"), f.server->port()));
+    ws->handshake("127.0.0.1", "/ws");
+  }
+  asks.text(true);
+  asks.write(asio::buffer(std::string("audio on")));
+  for (int i = 0; i < 100 && f.server->audio_clients() != 1; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(f.server->audio_clients(), 1u);
+  f.audio_burst = 3;
+  beast::flat_buffer buffer;
+  for (int i = 0; i < 3; ++i) {
+    asks.read(buffer);
+    EXPECT_TRUE(asks.got_binary());
+    EXPECT_EQ(buffer.size(), 65536u);
+    buffer.consume(buffer.size());
+  }
+  // The other page gets none: its next message is the reply to its own request.
+  quiet.text(true);
+  quiet.write(asio::buffer(std::string("hello")));
+  quiet.read(buffer);
+  EXPECT_TRUE(quiet.got_text());
+  buffer.consume(buffer.size());
+  EXPECT_EQ(f.server->audio_dropped(), 0u);
+  // The asking page stops reading: 64 MiB offered, at most 8 blocks queue beyond the socket's
+  // buffers, the rest is dropped.
+  for (int burst = 0; burst < 16; ++burst) {
+    f.audio_burst = 64;
+    for (int i = 0; i < 100 && f.audio_burst != 0; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  }
+  for (int i = 0; i < 100 && f.server->audio_dropped() < 700; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_GE(f.server->audio_dropped(), 700u);
+  EXPECT_EQ(f.server->frames_dropped(), 0u);
+  EXPECT_EQ(f.server->clients_dropped(), 0u);
+  // "audio off": no longer counted.
+  asks.write(asio::buffer(std::string("audio off")));
+  for (int i = 0; i < 100 && f.server->audio_clients() != 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(f.server->audio_clients(), 0u);
 }
 
 TEST(ViewServer, OversizedMessageDropsTheConnection) {
