@@ -103,8 +103,7 @@ void AudioBlockStream::Add(const TickSnapshot& s, bool wanted) {
     if ((f.active & cues::CueBit(cues::CueKind::kAudioError)) != 0 && f.error != last_.error) {
       cause |= view::kCauseError;
     }
-    if ((f.active & cues::CueBit(cues::CueKind::kPredictive)) != 0 &&
-        f.warning != last_.warning) {
+    if ((f.active & cues::CueBit(cues::CueKind::kPredictive)) != 0 && f.warning != last_.warning) {
       cause |= view::kCauseWarning;
     }
   }

@@ -19,8 +19,8 @@ StationView::StationView(const scene::SceneModel& scene, int port, const std::st
     : device_(device), scene_json_(view::SceneViewJson(scene)) {
   info_json_ = "{\"station_id\":" + view::JsonQuote(station_id) +
                ",\"device\":" + (device != nullptr ? "\"page\"" : "\"watch\"") + "}";
-  std::map<std::string, view::WebFile> files =
-      view::LoadWebFiles(web_dir, {"station.html", "station.js", "frame_worker.js", "audio_worklet.js"});
+  std::map<std::string, view::WebFile> files = view::LoadWebFiles(
+      web_dir, {"station.html", "station.js", "frame_worker.js", "audio_worklet.js"});
   files["/"] = files["/station.html"];
   view::ViewServerConfig config;
   config.port = static_cast<std::uint16_t>(port);

@@ -15,9 +15,9 @@
 #include <string>
 
 #include "common/scene/scene.h"
+#include "common/view/view_audio.h"
 #include "common/view/view_frame.h"
 #include "common/view/view_server.h"
-#include "common/view/view_audio.h"
 #include "station/page_device.h"
 #include "station/rt/spsc_ring.h"
 #include "station/rt/triple_buffer.h"

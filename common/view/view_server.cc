@@ -268,7 +268,7 @@ class WsSessionT : public WsSession, public std::enable_shared_from_this<WsSessi
   std::size_t queued_frames_ = 0;
   std::size_t queued_audio_ = 0;
   bool audio_ = false;  // the page asked for audio
-  long credit_ = 0;  // frames this page may still be sent before it takes some
+  long credit_ = 0;     // frames this page may still be sent before it takes some
   bool open_ = false;
   std::chrono::steady_clock::time_point window_start_{};
   std::size_t window_messages_ = 0;

@@ -170,8 +170,7 @@ TEST(ViewServer, AudioOnlyToPagesThatAskAndBounded) {
   asio::io_context ioc;
   websocket::stream<tcp::socket> asks(ioc), quiet(ioc);
   for (auto* ws : {&asks, &quiet}) {
-    ws->next_layer().connect(
-        tcp::endpoint(asio::ip::make_address("127.0.0.1"), f.server->port()));
+    ws->next_layer().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), f.server->port()));
     ws->handshake("127.0.0.1", "/ws");
   }
   asks.text(true);
