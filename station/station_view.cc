@@ -1,5 +1,6 @@
 #include "station/station_view.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -35,6 +36,9 @@ StationView::StationView(const scene::SceneModel& scene, int port, const std::st
       server_->BroadcastBinary(frames_.front().bytes.data(), frames_.front().size);
     view::AudioBlock block;
     while (audio_.TryPop(block)) {
+      block.sent_ms = std::chrono::duration<double, std::milli>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
       const std::string bytes = view::EncodeAudioBlock(block);
       server_->BroadcastAudio(bytes.data(), bytes.size());
     }

@@ -41,6 +41,7 @@ std::string EncodeAudioBlock(const AudioBlock& b) {
   Put<float>(out, 68, b.clearance_m);
   Put<float>(out, 72, b.geiger_rate_hz);
   Put<std::uint32_t>(out, 76, b.cause_offset);
+  Put<double>(out, 80, b.sent_ms);
   std::memcpy(out.data() + kAudioHeaderBytes, b.pcm.data(), 4 * n);
   return out;
 }
@@ -49,7 +50,7 @@ AudioBlock DecodeAudioBlock(const void* data, std::size_t size) {
   const auto* p = static_cast<const std::uint8_t*>(data);
   if (size < kAudioHeaderBytes) {
     throw std::invalid_argument("audio block: " + std::to_string(size) +
-                                " bytes, shorter than its header (80)");
+                                " bytes, shorter than its header (88)");
   }
   if (Get<std::uint32_t>(p, 0) != kAudioMagic) {
     throw std::invalid_argument("audio block: not an audio block (magic)");
@@ -81,6 +82,7 @@ AudioBlock DecodeAudioBlock(const void* data, std::size_t size) {
   b.clearance_m = Get<float>(p, 68);
   b.geiger_rate_hz = Get<float>(p, 72);
   b.cause_offset = Get<std::uint32_t>(p, 76);
+  b.sent_ms = Get<double>(p, 80);
   if (b.cause_offset != kCauseBefore && b.cause_offset >= b.samples) {
     throw std::invalid_argument("audio block: cause at sample " + std::to_string(b.cause_offset) +
                                 " of " + std::to_string(b.samples));

@@ -16,7 +16,8 @@
 //                 no wall), f32 the Geiger counter's mean rate (Hz; 0: silent), u32 the index
 //                 of the cause step's first sample in this block (kCauseBefore: the cause came
 //                 before this block)
-//   bytes 80..    n f32 samples in [−1, 1], mono
+//   bytes 80..87  f64 when the station's view server sent it (CLOCK_REALTIME, ms)
+//   bytes 88..    n f32 samples in [−1, 1], mono
 // The pitch, clearance and rate are those of the block's last step. Little-endian throughout.
 
 #include <array>
@@ -28,7 +29,7 @@ namespace microdex::view {
 
 inline constexpr std::uint32_t kAudioMagic = 0x4158444d;  // "MDXA" read as little-endian u32
 inline constexpr std::uint16_t kAudioVersion = 1;
-inline constexpr std::size_t kAudioHeaderBytes = 80;
+inline constexpr std::size_t kAudioHeaderBytes = 88;
 inline constexpr std::size_t kMaxAudioBlockSamples = 1024;
 inline constexpr std::size_t kMaxAudioBlockBytes = kAudioHeaderBytes + 4 * kMaxAudioBlockSamples;
 
@@ -62,6 +63,7 @@ struct AudioBlock {
   float clearance_m = 0;
   float geiger_rate_hz = 0;
   std::uint32_t cause_offset = kCauseBefore;
+  double sent_ms = 0;
   std::array<float, kMaxAudioBlockSamples> pcm{};
 };
 

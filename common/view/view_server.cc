@@ -355,6 +355,10 @@ class HttpSessionT : public std::enable_shared_from_this<HttpSessionT<Stream>> {
         return;
       }
       beast::get_lowest_layer(stream_).expires_never();
+      // Frames and audio blocks are small messages that should leave at once: no Nagle delay
+      // behind an unacknowledged one.
+      beast::error_code nodelay_ec;
+      beast::get_lowest_layer(stream_).socket().set_option(tcp::no_delay(true), nodelay_ec);
       auto ws = std::make_shared<WsSessionT<Stream>>(std::move(stream_), server_, client);
       ws->GrantInitialCredit();
       server_.sessions.push_back(ws);

@@ -4,7 +4,7 @@
 
 export const AUDIO_MAGIC = 0x4158444d; // "MDXA"
 export const AUDIO_VERSION = 1;
-export const AUDIO_HEADER_BYTES = 80;
+export const AUDIO_HEADER_BYTES = 88;
 export const MAX_AUDIO_BLOCK_SAMPLES = 1024;
 
 export const AUDIO_START = 1; // the first block after silence
@@ -33,6 +33,7 @@ export interface AudioBlockMeta {
   clearanceM: number;
   geigerRateHz: number;
   causeOffset: number; // index of the cause step's first sample here, or CAUSE_BEFORE
+  sentMs: number; // when the station's view server sent it (CLOCK_REALTIME)
   receivedMs: number; // when the page received it (performance.timeOrigin + now)
 }
 
@@ -93,6 +94,7 @@ export function decodeAudioBlock(buf: ArrayBuffer, receivedMs = 0): AudioBlock {
       clearanceM: v.getFloat32(68, true),
       geigerRateHz: v.getFloat32(72, true),
       causeOffset,
+      sentMs: v.getFloat64(80, true),
       receivedMs,
     },
     pcm,

@@ -63,6 +63,7 @@ export class AudioPlayer {
     causeMs: [] as number[], // cause → sound, blocks with their cause in them
     blockMs: [] as number[], // first sample's tick → its sound
     transportMs: [] as number[], // first sample's tick → page receive
+    stationMs: [] as number[], // first sample's tick → sent by the station's view server
     waitMs: [] as number[], // receive → rendered (jitter buffer)
     lastMeta: null as AudioBlockMeta | null,
     p50: NaN,
@@ -115,6 +116,7 @@ export class AudioPlayer {
   resetFigures(): void {
     const s = this.stats;
     s.causeMs.length = s.blockMs.length = s.transportMs.length = s.waitMs.length = 0;
+    s.stationMs.length = 0;
   }
 
   // The epoch ms at which context frame `frame` reaches the output.
@@ -159,6 +161,7 @@ export class AudioPlayer {
     const transport = meta.receivedMs - meta.firstStampMs;
     s.blockMs.push(block);
     s.transportMs.push(transport);
+    s.stationMs.push(meta.sentMs - meta.firstStampMs);
     s.waitMs.push(block - transport - s.baseLatencyMs - s.outputLatencyMs);
     if (meta.causeOffset !== CAUSE_BEFORE) {
       s.causeMs.push(this.heardMs(m.frame + meta.causeOffset * ratio) - meta.causeStampMs);
@@ -176,6 +179,7 @@ export class AudioPlayer {
       causeP50: q(s.causeMs, 0.5), causeP99: q(s.causeMs, 0.99), causeN: s.causeMs.length,
       blockP50: q(s.blockMs, 0.5), blockP99: q(s.blockMs, 0.99),
       transportP50: q(s.transportMs, 0.5), transportP99: q(s.transportMs, 0.99),
+      stationP50: q(s.stationMs, 0.5), stationP99: q(s.stationMs, 0.99),
       waitP50: q(s.waitMs, 0.5), waitP99: q(s.waitMs, 0.99),
       baseLatencyMs: s.baseLatencyMs, outputLatencyMs: s.outputLatencyMs,
     };

@@ -29,6 +29,7 @@ AudioBlock MakeBlock() {
   b.clearance_m = 3.25e-4f;
   b.geiger_rate_hz = 0;
   b.cause_offset = 308;
+  b.sent_ms = 1'764'000'000'141.5;
   for (std::uint32_t i = 0; i < b.samples; ++i) {
     b.pcm[i] = static_cast<float>(0.5 * std::sin(0.1 * i));
   }
@@ -59,6 +60,7 @@ TEST(ViewAudio, RoundTrip) {
   EXPECT_EQ(At<std::uint32_t>(bytes, 56), kCauseProximity | kCauseClick);
   EXPECT_EQ(At<float>(bytes, 64), 1650.5f);
   EXPECT_EQ(At<std::uint32_t>(bytes, 76), 308u);
+  EXPECT_EQ(At<double>(bytes, 80), b.sent_ms);
   EXPECT_EQ(At<float>(bytes, kAudioHeaderBytes + 4 * 440), b.pcm[440]);
 
   const AudioBlock d = DecodeAudioBlock(bytes.data(), bytes.size());
@@ -76,6 +78,7 @@ TEST(ViewAudio, RoundTrip) {
   EXPECT_EQ(d.clearance_m, b.clearance_m);
   EXPECT_EQ(d.geiger_rate_hz, b.geiger_rate_hz);
   EXPECT_EQ(d.cause_offset, b.cause_offset);
+  EXPECT_EQ(d.sent_ms, b.sent_ms);
   for (std::uint32_t i = 0; i < b.samples; ++i) ASSERT_EQ(d.pcm[i], b.pcm[i]) << i;
 }
 
@@ -103,7 +106,7 @@ void ExpectRefused(const std::string& bytes, const std::string& reason) {
 
 TEST(ViewAudio, MalformedBlocksAreRefused) {
   const std::string good = EncodeAudioBlock(MakeBlock());
-  ExpectRefused(good.substr(0, 79), "shorter than its header");
+  ExpectRefused(good.substr(0, 87), "shorter than its header");
   ExpectRefused(good.substr(0, good.size() - 4), "441 samples in");
   ExpectRefused(good + "abcd", "441 samples in");
   std::string s = good;

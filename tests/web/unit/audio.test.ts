@@ -35,6 +35,7 @@ function encode(p: BlockParts): ArrayBuffer {
   v.setFloat32(64, p.toneHz ?? 1000, true);
   v.setFloat32(68, 3e-4, true);
   v.setUint32(76, p.causeOffset ?? CAUSE_BEFORE, true);
+  v.setFloat64(80, 1.764e12 + step + 12.5, true);
   new Float32Array(buf, AUDIO_HEADER_BYTES, p.pcm.length).set(p.pcm);
   return buf;
 }
@@ -60,6 +61,7 @@ test('an audio block decodes to its fields and a view of its samples', () => {
   assert.ok(Math.abs(b.meta.clearanceM - 3e-4) < 1e-9);
   assert.equal(b.meta.receivedMs, 42);
   assert.equal(b.meta.causeStampMs - b.meta.firstStampMs, 9);
+  assert.equal(b.meta.sentMs - b.meta.firstStampMs, 12.5);
   assert.equal(b.pcm.length, 441);
   assert.equal(b.pcm[100], Math.fround(pcm[100]));
 });
@@ -68,7 +70,7 @@ test('malformed audio blocks are refused with their reason', () => {
   const good = encode({ seq: 1, pcm: sine(1000, 44100, 441) });
   const refused = (buf: ArrayBuffer, reason: RegExp) =>
     assert.throws(() => decodeAudioBlock(buf), (e: unknown) => e instanceof AudioBlockError && reason.test((e as Error).message));
-  refused(good.slice(0, 79), /shorter than its header/);
+  refused(good.slice(0, 87), /shorter than its header/);
   refused(good.slice(0, good.byteLength - 4), /441 samples in/);
   const edit = (f: (v: DataView) => void) => { const c = good.slice(0); f(new DataView(c)); return c; };
   refused(edit((v) => v.setUint32(0, 0x4658444d, true)), /bad magic/);
