@@ -101,8 +101,10 @@ async function pass(page, query) {
   const underruns = c1.underruns - c0.underruns;
   const gaps = c1.gaps - c0.gaps;
   const skips = c1.skips - c0.skips;
+  const trims = c1.trims - c0.trims;
   console.log(`${tag}: ${played} blocks played in ${elapsedS.toFixed(1)} s; underruns ${underruns}, ` +
-              `missing blocks ${gaps}, skips ${skips}, buffer target ${c1.targetMs} ms`);
+              `missing blocks ${gaps}, skips ${skips}, trims ${trims} (${(c1.trimmedMs - c0.trimmedMs).toFixed(0)} ms), ` +
+              `buffer target ${c1.targetMs} ms`);
   check(played >= 0.7 * 100 * elapsedS, `${tag}: blocks played at about 100 per second (${played} in ${elapsedS.toFixed(1)} s)`);
   check(c1.bad === 0, `${tag}: every block decodes`);
   // A few glitches are allowed on this shared machine (other jobs starve the browser now and
@@ -124,7 +126,7 @@ async function pass(page, query) {
   await waitFor(() => page.evaluate(() => window.__audioStats.stats.on === false && !window.__audioStats.ctx),
                 'audio off', 5000);
   check(errors.length === 0, `${tag}: no page errors (${errors.join('; ')})`);
-  report.passes.push({ query, ctxInfo, elapsedS, played, underruns, gaps, skips, figures, stats, analyses });
+  report.passes.push({ query, ctxInfo, elapsedS, played, underruns, gaps, skips, trims, figures, stats, analyses });
 }
 
 try {

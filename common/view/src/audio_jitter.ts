@@ -4,8 +4,10 @@
 // differ), starting once `targetMs` of sound is buffered. Running dry in the middle of a stream
 // is an underrun: silence, counted, and buffering again (adaptive: the target grows by
 // `stepMs` up to `maxMs` after an underrun and shrinks back by `stepMs` after `relaxS` without
-// one). A buffer that has grown past `targetMs + slackMs` (the station's clock ahead of the
-// audio clock, or a burst after a stall) skips ahead to the target. Gaps in the blocks' sequence
+// one). A buffer that has grown past `targetMs + slackMs` (a burst after a stall) skips ahead
+// to the target at once; one whose lowest fill over `trimS` of playing stayed more than
+// `trimMs` above the target (the latency left from an earlier, larger target, or the station's
+// clock running ahead of the audio clock) drops that excess, so the delay comes back down. Gaps in the blocks' sequence
 // numbers (blocks dropped by a slow page's link) are counted. Nothing allocates per sample.
 
 import { AUDIO_END, AUDIO_START, AudioBlockMeta } from './audio_block';
@@ -19,6 +21,8 @@ export interface JitterOptions {
   adaptive?: boolean; // default true
   slackMs?: number; // over-full beyond target + slack: skip (default max(target, 40))
   capacityS?: number; // ring capacity in seconds of source audio (default 2)
+  trimS?: number; // window of the lowest fill (default 1)
+  trimMs?: number; // excess over the target that is dropped (default 10)
 }
 
 // A block whose first sample went out in a pull: its metadata and the output frame (context
@@ -32,6 +36,8 @@ export interface JitterStats {
   gaps: number; // blocks missing between sequence numbers
   skips: number; // over-full buffer skipped ahead
   skippedMs: number;
+  trims: number; // excess dropped after a window with the fill above the target
+  trimmedMs: number;
   overflows: number; // blocks refused by a full ring
   targetMs: number;
   fillMs: number;
@@ -57,6 +63,10 @@ export class JitterBuffer {
   private readonly adaptive: boolean;
   private readonly slackMs: number | undefined;
   private readonly capacityS: number;
+  private readonly trimS: number;
+  private readonly trimMs: number;
+  private windowS = 0; // playing time in the current trim window
+  private minFill = Infinity; // lowest fill in it (source samples)
 
   constructor(private readonly opts: JitterOptions) {
     this.baseMs = opts.targetMs ?? 30;
@@ -66,9 +76,11 @@ export class JitterBuffer {
     this.adaptive = opts.adaptive ?? true;
     this.slackMs = opts.slackMs;
     this.capacityS = opts.capacityS ?? 2;
+    this.trimS = opts.trimS ?? 1;
+    this.trimMs = opts.trimMs ?? 10;
     this.ring = new Float32Array(0);
     this.stats = { blocks: 0, played: 0, underruns: 0, gaps: 0, skips: 0, skippedMs: 0,
-                   overflows: 0, targetMs: this.baseMs, fillMs: 0, state: 'idle' };
+                   overflows: 0, trims: 0, trimmedMs: 0, targetMs: this.baseMs, fillMs: 0, state: 'idle' };
   }
 
   get fill(): number { return this.written - this.read; }
@@ -119,6 +131,22 @@ export class JitterBuffer {
       // Start once the target is buffered (or the stream ended short of it).
       if (this.fill < st.targetMs * msToSamples && !this.ended) return;
       st.state = 'playing';
+      this.windowS = 0;
+      this.minFill = Infinity;
+    }
+    // The lowest fill of each window: more than trimMs above the target all along is delay
+    // that no jitter needed.
+    this.minFill = Math.min(this.minFill, this.fill);
+    this.windowS += quantumS;
+    if (this.windowS >= this.trimS) {
+      const excess = this.minFill - st.targetMs * msToSamples;
+      if (excess > this.trimMs * msToSamples && !this.ended) {
+        this.read += excess;
+        ++st.trims;
+        st.trimmedMs += excess / msToSamples;
+      }
+      this.windowS = 0;
+      this.minFill = Infinity;
     }
     const slack = this.slackMs ?? Math.max(st.targetMs, 40);
     if (this.fill > (st.targetMs + slack) * msToSamples) {

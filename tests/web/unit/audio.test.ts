@@ -225,3 +225,35 @@ test('the adaptive target shrinks back after a quiet spell', () => {
   for (let i = 0; i < 400; ++i) jb.pull(q, i * 128, played); // 1.16 s without underrun
   assert.equal(jb.stats.targetMs, 40);
 });
+
+test('delay left above the target is trimmed after a window', () => {
+  // 100 ms arrive before playing starts (target 30, no skip below 200 ms), then one block per
+  // 10 ms: the lowest fill stays ~90 ms, so after a second the excess over 30 ms is dropped.
+  const jb = new JitterBuffer({ outRate: 44100, targetMs: 30, adaptive: false, slackMs: 200, trimS: 1, trimMs: 10 });
+  const played: PlayedBlock[] = [];
+  const q = new Float32Array(128);
+  let seq = 0;
+  const push = () => {
+    const b = decodeAudioBlock(encode({ seq, pcm: sine(1000, 44100, 441, seq * 441) }));
+    jb.push(b.meta, b.pcm);
+    ++seq;
+  };
+  for (let i = 0; i < 10; ++i) push();
+  let frame = 0;
+  const fills: number[] = [];
+  while (frame < 44100 * 2) {
+    while (seq - 10 < frame / 441) push(); // steady arrival after the first 100 ms
+    jb.pull(q, frame, played);
+    fills.push(jb.stats.fillMs);
+    frame += 128;
+  }
+  assert.equal(jb.stats.trims, 1);
+  assert.ok(jb.stats.trimmedMs > 55 && jb.stats.trimmedMs < 75, `trimmed ${jb.stats.trimmedMs} ms`);
+  assert.equal(jb.stats.underruns, 0);
+  const late = fills.slice(-100);
+  // The fill after each quantum: the target less one quantum (2.9 ms) at the trough, one
+  // block (10 ms) more at the peak.
+  const quantumMs = (128 / 44100) * 1000;
+  assert.ok(Math.min(...late) >= 30 - quantumMs - 0.1 && Math.max(...late) <= 40 + 0.1,
+            `fill ${Math.min(...late)}..${Math.max(...late)} ms`);
+});
