@@ -14,6 +14,8 @@
 //                 polyline role, r, g, b, a, width (m), point count, then x, y, z per point;
 //                 per label role, r, g, b, a, x, y, z, then 32 bytes of text (NUL-padded)
 // Little-endian throughout (x86-64 and every browser's typed arrays on it).
+// The other binary message on the station's WebSocket, its audio cue blocks (magic "MDXA"), is
+// laid out in view_audio.h.
 
 #include <array>
 #include <cstddef>
