@@ -475,7 +475,7 @@ void ToMsg(const ToolState& in, msg::ToolState& out) {
   out.f_T_W(V(in.f_T_W));
   out.tremor_rms_m(in.tremor_rms_m);
   out.active_cues(ActiveCuesToMsg(in.active_cues));
-  out.has_second_tool(in.has_second_tool);
+  out.has_second_tool(in.has_second_tool ? 1 : 0);
   out.p_WT2(V(in.p_WT2));
   out.q_WT2(Q(in.q_WT2));
   out.f_T2_W(V(in.f_T2_W));
@@ -495,7 +495,8 @@ bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
   if (!ActiveCuesFromMsg(in.active_cues(), &out.active_cues)) {
     c.Fail("active_cues: a bit that names no cue kind");
   }
-  out.has_second_tool = in.has_second_tool();
+  if (in.has_second_tool() > 1) c.Fail("has_second_tool: expected 0 or 1");
+  out.has_second_tool = in.has_second_tool() == 1;
   if (out.has_second_tool) {
     c.Finite(in.p_WT2(), "p_WT2");
     c.Unit(in.q_WT2(), "q_WT2");

@@ -319,7 +319,10 @@ TEST(NetConvert, SecondToolCrossesAndIsCheckedOnlyWhenPresent) {
   EXPECT_FALSE(FromMsg(m, out, &why));
   EXPECT_NE(why.find("p_WT2"), std::string::npos) << why;
   // Without a second tool its fields are ignored (a one-handed station sends zeros).
-  m.has_second_tool(false);
+  m.has_second_tool(7);
+  EXPECT_FALSE(FromMsg(m, out, &why));
+  EXPECT_NE(why.find("has_second_tool"), std::string::npos) << why;
+  m.has_second_tool(0);
   m.q_WT2({0, 0, 0, 0});
   ASSERT_TRUE(FromMsg(m, out, &why)) << why;
   EXPECT_FALSE(out.has_second_tool);
