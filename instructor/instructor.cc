@@ -91,6 +91,9 @@ struct Instructor::Dds {
   dds::WaitSet waitset;
   dds::GuardCondition guard;
   std::map<std::string, std::string> instance_to_station;  // StationInfo instance → id
+  // Station id → its current run's StationInfo writer: the departure or loss of an earlier
+  // run's writer (a station restarted under the same id) does not end the current run.
+  std::map<std::string, std::string> current_info_writer;
   // Recording: one type support per recorded topic (record::TopicIndex order) to serialize
   // the samples again, and one payload buffer reused for every sample.
   std::vector<std::unique_ptr<dds::TopicDataType>> types;
@@ -147,10 +150,10 @@ Instructor::Instructor(const InstructorOptions& options)
   d.overlay = d.context->CreateReader<msg::CueOverlayPubSubType>(spec(net::kCueOverlayTopic));
   d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
   if (recorder_) {
-    // DeviceForce is best-effort and latest-only like the mirrored states: read with the
-    // recording mirror reader's deep history so that none is replaced before it is taken.
+    // DeviceForce: the bridge's writer is best-effort and latest-only; read with a deep
+    // best-effort history so that none is replaced before it is taken.
     net::TopicSpec force = net::kDeviceForceTopic;
-    force.reader_profile = "microdex_mirror_record_reader";
+    force.reader_profile = "microdex_force_record_reader";
     d.force = d.context->CreateReader<msg::DeviceForcePubSubType>(force);
   }
   for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry,
@@ -290,6 +293,7 @@ void Instructor::HandleStationInfo() {
     if (si.valid_data) {
       dds_->instance_to_station[HandleKey(si.instance_handle)] = info.header.station_id;
       writer_to_station_[HandleKey(si.publication_handle)] = info.header.station_id;
+      dds_->current_info_writer[info.header.station_id] = HandleKey(si.publication_handle);
       StationView& v = ViewFor(info.header.station_id);
       const bool known = v.info.header.session_id.size() > 0;
       if (known && v.presence != Presence::kAlive) ++v.comebacks;
@@ -301,6 +305,10 @@ void Instructor::HandleStationInfo() {
     }
     auto it = dds_->instance_to_station.find(HandleKey(si.instance_handle));
     if (it == dds_->instance_to_station.end()) continue;
+    if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE &&
+        dds_->current_info_writer[it->second] != HandleKey(si.publication_handle)) {
+      continue;  // an earlier run's departure, arriving after the current run's StationInfo
+    }
     StationView& v = ViewFor(it->second);
     if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
       if (v.presence != Presence::kDeparted) v.presence_changed_ns = now;
@@ -321,8 +329,11 @@ void Instructor::HandleLiveliness() {
   // silence watchdog (CheckSilence) is the last resort.
   if (status.not_alive_count_change <= 0 && status.alive_count_change >= 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = writer_to_station_.find(HandleKey(status.last_publication_handle));
+  const std::string writer = HandleKey(status.last_publication_handle);
+  auto it = writer_to_station_.find(writer);
   if (it == writer_to_station_.end()) return;
+  // An earlier run's writer gone (a station restarted under the same id): not this run's loss.
+  if (dds_->current_info_writer[it->second] != writer) return;
   MarkLost(ViewFor(it->second), LossSignal::kLiveliness, MonotonicNowNs());
 }
 
@@ -508,6 +519,45 @@ std::uint64_t Instructor::SendCue(const std::string& station_id, cues::CueKind k
   }
   dds_->guard.set_trigger_value(true);
   return c.cue_id;
+}
+
+std::vector<std::uint64_t> Instructor::SendCondition(const std::string& station_id,
+                                                     const std::string& station_session,
+                                                     const std::vector<cues::CueArg>& cues) {
+  if (station_id.empty() || station_id == net::kAllStations ||
+      station_id.size() > net::kMaxIdLength) {
+    throw std::invalid_argument("condition target: expected a station id");
+  }
+  if (station_session.empty() || station_session.size() > net::kMaxIdLength) {
+    throw std::invalid_argument("condition target: expected the station's session id");
+  }
+  if (cues.size() > net::kMaxConditionSize) {
+    throw std::invalid_argument("condition: more than " + std::to_string(net::kMaxConditionSize) +
+                                " cues");
+  }
+  std::vector<cues::CueArg> commands = cues;
+  if (commands.empty()) commands.push_back({cues::CueKind::kClear, 0, false});  // "no cue"
+  std::vector<std::uint64_t> ids;
+  std::vector<net::CueCommand> out;
+  for (const cues::CueArg& a : commands) {
+    net::CueCommand c;
+    c.header = {station_id, session_id_, 0, RealtimeNowNs()};
+    c.cue_id = next_cue_id_++;
+    c.kind = a.kind;
+    c.param = a.off ? 0.0 : a.param;
+    c.off = a.off;
+    c.issuer = options_.issuer.substr(0, net::kMaxIdLength);
+    c.station_session = station_session;
+    c.condition_size = static_cast<std::uint32_t>(commands.size());
+    ids.push_back(c.cue_id);
+    out.push_back(std::move(c));
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queued_cues_.insert(queued_cues_.end(), out.begin(), out.end());
+  }
+  dds_->guard.set_trigger_value(true);
+  return ids;
 }
 
 std::optional<record::RecorderStats> Instructor::RecorderStats() const {

@@ -153,6 +153,15 @@ class Instructor {
   // for a bad target.
   std::uint64_t SendCue(const std::string& station_id, cues::CueKind kind, double param,
                         std::uint64_t at_step = 0, bool off = false);
+  // A trial's condition for one run of a station (`station_session`, its StationInfo's
+  // session id): its cues, or for a condition without any an explicit "no cue" (one `clear`),
+  // each sent as one of the condition's commands (CueCommand.condition_size), on receipt, so
+  // that a station started with --wait-for-condition knows when it has them all and applies
+  // them from step 0. Returns their cue ids. Throws std::invalid_argument for a bad target or
+  // more than net::kMaxConditionSize cues.
+  std::vector<std::uint64_t> SendCondition(const std::string& station_id,
+                                           const std::string& station_session,
+                                           const std::vector<cues::CueArg>& cues);
 
   // Task events of every station received since the last call, in arrival order.
   std::vector<net::TaskEvent> TakeEvents();

@@ -225,15 +225,15 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
         for (const auto& c : e.conditions) {
           if (c.name == a->second) condition = &c;
         }
-        // The condition's cues, on receipt: the trial starts with them.
-        for (const cues::CueArg& c : condition->cues) {
-          console_.SendCue(row.station, c.kind, c.param, 0, c.off);
-        }
+        // The condition for this run of the station, at least one command (an explicit "no
+        // cue" for an empty condition): a station waiting for it (--wait-for-condition)
+        // starts the trial with it in force from step 0.
+        const std::size_t sent =
+            console_.SendCondition(row.station, session, condition->cues).size();
         lines.push_back("experiment " + row.experiment + ": " + row.trainee + " trial " +
                         std::to_string(row.trial) + "/" + std::to_string(e.trials_per_trainee) +
-                        ", condition " + row.condition + " (" +
-                        std::to_string(condition->cues.size()) + " cues sent to " + row.station +
-                        ")");
+                        ", condition " + row.condition + " (" + std::to_string(sent) +
+                        (sent == 1 ? " command" : " commands") + " sent to " + row.station + ")");
       }
     }
     new_sessions.push_back(std::move(row));

@@ -54,7 +54,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                  "--device dds: workspace mapping, scaling and limits of the device(s) (YAML)");
   app.add_option("--wait-for-recorder", o.wait_for_recorder_s,
                  "before the first step, wait up to S seconds for a DeviceInput reader (a "
-                 "recording instructor) so that the recording holds every step from step 0");
+                 "recording instructor) and for a reader of each of its topics, so that the "
+                 "recording holds every sample from the first");
+  app.add_option("--wait-for-condition", o.wait_for_condition_s,
+                 "before the first step, wait up to S seconds for this run's condition from the "
+                 "instructor's experiment (its cue commands, applied from step 0); none by "
+                 "then: exit 2 naming the station and the instructor");
   microdex::net::AddDdsOptions(app, o.dds);
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,

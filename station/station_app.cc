@@ -212,6 +212,9 @@ std::string StationOptions::Validate() const {
   if (!(wait_for_recorder_s >= 0 && wait_for_recorder_s <= 600)) {
     return "--wait-for-recorder: expected 0..600 s";
   }
+  if (!(wait_for_condition_s >= 0 && wait_for_condition_s <= 600)) {
+    return "--wait-for-condition: expected 0..600 s";
+  }
   if (std::string why = dds.Validate(); !why.empty()) return "--" + why;
   return {};
 }
@@ -342,8 +345,19 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     spdlog::info("view: http://127.0.0.1:{}/", view->port());
   }
 
-  if (o.wait_for_recorder_s > 0 && !publisher.WaitForInputReader(o.wait_for_recorder_s, stop)) {
-    spdlog::warn("no DeviceInput reader after {} s: starting unrecorded", o.wait_for_recorder_s);
+  if (o.wait_for_recorder_s > 0) {
+    std::string missing;
+    if (!publisher.WaitForRecorder(o.wait_for_recorder_s, stop, &missing)) {
+      spdlog::warn("no reader of {} after {} s: starting, not every sample recorded", missing,
+                   o.wait_for_recorder_s);
+    }
+  }
+  // --wait-for-condition: the trial's cues (in the cue ring now) apply at the first step.
+  if (o.wait_for_condition_s > 0) {
+    std::string why;
+    if (!publisher.WaitForCondition(o.wait_for_condition_s, stop, &why)) {
+      throw std::runtime_error(why);
+    }
   }
 
   const auto max_steps =

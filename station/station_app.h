@@ -37,6 +37,11 @@ struct StationOptions {
   // Before the first step, wait up to this long for a DeviceInput reader to match (a recording
   // instructor): DeviceInput is volatile, so steps taken before it matched are not recorded.
   double wait_for_recorder_s = 0;
+  // Before the first step (after the recorder), wait up to this long for the instructor's
+  // condition for this run (an experiment's trial, instructor/README.md "Cue experiments"),
+  // which then applies from step 0; none by then: an error naming the station and the
+  // instructor. 0: do not wait.
+  double wait_for_condition_s = 0;
   net::DdsOptions dds;
   // The microscope view (station_view.h) on 127.0.0.1:view_port; -1: none, 0: any free port.
   int view_port = -1;

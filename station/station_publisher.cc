@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fastdds/dds/core/condition/GuardCondition.hpp>
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <thread>
 
@@ -128,7 +130,9 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
       loop_(loop),
       dds_(std::make_unique<net::DdsContext>(dds)),
       stop_guard_(std::make_unique<dds::GuardCondition>()),
-      w_(std::make_unique<Writers>()) {
+      w_(std::make_unique<Writers>()),
+      dds_where_("DDS domain " + std::to_string(dds.domain_id) +
+                 (dds.partition.empty() ? std::string() : ", partition '" + dds.partition + "'")) {
   w_->info = dds_->CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
   w_->input = dds_->CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
   w_->tool = dds_->CreateWriter<msg::ToolStatePubSubType>(net::kToolStateTopic);
@@ -203,7 +207,6 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   net::ToMsg(info, w_->info_msg);
   w_->info_handle = w_->info->register_instance(&w_->info_msg);
   w_->info->write(&w_->info_msg, w_->info_handle);
-  PublishEvent(net::TaskEventKind::kTaskStart, 0, 0, 0, scene.name);
 }
 
 StationPublisher::~StationPublisher() {
@@ -219,15 +222,76 @@ net::Header StationPublisher::MakeHeader(std::uint64_t step, std::int64_t stamp_
   return {config_.station_id, config_.session_id, step, stamp_ns};
 }
 
-bool StationPublisher::WaitForInputReader(double timeout_s, const std::atomic<bool>& stop) {
+std::vector<dds::DataWriter*> StationPublisher::RecordedWriters() const {
+  std::vector<dds::DataWriter*> out;
+  for (dds::DataWriter* w : {w_->info, w_->scene, w_->input, w_->tool, w_->overlay, w_->needle,
+                             w_->thread, w_->tissue, w_->telemetry, w_->events, w_->score}) {
+    if (w != nullptr) out.push_back(w);
+  }
+  return out;
+}
+
+bool StationPublisher::WaitForRecorder(double timeout_s, const std::atomic<bool>& stop,
+                                       std::string* missing) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   for (;;) {
-    dds::PublicationMatchedStatus status;
-    w_->input->get_publication_matched_status(status);
-    if (status.current_count > 0) return true;
-    if (stop.load() || std::chrono::steady_clock::now() >= deadline) return false;
+    // DeviceInput first (only an instructor reads it), then every other writer: each matches
+    // the instructor's reader on its own, and a sample written before its match is not
+    // delivered (volatile), nor is the final score of a writer that never matched.
+    std::string unmatched;
+    for (dds::DataWriter* w : RecordedWriters()) {
+      dds::PublicationMatchedStatus status;
+      w->get_publication_matched_status(status);
+      if (status.current_count > 0) continue;
+      unmatched = w->get_topic()->get_name();
+      if (w == w_->input) break;
+    }
+    if (unmatched.empty()) return true;
+    if (stop.load() || std::chrono::steady_clock::now() >= deadline) {
+      if (missing != nullptr) *missing = unmatched;
+      return false;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+}
+
+bool StationPublisher::WaitForCondition(double timeout_s, const std::atomic<bool>& stop,
+                                        std::string* why) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  dds::ConditionSeq active;
+  for (;;) {
+    HandleCues();
+    if (condition_size_ > 0 && condition_received_ >= condition_size_) return true;
+    if (stop.load()) return true;  // stopping anyway: no error
+    if (std::chrono::steady_clock::now() >= deadline) break;
+    w_->waitset.wait(active, eprosima::fastrtps::Duration_t(0, 50'000'000));
+  }
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%g", timeout_s);
+  std::string text = "station '" + config_.station_id + "' (session " + config_.session_id +
+                     "): --wait-for-condition " + seconds + ": no condition for this run ";
+  if (condition_size_ > 0) {
+    text += "from instructor " + condition_from_ + " within " + seconds +
+            " s: " + std::to_string(condition_received_) + " of its " +
+            std::to_string(condition_size_) + " commands received";
+  } else {
+    dds::SubscriptionMatchedStatus matched;
+    w_->cues->get_subscription_matched_status(matched);
+    text += std::string("within ") + seconds + " s from ";
+    if (!instructor_seen_.empty()) {
+      text += "instructor " + instructor_seen_ +
+              " (it sent cues to other stations: is this station's trainee in its experiment, "
+              "and does the station run its scene?)";
+    } else if (matched.current_count > 0) {
+      text += "the instructor whose cue writer matched on " + dds_where_ +
+              " (it sent no command: is it running an experiment, --experiment?)";
+    } else {
+      text += "an instructor: none found on " + dds_where_ +
+              " (no cue writer matched; start microdex-instructor --experiment first)";
+    }
+  }
+  if (why != nullptr) *why = text;
+  return false;
 }
 
 void StationPublisher::RequestStop() {
@@ -259,13 +323,28 @@ void StationPublisher::HandleCues() {
                    "malformed cue: " + why);
       continue;
     }
+    const std::string from = "'" + cue.issuer + "' (session " + cue.header.session_id + ")";
+    instructor_seen_ = from;
     if (cue.header.station_id != config_.station_id && cue.header.station_id != net::kAllStations) {
       continue;  // addressed to another station
+    }
+    if (!cue.station_session.empty() && cue.station_session != config_.session_id) {
+      continue;  // for another run of this station (transient-local history keeps them)
     }
     // A cue is applied once, even when transient-local history delivers it again.
     const auto key = std::make_pair(cue.issuer + "/" + cue.header.session_id, cue.cue_id);
     if (std::find(seen_cues_.begin(), seen_cues_.end(), key) != seen_cues_.end()) continue;
     seen_cues_.push_back(key);
+    if (cue.condition_size > 0 && !cue.station_session.empty()) {
+      // One command of this run's condition (a trial of an experiment); a condition sent
+      // again by another instructor session replaces the count.
+      if (from != condition_from_) {
+        condition_from_ = from;
+        condition_received_ = 0;
+      }
+      condition_size_ = cue.condition_size;
+      ++condition_received_;
+    }
     if (const std::string why_not = CheckCue(cue.kind, cue.param, cue.off); !why_not.empty()) {
       ++totals_.cues_rejected;
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param, why_not);
@@ -541,6 +620,9 @@ void StationPublisher::Run() {
   next_telemetry_ns_ = now + telemetry_ns;
   next_score_ns_ = now + score_ns;
   telemetry_window_start_ns_ = now;
+  // The run's first event, once the readers have matched (--wait-for-recorder): written in the
+  // constructor, before any reader matched, it was not delivered (volatile).
+  PublishEvent(net::TaskEventKind::kTaskStart, 0, 0, 0, scene_.name);
   dds::ConditionSeq active;
   while (!stop_.load()) {
     // Wake just after the next tick is due (its snapshot is then in the ring).
@@ -579,29 +661,29 @@ void StationPublisher::Goodbye() {
   PublishFrames();
   PublishScore(true);
   PublishEvent(net::TaskEventKind::kTaskEnd, last_.step, 0, final_score_.score, "");
-  // Give the reliable topics a moment to deliver the final samples to a live instructor;
-  // bounded so that a shutdown stays well within one second.
-  const eprosima::fastrtps::Duration_t wait(0, 150'000'000);
-  // The DeviceInput backlog of a recorded session (the replay source) gets longer.
-  const auto input_wait_ns = static_cast<std::int64_t>(config_.input_ack_wait_s * 1e9);
-  w_->input->wait_for_acknowledgments(
-      eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(input_wait_ns / 1'000'000'000),
-                                     static_cast<std::uint32_t>(input_wait_ns % 1'000'000'000)));
-  // A recorded session (--wait-for-recorder raises input_ack_wait_s): the final score and the
-  // task end are waited for as long, so that a recorder on a loaded machine still gets them
-  // (with 150 ms, final scores were lost at a load average of 13).
-  const eprosima::fastrtps::Duration_t final_wait =
-      config_.input_ack_wait_s > 0.15
-          ? eprosima::fastrtps::Duration_t(
-                static_cast<std::int32_t>(input_wait_ns / 1'000'000'000),
-                static_cast<std::uint32_t>(input_wait_ns % 1'000'000'000))
-          : wait;
-  w_->events->wait_for_acknowledgments(final_wait);
-  w_->score->wait_for_acknowledgments(final_wait);
+  // Wait for the final samples of every writer to be acknowledged by the readers that
+  // matched (the reliable ones: a best-effort reader acknowledges nothing and is not waited
+  // for), within one deadline for all: 150 ms, or input_ack_wait_s for a recorded station
+  // (--wait-for-recorder) so that the recorder has every step, state, event and the final
+  // score even on a loaded machine. The final score and the task end first. A dead reader
+  // costs the deadline once (until its participant's lease drops it), not once per writer.
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration<double>(std::max(config_.input_ack_wait_s, 0.15));
+  for (dds::DataWriter* w : {w_->score, w_->events, w_->input, w_->tool, w_->overlay, w_->needle,
+                             w_->thread, w_->tissue, w_->telemetry}) {
+    if (w == nullptr) continue;
+    const auto left_ns =
+        std::max<std::int64_t>(0, std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                      deadline - std::chrono::steady_clock::now())
+                                      .count());
+    w->wait_for_acknowledgments(
+        eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(left_ns / 1'000'000'000),
+                                       static_cast<std::uint32_t>(left_ns % 1'000'000'000)));
+  }
   // Departure: dispose the station's instance, then unregister it.
   w_->info->dispose(&w_->info_msg, w_->info_handle);
   w_->info->unregister_instance(&w_->info_msg, w_->info_handle);
-  w_->info->wait_for_acknowledgments(wait);
+  w_->info->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(0, 150'000'000));
 }
 
 }  // namespace microdex::station

@@ -32,8 +32,9 @@
 #include "station/snapshot.h"
 
 namespace eprosima::fastdds::dds {
+class DataWriter;
 class GuardCondition;
-}
+}  // namespace eprosima::fastdds::dds
 
 namespace microdex::station {
 
@@ -91,9 +92,17 @@ class StationPublisher {
   // Before Run(): also encode a view frame (common/view) at the mirror rate into `frames`
   // (this thread is its producer; the station's view server its consumer).
   void SetViewFrames(rt::TripleBuffer<view::FrameBytes>* frames) { view_frames_ = frames; }
-  // Waits until a DeviceInput reader has matched (true), `timeout_s` passed or `stop` is set.
-  // Call before the haptic loop starts (the main thread).
-  bool WaitForInputReader(double timeout_s, const std::atomic<bool>& stop);
+  // Waits until every writer of the station (StationInfo, DeviceInput, the mirrored states,
+  // Telemetry, TaskEvent, Score, SceneDescription) has matched a reader (true), `timeout_s`
+  // passed or `stop` is set (false; `missing` names a topic still unmatched). Call before the
+  // haptic loop starts (the main thread).
+  bool WaitForRecorder(double timeout_s, const std::atomic<bool>& stop, std::string* missing);
+  // --wait-for-condition: takes cue commands until this run's condition has come whole (the
+  // condition_size commands addressed to this station's session, CueCommand IDL): true; they
+  // are then in the cue ring and apply at the first step. False after `timeout_s`, with `why`
+  // naming the station and the instructor it waited for. True also when `stop` is set. Call
+  // before the haptic loop and Run() start (the main thread stands in for the publisher).
+  bool WaitForCondition(double timeout_s, const std::atomic<bool>& stop, std::string* why);
 
   const PeriodStats& run_periods() const { return run_periods_; }
   // Step time of module i over the whole run (the "period" is the step's wall time).
@@ -104,6 +113,7 @@ class StationPublisher {
 
  private:
   void HandleCues();
+  std::vector<eprosima::fastdds::dds::DataWriter*> RecordedWriters() const;
   void Drain();
   void PublishMirror();
   void EncodeViewFrame();
@@ -140,6 +150,11 @@ class StationPublisher {
   std::uint8_t last_device_fault_ = 0;
   std::string knot_;  // "" until the first recognition
   std::vector<std::pair<std::string, std::uint64_t>> seen_cues_;
+  // This run's condition (--wait-for-condition): its size, the commands received, and from
+  // whom ("'ISSUER' (session S)"); the latest instructor seen sending any cue.
+  std::uint32_t condition_size_ = 0, condition_received_ = 0;
+  std::string condition_from_, instructor_seen_;
+  std::string dds_where_;  // "DDS domain N, partition 'P'" (error messages)
   net::Score final_score_;
   rt::TripleBuffer<view::FrameBytes>* view_frames_ = nullptr;
   net::Score last_score_;  // the latest published (the view's live score)

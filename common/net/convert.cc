@@ -723,6 +723,10 @@ void ToMsg(const CueCommand& in, msg::CueCommand& out) {
   out.param(in.param);
   out.issuer(in.issuer);
   out.off(in.off);
+  MICRODEX_CHECK(in.station_session.size() <= kMaxIdLength);
+  MICRODEX_CHECK(in.condition_size <= kMaxConditionSize);
+  out.station_session(in.station_session);
+  out.condition_size(in.condition_size);
 }
 
 bool FromMsg(const msg::CueCommand& in, CueCommand& out, std::string* why) {
@@ -735,6 +739,12 @@ bool FromMsg(const msg::CueCommand& in, CueCommand& out, std::string* why) {
   out.off = in.off();
   out.param = in.off() ? 0.0 : in.param();
   out.issuer = S(in.issuer());
+  c.String(S(in.station_session()), kMaxIdLength, "station_session");
+  if (in.condition_size() > kMaxConditionSize) {
+    c.Fail("condition_size: more than " + std::to_string(kMaxConditionSize));
+  }
+  out.station_session = S(in.station_session());
+  out.condition_size = in.condition_size();
   return c.ok();
 }
 

@@ -154,7 +154,12 @@ struct CueCommand {
   double param = 0;  // the kind's parameter (common/cues/cue_kind.h); unused when off
   std::string issuer;
   bool off = false;  // switch the kind off
+  // A trial's condition: for the station's run of this session id only ("": any run), one of
+  // condition_size commands (0: a cue on its own; at most kMaxConditionSize).
+  std::string station_session;
+  std::uint32_t condition_size = 0;
 };
+inline constexpr std::uint32_t kMaxConditionSize = 16;
 
 enum class TaskEventKind : std::uint32_t {
   kTaskStart = 0,

@@ -58,6 +58,11 @@ std::vector<CueCondition> ReadConditions(const YAML::Node& root, const YamlSecti
       }
       c.cue_specs.push_back(text);
     }
+    // The condition goes to a station as one command a cue (CueCommand.condition_size), and the
+    // cue topic keeps 16 per station for a station that joins late.
+    if (c.cues.size() > 16) {
+      throw InputError(top.file(), line, field, "at most 16 cues in a condition");
+    }
     out.push_back(std::move(c));
   }
   return out;

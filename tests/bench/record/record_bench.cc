@@ -174,6 +174,8 @@ int RunRecord(int argc, char** argv) {
   const double recorder_cpu = (rs.thread_cpu_s - rec_cpu0) / wall;
   const double instructor_cpu = (ProcessCpuS() - cpu0) / wall;
   const double bytes = FileBytes(file) + FileBytes(file + "-wal");
+  double load_average = -1;  // of the last minute, at the end (/proc/loadavg)
+  if (std::ifstream loadavg("/proc/loadavg"); loadavg) loadavg >> load_average;
   console.reset();  // closes the file
 
   // Loss, from the file: every station's DeviceInput steps 0..steps-1; per writer (station,
@@ -210,28 +212,41 @@ int RunRecord(int argc, char** argv) {
       missing_last += n - 1 - static_cast<double>(*steps[id].rbegin());
     }
   }
-  std::string by_topic;
-  std::map<int, double> gaps_by_topic;
+  // Per topic: the gaps in each writer's sequence numbers, and the samples before its first
+  // recorded one (a writer's sequence numbers start at 1; the stations wait for a reader of
+  // every topic before they start, --wait-for-recorder, so none is written unmatched).
+  std::string by_topic, lost_by_topic;
+  std::map<int, double> gaps_by_topic, lost_in_topic;
+  double missing_before_first = 0;
   for (const auto& [key, mm] : seq) {
     const double gaps =
         static_cast<double>(mm.second - mm.first + 1) - static_cast<double>(count[key]);
+    const double before = static_cast<double>(std::max<std::int64_t>(0, mm.first - 1));
     gaps_by_topic[key.second] += gaps;
+    lost_in_topic[key.second] += gaps + before;
     sequence_gaps += gaps;
+    missing_before_first += before;
   }
   for (const auto& [t, g] : gaps_by_topic) {
     char item[128];
-    std::snprintf(item, sizeof item, "%s\"%s\": %.0f", by_topic.empty() ? "" : ", ",
-                  record::KnownTopics()[static_cast<std::size_t>(t)].name.c_str(), g);
+    const char* name = record::KnownTopics()[static_cast<std::size_t>(t)].name.c_str();
+    std::snprintf(item, sizeof item, "%s\"%s\": %.0f", by_topic.empty() ? "" : ", ", name, g);
     by_topic += item;
+    std::snprintf(item, sizeof item, "%s\"%s\": %.0f", lost_by_topic.empty() ? "" : ", ", name,
+                  lost_in_topic[t]);
+    lost_by_topic += item;
   }
   const double offered = static_cast<double>(samples) / wall;
-  const double lost = input_lost + sequence_gaps + static_cast<double>(rs.dropped);
-  char out[2048];
+  const double lost =
+      input_lost + sequence_gaps + missing_before_first + static_cast<double>(rs.dropped);
+  char out[4096];
   std::snprintf(out, sizeof out,
                 "{\n  \"stations\": %d,\n  \"seconds\": %.1f,\n  \"samples\": %llu,\n"
                 "  \"lost\": %.0f,\n  \"input_lost\": %.0f,\n  \"input_missing_first\": %.0f,\n"
                 "  \"input_missing_last\": %.0f,\n  \"station_steps\": %.0f,\n"
                 "  \"sequence_gaps\": %.0f,\n  \"sequence_gaps_by_topic\": {%s},\n"
+                "  \"missing_before_first\": %.0f,\n  \"lost_by_topic\": {%s},\n"
+                "  \"load_average_1min\": %.2f,\n"
                 "  \"recorder_dropped\": %llu,\n  \"mb_per_min\": %.2f,\n"
                 "  \"recorder_cpu\": %.4f,\n  \"instructor_cpu\": %.4f,\n"
                 "  \"commits\": %llu,\n  \"max_commit_gap_ms\": %.1f,\n"
@@ -239,6 +254,7 @@ int RunRecord(int argc, char** argv) {
                 "  \"capacity_over_offered\": %.1f\n}\n",
                 stations, wall, static_cast<unsigned long long>(samples), lost, input_lost,
                 missing_first, missing_last, station_steps, sequence_gaps, by_topic.c_str(),
+                missing_before_first, lost_by_topic.c_str(), load_average,
                 static_cast<unsigned long long>(rs.dropped), bytes / 1e6 / (wall / 60),
                 recorder_cpu, instructor_cpu, static_cast<unsigned long long>(rs.commits),
                 rs.max_commit_gap_s * 1e3, offered, capacity, capacity / offered);
