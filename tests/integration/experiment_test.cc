@@ -371,6 +371,45 @@ TEST(ExperimentBadInput, MalformedFileAndUnreachableServerAreNamed) {
 namespace microdex {
 namespace {
 
+// --wait-for-condition without a condition: exit 2 with one line naming the station (and its
+// session) and the instructor it waited for: none at all, or one that sent nothing.
+TEST(ExperimentBadInput, StationWithoutItsConditionNamesTheInstructorItWaitedFor) {
+  constexpr int kConditionDomain = 145;
+  const std::string dir = TmpDir();
+  std::ofstream(dir + "/hold_short.yaml") << kScene;
+  const std::vector<std::string> station = {"--scene",
+                                            dir + "/hold_short.yaml",
+                                            "--station-id",
+                                            "lonely",
+                                            "--no-realtime",
+                                            "--duration",
+                                            "1",
+                                            "--domain",
+                                            std::to_string(kConditionDomain),
+                                            "--wait-for-condition",
+                                            "2"};
+  std::string out;
+  EXPECT_EQ(RunTool("microdex-station", station, dir + "/alone.log", &out), 2) << out;
+  EXPECT_NE(out.find("microdex-station: station 'lonely' (session lonely-"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("--wait-for-condition 2: no condition for this run within 2 s from an "
+                     "instructor: none found on DDS domain 145"),
+            std::string::npos)
+      << out;
+  // An instructor that runs no experiment: its cue writer matched, it sent nothing.
+  const pid_t console = testing::Spawn("microdex-instructor",
+                                       {"--headless", "--table-period", "0", "--domain",
+                                        std::to_string(kConditionDomain), "--duration", "20"},
+                                       dir + "/instructor.log");
+  EXPECT_EQ(RunTool("microdex-station", station, dir + "/plain.log", &out), 2) << out;
+  EXPECT_NE(out.find("station 'lonely'"), std::string::npos) << out;
+  EXPECT_NE(out.find("from the instructor whose cue writer matched on DDS domain 145 (it sent no "
+                     "command"),
+            std::string::npos)
+      << out;
+  testing::KillAll({console});
+}
+
 // The instructor writing a station run into a PostgreSQL database (a real server, started
 // here), read back: the same rows as with SQLite.
 class InstructorPostgres : public testing::PostgresServerTest {};
