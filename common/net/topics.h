@@ -29,7 +29,8 @@ inline constexpr TopicSpec kDeviceSampleTopic{
 inline constexpr TopicSpec kDeviceForceTopic{"microdex/device_force", "microdex_topic_keep_last_1",
                                              "microdex_device_bridge_writer",
                                              "microdex_device_bridge_reader"};
-// The mirrored state topics (60 Hz, the latest sample is all a mirror needs) share one QoS.
+// The mirrored state topics (60 Hz) share one QoS: a reliable keep-last writer (4 s of
+// samples, for a recorder), read best-effort latest-only by a console.
 constexpr TopicSpec MirrorTopic(const char* name) {
   return {name, "microdex_topic_keep_last_1", "microdex_mirror_writer", "microdex_mirror_reader"};
 }
@@ -54,7 +55,8 @@ inline constexpr TopicSpec kScoreTopic{"microdex/score", "microdex_topic_keep_al
                                        "microdex_events_writer", "microdex_events_reader"};
 
 // The reader a recording instructor uses for `spec`: the mirrored states and the telemetry
-// with a deep history (no sample replaced before it is taken); the others as they are.
+// reliable, with a deep history (no sample lost or replaced before it is taken); the others as
+// they are.
 inline TopicSpec RecordingReaderSpec(TopicSpec spec) {
   const std::string_view reader = spec.reader_profile;
   if (reader == "microdex_mirror_reader") {
