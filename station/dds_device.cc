@@ -1,5 +1,8 @@
 #include "station/dds_device.h"
 
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -33,6 +36,7 @@ class DdsDevice::Listener final : public dds::DataReaderListener {
       s.buttons = msg_.buttons();
       s.step = msg_.step();
       s.stamp_ns = msg_.stamp_ns();
+      s.received_ns = device_.clock_.RealtimeNs();
       device_.OnSample(s);
     }
   }
@@ -53,17 +57,32 @@ std::string SecondDeviceKey(const std::string& station_id) {
 
 DdsDevice::DdsDevice(const net::DdsOptions& dds_options, const std::string& station_id,
                      const std::string& session_id, const DeviceMappingDef& mapping,
-                     const DeviceGuardDef& guard)
+                     const DeviceGuardDef& guard, const DdsBridgeTuning& tuning)
     : station_id_(station_id),
       session_id_(session_id),
-      dds_(std::make_unique<net::DdsContext>(dds_options)),
       listener_(std::make_unique<Listener>(*this)),
       guard_(guard),
       mapping_(mapping) {
+  // The threads Fast DDS starts for this participant: those that appear while it and its
+  // endpoints are created (before the publisher thread is started below).
+  const std::vector<int> threads_before = rt::ThreadIds();
+  dds_ = std::make_unique<net::DdsContext>(tuning.Apply(dds_options));
   auto* writer = dds_->CreateWriter<msg::DeviceForcePubSubType>(net::kDeviceForceTopic);
   auto* reader = dds_->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic);
   writer_ = writer;
   reader_ = reader;
+  if (tuning.realtime_threads) {
+    dds_threads_realtime_ =
+        rt::MakeThreadsFifo(rt::ThreadsStartedSince(threads_before), kDdsThreadPriority);
+  }
+  if (const char* dir = std::getenv(kHopsEnv); dir != nullptr && *dir != '\0') {
+    std::string name = station_id_;
+    for (char& c : name) {
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+    }
+    hops_file_ = std::string(dir) + "/" + name + ".hops.csv";
+    hops_.reserve(kMaxHops);
+  }
   publisher_ = std::thread([this] { RunPublisher(); });
   reader->set_listener(listener_.get(), dds::StatusMask::data_available());
 }
@@ -74,6 +93,25 @@ DdsDevice::~DdsDevice() {
   force_event_.Notify();
   publisher_.join();
   dds_.reset();
+  WriteHops();
+}
+
+void DdsDevice::WriteHops() const {
+  if (hops_file_.empty()) return;
+  std::FILE* f = std::fopen(hops_file_.c_str(), "w");
+  if (f == nullptr) return;  // a diagnostic: the bench reports the file missing
+  std::fprintf(f,
+               "sample_step,sample_stamp_ns,received_ns,woken_ns,ready_ns,publisher_woken_ns,"
+               "write_ns,written_ns\n");
+  for (const Hops& h : hops_) {
+    std::fprintf(f, "%llu,%lld,%lld,%lld,%lld,%lld,%lld,%lld\n",
+                 static_cast<unsigned long long>(h.sample_step),
+                 static_cast<long long>(h.sample_stamp_ns), static_cast<long long>(h.received_ns),
+                 static_cast<long long>(h.woken_ns), static_cast<long long>(h.ready_ns),
+                 static_cast<long long>(h.publisher_woken_ns), static_cast<long long>(h.write_ns),
+                 static_cast<long long>(h.written_ns));
+  }
+  std::fclose(f);
 }
 
 void DdsDevice::OnSample(const BridgeSample& s) {
@@ -88,10 +126,14 @@ bool DdsDevice::WaitForSample(std::int64_t until_ns) {
     const std::uint32_t count = sample_event_.count();
     if (count != sample_seen_) {
       sample_seen_ = count;
+      woken_ns_ = clock_.RealtimeNs();
       return true;
     }
     const std::int64_t now = clock_.NowNs();
-    if (now >= until_ns) return false;
+    if (now >= until_ns) {
+      woken_ns_ = clock_.RealtimeNs();
+      return false;
+    }
     sample_event_.WaitWhile(count, until_ns - now);
   }
 }
@@ -108,6 +150,7 @@ DeviceSample DdsDevice::Read(std::uint64_t step) {
     fresh.buttons = b.buttons;
     fresh.sample_step = b.step;
     fresh.sample_stamp_ns = b.stamp_ns;
+    received_ns_ = b.received_ns;
   }
   bool resumed = false;
   raw_ = guard_.Step(got ? &fresh : nullptr, &fault_, &resumed);
@@ -136,7 +179,10 @@ void DdsDevice::WriteWrench(const Eigen::Vector3d& f_T_W, const Eigen::Vector3d&
              raw_.sample_stamp_ns,
              {f_D.x(), f_D.y(), f_D.z()},
              {tau_D.x(), tau_D.y(), tau_D.z()},
-             static_cast<std::uint8_t>(fault_)};
+             static_cast<std::uint8_t>(fault_),
+             received_ns_,
+             woken_ns_,
+             clock_.RealtimeNs()};
   if (!forces_.TryPush(f)) dropped_.fetch_add(1, std::memory_order_relaxed);
   force_event_.Notify();
 }
@@ -153,15 +199,21 @@ void DdsDevice::RunPublisher() {
   ForceOut f{};
   while (!stop_.load()) {
     const std::uint32_t seen = force_event_.count();
+    const std::int64_t woken = clock_.RealtimeNs();
     while (forces_.TryPop(f)) {
+      const std::int64_t write_ns = clock_.RealtimeNs();
       m.step(f.step);
-      m.stamp_ns(clock_.RealtimeNs());
+      m.stamp_ns(write_ns);
       m.sample_step(f.sample_step);
       m.sample_stamp_ns(f.sample_stamp_ns);
       m.f_D({f.f_D[0], f.f_D[1], f.f_D[2]});
       m.tau_D({f.tau_D[0], f.tau_D[1], f.tau_D[2]});
       m.fault(f.fault);
       writer->write(&m);
+      if (!hops_file_.empty() && hops_.size() < kMaxHops) {
+        hops_.push_back({f.sample_step, f.sample_stamp_ns, f.received_ns, f.woken_ns, f.ready_ns,
+                         woken, write_ns, clock_.RealtimeNs()});
+      }
     }
     force_event_.WaitWhile(seen, 100'000'000);
   }

@@ -18,8 +18,10 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "common/net/dds_context.h"
+#include "station/dds_bridge_tuning.h"
 #include "station/device.h"
 #include "station/device_guard.h"
 #include "station/device_mapping.h"
@@ -37,11 +39,11 @@ std::string SecondDeviceKey(const std::string& station_id);
 
 class DdsDevice final : public Device {
  public:
-  // Creates the bridge's participant, reader, writer and publisher thread (throws
-  // std::runtime_error naming the profile or entity that failed).
+  // Creates the bridge's participant (tuned as `tuning` says), reader, writer and publisher
+  // thread (throws std::runtime_error naming the profile or entity that failed).
   DdsDevice(const net::DdsOptions& dds, const std::string& station_id,
             const std::string& session_id, const DeviceMappingDef& mapping = {},
-            const DeviceGuardDef& guard = {});
+            const DeviceGuardDef& guard = {}, const DdsBridgeTuning& tuning = {});
   ~DdsDevice() override;
   DdsDevice(const DdsDevice&) = delete;
   DdsDevice& operator=(const DdsDevice&) = delete;
@@ -55,6 +57,26 @@ class DdsDevice final : public Device {
   // Any thread: samples received (valid or not) and forces the ring could not take.
   std::uint64_t samples_received() const { return received_.load(std::memory_order_relaxed); }
   std::uint64_t forces_dropped() const { return dropped_.load(std::memory_order_relaxed); }
+  // The participant's Fast DDS threads made SCHED_FIFO kDdsThreadPriority (tuning rt), and
+  // the participant profile it came from.
+  int dds_threads_realtime() const { return dds_threads_realtime_; }
+  const std::string& participant_profile() const { return dds_->participant_profile(); }
+  // Just below the haptic thread (80): a sample reaches the tick as soon as it arrives.
+  static constexpr int kDdsThreadPriority = 79;
+
+  // The way of one force through the station, CLOCK_REALTIME ns: the driver's sample stamp,
+  // the listener's receipt of that sample, the haptic thread's wake, the force computed, the
+  // publisher thread's wake, the write's start (the force's stamp_ns) and its return. Recorded
+  // (by the publisher thread, into storage reserved at construction) only when the environment
+  // names a directory in MICRODEX_DEVICE_HOPS; written there as KEY.hops.csv when the bridge
+  // closes (microdex-bench device reads it for its hop breakdown).
+  struct Hops {
+    std::uint64_t sample_step;
+    std::int64_t sample_stamp_ns, received_ns, woken_ns, ready_ns, publisher_woken_ns, write_ns,
+        written_ns;
+  };
+  static constexpr const char* kHopsEnv = "MICRODEX_DEVICE_HOPS";
+  static constexpr std::size_t kMaxHops = 600'000;  // 10 min at 1 kHz
 
  private:
   // The plain copy of a sample that crosses from the listener to the haptic thread.
@@ -65,6 +87,7 @@ class DdsDevice final : public Device {
     std::uint32_t buttons;
     std::uint64_t step;
     std::int64_t stamp_ns;
+    std::int64_t received_ns;  // CLOCK_REALTIME, when the listener took it
   };
   struct ForceOut {
     std::uint64_t step;
@@ -73,13 +96,16 @@ class DdsDevice final : public Device {
     double f_D[3];
     double tau_D[3];
     std::uint8_t fault;
+    std::int64_t received_ns, woken_ns, ready_ns;  // CLOCK_REALTIME (Hops)
   };
   class Listener;
   void OnSample(const BridgeSample& s);  // DDS listener thread
   void RunPublisher();                   // the bridge's publisher thread
+  void WriteHops() const;                // after the publisher thread ended
 
   std::string station_id_;
   std::string session_id_;
+  int dds_threads_realtime_ = 0;
   std::unique_ptr<net::DdsContext> dds_;
   std::unique_ptr<Listener> listener_;
   void* reader_ = nullptr;                 // dds::DataReader*
@@ -99,6 +125,11 @@ class DdsDevice final : public Device {
   RawDeviceSample raw_;
   DeviceFault fault_ = DeviceFault::kNone;
   std::uint64_t step_ = 0;
+  std::int64_t woken_ns_ = 0;     // the last return of WaitForSample
+  std::int64_t received_ns_ = 0;  // the listener's receipt of the sample read last
+  // Publisher thread only (then the destructor): the recorded hops, if asked for.
+  std::string hops_file_;
+  std::vector<Hops> hops_;
   std::thread publisher_;
 };
 

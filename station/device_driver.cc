@@ -30,6 +30,7 @@ class ForceListener final : public dds::DataReaderListener {
   ForceListener(std::string station_id, std::size_t capacity)
       : station_id_(std::move(station_id)), answered_(capacity, 0) {
     stats_.round_trip_us.reserve(capacity);
+    stats_.hops.reserve(capacity);
   }
   void on_data_available(dds::DataReader* reader) override {
     dds::SampleInfo info;
@@ -51,6 +52,7 @@ class ForceListener final : public dds::DataReaderListener {
         answered_[k] = 1;
         ++stats_.answered;
         stats_.round_trip_us.push_back(static_cast<double>(now - msg_.sample_stamp_ns()) * 1e-3);
+        stats_.hops.push_back({k, msg_.sample_stamp_ns(), 0, msg_.stamp_ns(), now});
       }
     }
   }
@@ -94,9 +96,14 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
   if (const std::string why = def.Validate(); !why.empty()) throw std::runtime_error(why);
   std::unique_ptr<PlaybackDevice> csv;
   if (!def.csv.empty()) csv = std::make_unique<PlaybackDevice>(def.csv);
-  net::DdsContext ctx(dds_options);
+  const std::vector<int> threads_before = rt::ThreadIds();
+  net::DdsContext ctx(def.tuning.Apply(dds_options));
   dds::DataWriter* writer = ctx.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic);
   dds::DataReader* reader = ctx.CreateReader<msg::DeviceForcePubSubType>(net::kDeviceForceTopic);
+  const int dds_threads_realtime =
+      def.tuning.realtime_threads
+          ? rt::MakeThreadsFifo(rt::ThreadsStartedSince(threads_before), kDriverDdsThreadPriority)
+          : 0;
   const auto total = static_cast<std::uint64_t>(std::llround(def.duration_s * def.rate_hz));
   ForceListener listener(def.station_id, total + 1);
   reader->set_listener(&listener, dds::StatusMask::data_available());
@@ -120,13 +127,14 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
   // A driver's servo loop runs at real-time priority where it may (as the station's haptic
   // thread does); otherwise at normal priority.
   std::string why;
-  const bool fifo = rt::MakeThisThreadFifo(70, &why);
+  const bool fifo = rt::MakeThisThreadFifo(kDriverPriority, &why);
   msg::DeviceInput m;
   m.station_id(def.station_id);
   m.session_id("driver");
   const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / def.rate_hz));
   std::int64_t deadline = clock.NowNs();
   std::uint64_t sent = 0;
+  std::vector<std::int64_t> write_returned(total + 1, 0);
   for (std::uint64_t k = 1; matched && k <= total && !stop.load(); ++k) {
     deadline += period_ns;
     clock.SleepUntilNs(deadline);
@@ -157,6 +165,7 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
     m.gripper(gripper);
     m.buttons(buttons);
     writer->write(&m);
+    write_returned[k] = clock.RealtimeNs();
     ++sent;
   }
   // The last forces still on their way.
@@ -165,8 +174,12 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
   DriverStats stats = listener.Take();
   stats.matched = matched;
   stats.realtime = fifo;
+  stats.dds_threads_realtime = dds_threads_realtime;
   stats.sent = sent;
   stats.lost = sent - std::min(sent, stats.answered);
+  for (DriverHop& h : stats.hops) {
+    if (h.sample_step < write_returned.size()) h.write_returned_ns = write_returned[h.sample_step];
+  }
   return stats;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/net/dds_context.h"
+#include "station/dds_bridge_tuning.h"
 
 namespace microdex::station {
 
@@ -29,8 +30,18 @@ struct DeviceDriverDef {
   double fault_at_s = 1;
   double fault_for_s = 0.05;
   double discovery_timeout_s = 10;  // waiting for the station's bridge
+  // The driver's participant (dds_bridge_tuning.h); its rt threads run SCHED_FIFO
+  // kDriverDdsThreadPriority, just below the sending thread's kDriverPriority.
+  DdsBridgeTuning tuning;
   // Empty when valid; otherwise "field: reason".
   std::string Validate() const;
+};
+
+// One answered sample at the driver, CLOCK_REALTIME ns: its stamp (just before the write), the
+// write's return, the answering force's stamp (the station's write start) and its receipt.
+struct DriverHop {
+  std::uint64_t sample_step = 0;
+  std::int64_t sample_stamp_ns = 0, write_returned_ns = 0, force_stamp_ns = 0, received_ns = 0;
 };
 
 struct DriverStats {
@@ -40,11 +51,16 @@ struct DriverStats {
   std::uint64_t lost = 0;             // samples sent and never answered
   std::uint64_t fault_forces = 0;     // forces flagged with a device fault
   std::vector<double> round_trip_us;  // send → the force that echoes it
+  std::vector<DriverHop> hops;        // one per answered sample, in order of receipt
   double force_max_N = 0;
-  double torque_max_Nm = 0;  // largest |tau_D| received
-  bool matched = false;      // the station's bridge was found
-  bool realtime = false;     // the sending thread ran SCHED_FIFO
+  double torque_max_Nm = 0;      // largest |tau_D| received
+  bool matched = false;          // the station's bridge was found
+  bool realtime = false;         // the sending thread ran SCHED_FIFO
+  int dds_threads_realtime = 0;  // the participant's threads made SCHED_FIFO (tuning rt)
 };
+
+inline constexpr int kDriverPriority = 70;
+inline constexpr int kDriverDdsThreadPriority = 69;
 
 // Runs the driver until duration_s has passed or `stop`; throws std::runtime_error (DDS
 // profile, CSV file) with a one-line reason.

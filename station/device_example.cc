@@ -27,6 +27,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--fault-at", def.fault_at_s, "when, s after the start");
   app.add_option("--fault-for", def.fault_for_s, "for how long, s");
   app.add_option("--stats-json", stats_json, "write the round trips and losses as JSON");
+  std::string tuning = "all";
+  app.add_option("--tuning", tuning,
+                 "all (default), none, or a comma list of shm (shared-memory participant "
+                 "profile), rt (the participant's DDS threads SCHED_FIFO)");
   microdex::net::AddDdsOptions(app, dds);
   microdex::net::AddSecurityOption(app, dds);
   if (const std::optional<int> status =
@@ -44,6 +48,11 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     def.fault = DriverFault::kJump;
   } else {
     std::fprintf(stderr, "microdex-device-example: --fault: expected none|stop|nan|jump\n");
+    return 2;
+  }
+  if (const std::string why = microdex::station::DdsBridgeTuning::Parse(tuning, &def.tuning);
+      !why.empty()) {
+    std::fprintf(stderr, "microdex-device-example: --tuning %s\n", why.c_str());
     return 2;
   }
   if (const std::string why = def.Validate(); !why.empty()) {

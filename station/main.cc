@@ -61,6 +61,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                  "instructor's experiment (its cue commands, applied from step 0); none by "
                  "then: exit 2 naming the station and the instructor");
   microdex::net::AddDdsOptions(app, o.dds);
+  std::string bridge_tuning = "all";
+  app.add_option("--device-bridge-tuning", bridge_tuning,
+                 "--device dds: all (default), none, or a comma list of shm (shared-memory "
+                 "participant profile), rt (the bridge's DDS threads SCHED_FIFO)");
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,
                "step as fast as possible in simulated time (same results as paced)");
@@ -82,6 +86,14 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 2;
   }
   o.realtime = !no_realtime;
+  if (const std::string why =
+          microdex::station::DdsBridgeTuning::Parse(bridge_tuning, &o.device_bridge_tuning);
+      !why.empty()) {
+    std::fprintf(stderr, "microdex-station: --device-bridge-tuning %s\n", why.c_str());
+    return 2;
+  }
+  // Without real-time scheduling the bridge's threads stay at normal priority as well.
+  if (no_realtime) o.device_bridge_tuning.realtime_threads = false;
   if (!device_args.empty()) o.device = device_args[0];
   if (device_args.size() > 1) o.device_file = device_args[1];
   if (device_args.size() > 2) o.device_file2 = device_args[2];

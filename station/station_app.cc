@@ -240,8 +240,12 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     // The driver's hand at the device origin puts the tool at the task's start.
     const DeviceMappingDef mapping =
         DdsDeviceMapping(scene, o.device_map, 0, scene.CalcIdealToolPose(0).translation());
-    device_owner =
-        std::make_unique<DdsDevice>(o.dds, o.station_id, session_id.substr(0, 64), mapping);
+    auto bridge = std::make_unique<DdsDevice>(o.dds, o.station_id, session_id.substr(0, 64),
+                                              mapping, DeviceGuardDef{}, o.device_bridge_tuning);
+    spdlog::info("device bridge: participant '{}', {} DDS threads SCHED_FIFO {} (tuning {})",
+                 bridge->participant_profile(), bridge->dds_threads_realtime(),
+                 DdsDevice::kDdsThreadPriority, o.device_bridge_tuning.Name());
+    device_owner = std::move(bridge);
   } else {
     device_owner = std::make_unique<SimTrainee>(scene, trainee_def);
   }
@@ -263,7 +267,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
       const DeviceMappingDef mapping =
           DdsDeviceMapping(scene, o.device_map, 1, X_WT2_start.translation());
       second_device = std::make_unique<DdsDevice>(o.dds, SecondDeviceKey(o.station_id),
-                                                  session_id.substr(0, 64), mapping);
+                                                  session_id.substr(0, 64), mapping,
+                                                  DeviceGuardDef{}, o.device_bridge_tuning);
     } else {
       SimTraineeDef other_hand = trainee_def;
       other_hand.hand = 1;

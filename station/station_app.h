@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/net/dds_context.h"
+#include "station/dds_bridge_tuning.h"
 
 namespace microdex::station {
 
@@ -43,6 +44,8 @@ struct StationOptions {
   // instructor. 0: do not wait.
   double wait_for_condition_s = 0;
   net::DdsOptions dds;
+  // --device dds: how the bridge's participant is set up (dds_bridge_tuning.h).
+  DdsBridgeTuning device_bridge_tuning;
   // The microscope view (station_view.h) on 127.0.0.1:view_port; -1: none, 0: any free port.
   int view_port = -1;
   std::string web_dir;  // the bundled pages ("" : DefaultWebDir())

@@ -94,8 +94,15 @@ DdsContext::DdsContext(const DdsOptions& options) : options_(options) {
   auto* factory = dds::DomainParticipantFactory::get_instance();
   const auto domain = static_cast<dds::DomainId_t>(options_.domain_id);
   partition_ = options_.partition;
+  participant_profile_ = kParticipantProfile;
+  if (dds::DomainParticipantQos probe;
+      !options_.participant_profile.empty() &&
+      factory->get_participant_qos_from_profile(options_.participant_profile, probe) ==
+          ReturnCode_t::RETCODE_OK) {
+    participant_profile_ = options_.participant_profile;
+  }
   if (options_.security_dir.empty()) {
-    participant_ = factory->create_participant_with_profile(domain, kParticipantProfile);
+    participant_ = factory->create_participant_with_profile(domain, participant_profile_);
   } else {
     const SecurityFiles files = LoadSecurityFiles(options_.security_dir);
     if (!options_.partition.empty() && options_.partition != files.course) {
@@ -106,10 +113,10 @@ DdsContext::DdsContext(const DdsOptions& options) : options_(options) {
     // The participant profile's QoS as create_participant_with_profile builds it (the
     // factory's default QoS with the profile's attributes), plus the security properties.
     dds::DomainParticipantQos qos;
-    if (factory->get_participant_qos_from_profile(kParticipantProfile, qos) !=
+    if (factory->get_participant_qos_from_profile(participant_profile_, qos) !=
         ReturnCode_t::RETCODE_OK) {
       throw std::runtime_error("dds profile '" + options_.profile_file +
-                               "': no participant profile '" + kParticipantProfile + "'");
+                               "': no participant profile '" + participant_profile_ + "'");
     }
     for (const auto& [name, value] : SecurityProperties(files)) {
       qos.properties().properties().emplace_back(name, value);

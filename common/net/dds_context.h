@@ -33,6 +33,9 @@ struct DdsOptions {
   int domain_id = 0;         // 0..232
   std::string partition;     // empty: the default partition
   std::string participant_name = "microdex";
+  // The participant profile; empty, or a name the file does not define: kParticipantProfile.
+  // (The DDS device bridge asks for kDeviceBridgeParticipantProfile.)
+  std::string participant_profile;
   // DDS Security: the identity directory (deploy/security/make-course); empty: plain DDS.
   std::string security_dir;
   // With security: the station this participant acts for (a station, a device driver), or
@@ -88,6 +91,8 @@ class DdsContext {
 
   dds::DomainParticipant* participant() { return participant_; }
   const DdsOptions& options() const { return options_; }
+  // The participant profile the participant was created from.
+  const std::string& participant_profile() const { return participant_profile_; }
   // The partition of the publisher and subscriber (empty: the default partition).
   const std::string& partition() const { return partition_; }
 
@@ -97,6 +102,7 @@ class DdsContext {
   dds::DataReader* CreateReaderImpl(dds::Topic* topic, const TopicSpec& spec);
 
   DdsOptions options_;
+  std::string participant_profile_;
   std::string partition_;
   dds::DomainParticipant* participant_ = nullptr;
   dds::Publisher* publisher_ = nullptr;

@@ -14,6 +14,9 @@ struct TopicSpec {
 };
 
 inline constexpr const char* kParticipantProfile = "microdex_participant";
+// The DDS device bridge's participants (the station's bridge, a driver): on one host their
+// data takes shared memory (loopback.xml; a file without it: kParticipantProfile).
+inline constexpr const char* kDeviceBridgeParticipantProfile = "microdex_device_bridge_participant";
 
 inline constexpr TopicSpec kStationInfoTopic{"microdex/station_info", "microdex_topic_keep_last_1",
                                              "microdex_station_info_writer",

@@ -1,12 +1,16 @@
 #include "station/rt/realtime.h"
 
+#include <dirent.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <iterator>
 
 #include "station/rt/clock.h"
 
@@ -29,6 +33,38 @@ bool MakeThisThreadFifo(int priority, std::string* why_not) {
     return false;
   }
   return true;
+}
+
+std::vector<int> ThreadIds() {
+  std::vector<int> tids;
+  DIR* dir = opendir("/proc/self/task");
+  if (dir == nullptr) return tids;
+  while (const dirent* e = readdir(dir)) {
+    if (e->d_name[0] < '0' || e->d_name[0] > '9') continue;
+    tids.push_back(std::atoi(e->d_name));
+  }
+  closedir(dir);
+  std::sort(tids.begin(), tids.end());
+  return tids;
+}
+
+std::vector<int> ThreadsStartedSince(const std::vector<int>& before) {
+  std::vector<int> started;
+  const std::vector<int> now = ThreadIds();
+  std::set_difference(now.begin(), now.end(), before.begin(), before.end(),
+                      std::back_inserter(started));
+  return started;
+}
+
+int MakeThreadsFifo(const std::vector<int>& tids, int priority) {
+  sched_param param{};
+  param.sched_priority = priority;
+  int made = 0;
+  for (const int tid : tids) {
+    // On Linux a thread id names that one thread to sched_setscheduler.
+    if (sched_setscheduler(tid, SCHED_FIFO, &param) == 0) ++made;
+  }
+  return made;
 }
 
 std::int64_t MonotonicClock::NowNs() {
