@@ -8,6 +8,8 @@
 #include <chrono>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fstream>
+#include <set>
 #include <thread>
 
 #include "common/net/convert.h"
@@ -23,6 +25,17 @@ namespace transport = eprosima::fastdds::rtps;
 
 // Each DDS test gets its own domain so parallel ctest runs cannot cross-talk.
 constexpr int kDomain = 61;
+
+// The Fast DDS shared-memory ports (input channels) this process has mapped.
+int SharedMemoryPortsMapped() {
+  std::ifstream maps("/proc/self/maps");
+  std::set<std::string> ports;
+  for (std::string line; std::getline(maps, line);) {
+    const auto at = line.find("/dev/shm/fastrtps_port");
+    if (at != std::string::npos) ports.insert(line.substr(at));
+  }
+  return static_cast<int>(ports.size());
+}
 
 DdsOptions Options(int domain, const std::string& partition) {
   DdsOptions o;
@@ -97,6 +110,40 @@ TEST(DdsProfile, LoopbackParticipantStaysOnTheHost) {
       EXPECT_EQ(rtps::IPLocator::toIPv4string(l), "127.0.0.1");
     }
   }
+}
+
+// The device bridge's participant: the same transports, discovery on 127.0.0.1, but no
+// explicit data locators, so that the participant announces shared memory (and UDPv4 on the
+// whitelisted 127.0.0.1 only). A name the file does not define falls back to the default.
+TEST(DdsProfile, BridgeParticipantAnnouncesSharedMemoryAndStaysOnTheHost) {
+  const int ports_before = SharedMemoryPortsMapped();
+  {
+    DdsContext plain(Options(kDomain, ""));
+    EXPECT_EQ(SharedMemoryPortsMapped(), ports_before);
+  }
+  DdsOptions o = Options(kDomain, "");
+  o.participant_profile = kDeviceBridgeParticipantProfile;
+  DdsContext context(o);
+  EXPECT_EQ(context.participant_profile(), kDeviceBridgeParticipantProfile);
+  dds::DomainParticipantQos qos;
+  ASSERT_EQ(dds::DomainParticipantFactory::get_instance()->get_participant_qos_from_profile(
+                kDeviceBridgeParticipantProfile, qos),
+            ReturnCode_t::RETCODE_OK);
+  EXPECT_FALSE(qos.transport().use_builtin_transports);
+  EXPECT_TRUE(qos.wire_protocol().default_unicast_locator_list.empty());
+  EXPECT_TRUE(qos.wire_protocol().default_multicast_locator_list.empty());
+  EXPECT_TRUE(qos.wire_protocol().builtin.avoid_builtin_multicast);
+  for (const auto& l : qos.wire_protocol().builtin.metatrafficUnicastLocatorList) {
+    EXPECT_EQ(rtps::IPLocator::toIPv4string(l), "127.0.0.1");
+  }
+  // The created participant listens on a shared-memory port (its data locator), which the
+  // default participant of this file does not (it announces UDPv4 only).
+  EXPECT_GT(SharedMemoryPortsMapped(), ports_before);
+
+  DdsOptions missing = Options(kDomain, "");
+  missing.participant_profile = "no_such_participant_profile";
+  DdsContext fallback(missing);
+  EXPECT_EQ(fallback.participant_profile(), kParticipantProfile);
 }
 
 TEST(DdsProfile, EndpointProfilesFollowTheTopicTable) {

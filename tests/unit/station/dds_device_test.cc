@@ -5,10 +5,16 @@
 #include "station/dds_device.h"
 
 #include <gtest/gtest.h>
+#include <sched.h>
+#include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <thread>
+#include <vector>
 
 #include "station/device_driver.h"
+#include "station/rt/realtime.h"
 #include "tests/support/alloc_counter.h"
 
 namespace microdex::station {
@@ -57,6 +63,92 @@ TEST(DdsDevice, HapticSideNeverAllocatesAndSamplesWakeTheWait) {
   // And the torque with them (identity mapping: the same vector in the device frame).
   EXPECT_NEAR(stats.torque_max_Nm, 2e-3, 1e-15);
   EXPECT_EQ(device.forces_dropped(), 0u);
+}
+
+TEST(DdsBridgeTuning, ParsesListsAndNamesBadInput) {
+  DdsBridgeTuning t{false, false};
+  EXPECT_EQ(DdsBridgeTuning::Parse("all", &t), "");
+  EXPECT_TRUE(t.shared_memory && t.realtime_threads);
+  EXPECT_EQ(t.Name(), "shm,rt");
+  EXPECT_EQ(DdsBridgeTuning::Parse("none", &t), "");
+  EXPECT_FALSE(t.shared_memory || t.realtime_threads);
+  EXPECT_EQ(t.Name(), "none");
+  EXPECT_EQ(DdsBridgeTuning::Parse("rt", &t), "");
+  EXPECT_TRUE(!t.shared_memory && t.realtime_threads);
+  EXPECT_EQ(DdsBridgeTuning::Parse("rt,shm", &t), "");
+  EXPECT_EQ(t.Name(), "shm,rt");
+  EXPECT_EQ(t.Apply({}).participant_profile, net::kDeviceBridgeParticipantProfile);
+  const std::string why = DdsBridgeTuning::Parse("shm,fast", &t);
+  EXPECT_NE(why.find("shm,fast"), std::string::npos) << why;
+  EXPECT_EQ(t.Name(), "shm,rt") << "unchanged by bad input";
+  EXPECT_NE(DdsBridgeTuning::Parse("", &t), "");
+}
+
+TEST(RealTime, ThreadsStartedSinceFindsTheNewThreadAndRaisesIt) {
+  const std::vector<int> before = rt::ThreadIds();
+  ASSERT_FALSE(before.empty());
+  std::atomic<bool> release{false};
+  std::atomic<int> tid{0};
+  std::thread t([&] {
+    tid = static_cast<int>(gettid());
+    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  });
+  while (tid == 0) std::this_thread::yield();
+  const std::vector<int> started = rt::ThreadsStartedSince(before);
+  ASSERT_EQ(started.size(), 1u);
+  EXPECT_EQ(started[0], tid.load());
+  if (rt::MakeThreadsFifo(started, 10) == 1) {
+    EXPECT_EQ(sched_getscheduler(tid), SCHED_FIFO);
+    sched_param p{};
+    ASSERT_EQ(sched_getparam(tid, &p), 0);
+    EXPECT_EQ(p.sched_priority, 10);
+  } else {
+    EXPECT_EQ(sched_getscheduler(tid), SCHED_OTHER) << "not permitted: left as it was";
+  }
+  release = true;
+  t.join();
+}
+
+// The participant's own threads: how many of this process's threads run SCHED_FIFO `priority`.
+int ThreadsAtFifo(int priority) {
+  int n = 0;
+  for (const int tid : rt::ThreadIds()) {
+    sched_param p{};
+    if (sched_getscheduler(tid) == SCHED_FIFO && sched_getparam(tid, &p) == 0 &&
+        p.sched_priority == priority) {
+      ++n;
+    }
+  }
+  return n;
+}
+
+TEST(DdsDevice, TuningChoosesTheParticipantAndRaisesItsThreads) {
+  net::DdsOptions dds;
+  dds.profile_file = net::DefaultDdsProfileFile();
+  dds.domain_id = kDomain + 1;
+  // (Fast DDS's process-wide threads started with an earlier participant may run there too.)
+  const int before = ThreadsAtFifo(DdsDevice::kDdsThreadPriority);
+  {
+    DdsDevice plain(dds, "dds-plain", "session", {}, {}, DdsBridgeTuning{false, false});
+    EXPECT_EQ(plain.participant_profile(), net::kParticipantProfile);
+    EXPECT_EQ(plain.dds_threads_realtime(), 0);
+    EXPECT_EQ(ThreadsAtFifo(DdsDevice::kDdsThreadPriority), before);
+  }
+  const int after_plain = ThreadsAtFifo(DdsDevice::kDdsThreadPriority);
+  DdsDevice tuned(dds, "dds-tuned", "session", {}, {}, DdsBridgeTuning{});
+  EXPECT_EQ(tuned.participant_profile(), net::kDeviceBridgeParticipantProfile);
+  // Privilege permitting, the threads Fast DDS started for it (at least its receive and event
+  // threads) and only those run just below the haptic thread.
+  std::string why;
+  std::thread probe([&] { rt::MakeThisThreadFifo(1, &why); });
+  probe.join();
+  if (why.empty()) {
+    EXPECT_GE(tuned.dds_threads_realtime(), 2);
+    EXPECT_EQ(ThreadsAtFifo(DdsDevice::kDdsThreadPriority),
+              after_plain + tuned.dds_threads_realtime());
+  } else {
+    EXPECT_EQ(tuned.dds_threads_realtime(), 0) << why;
+  }
 }
 
 }  // namespace
