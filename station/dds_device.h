@@ -12,7 +12,9 @@
 // the device guard (faults: timeout, non-finite, jump) and the workspace mapping (scale,
 // clutch), and in WriteForce() hands the force, in the device frame, through an SPSC ring to
 // the bridge's publisher thread, which writes DeviceForce. The haptic thread never allocates,
-// locks or blocks there (WaitForSample is the tick's pacing wait).
+// locks or blocks there (WaitForSample is the tick's pacing wait). The bridge's participant is
+// its own, set up as DdsBridgeTuning says (dds_bridge_tuning.h: shared memory, its Fast DDS
+// threads SCHED_FIFO kDdsThreadPriority).
 
 #include <atomic>
 #include <memory>
