@@ -161,9 +161,11 @@ TEST(DdsProfile, EndpointProfilesFollowTheTopicTable) {
   EXPECT_EQ(input->get_qos().history().kind, dds::KEEP_ALL_HISTORY_QOS);
 
   dds::DataWriter* mirror = context.CreateWriter<msg::StationInfoPubSubType>(kNeedleStateTopic);
-  EXPECT_EQ(mirror->get_qos().reliability().kind, dds::BEST_EFFORT_RELIABILITY_QOS);
+  // Reliable keep-last 240 (4 s at 60 Hz): the recorder's reliable readers get every state;
+  // the console's best-effort readers match it and keep only the latest.
+  EXPECT_EQ(mirror->get_qos().reliability().kind, dds::RELIABLE_RELIABILITY_QOS);
   EXPECT_EQ(mirror->get_qos().history().kind, dds::KEEP_LAST_HISTORY_QOS);
-  EXPECT_EQ(mirror->get_qos().history().depth, 1);
+  EXPECT_EQ(mirror->get_qos().history().depth, 240);
 
   dds::DataReader* cue = context.CreateReader<msg::StationInfoPubSubType>(kCueCommandTopic);
   EXPECT_EQ(cue->get_qos().reliability().kind, dds::RELIABLE_RELIABILITY_QOS);
