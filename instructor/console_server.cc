@@ -216,8 +216,24 @@ std::string CueKindsJson() {
 }  // namespace
 
 std::string ConsoleServer::StatusJsonHead() const {
+  // The samples this instructor refused (instructor.h RejectedSamples), by topic.
+  const RejectedSamples rejected = instructor_.Rejected();
+  std::string rej = "{\"total\":" + std::to_string(rejected.total) + ",\"by_topic\":{";
+  for (const auto& [topic, n] : rejected.by_topic) {
+    if (rej.back() != '{') rej += ',';
+    rej += view::JsonQuote(topic);
+    rej += ':';
+    rej += std::to_string(n);
+  }
+  // A reason may quote a hostile sample: printable ASCII only (a WebSocket text frame must be
+  // UTF-8).
+  std::string latest = rejected.last_reason;
+  for (char& ch : latest) {
+    if (ch < ' ' || ch > '~') ch = '?';
+  }
+  rej += "},\"latest\":" + view::JsonQuote(latest) + "}";
   return "{\"type\":\"stations\",\"issuer_session\":" + view::JsonQuote(instructor_.session_id()) +
-         ",\"cue_kinds\":" + CueKindsJson() + ",\"stations\":[";
+         ",\"cue_kinds\":" + CueKindsJson() + ",\"rejected\":" + rej + ",\"stations\":[";
 }
 
 void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, std::int64_t now_ns,
@@ -242,7 +258,9 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
       const net::Telemetry& t = *v.telemetry.latest;
       j << ",\"period_p99_ms\":" << Num(t.period_p99_s * 1e3)
         << ",\"period_max_ms\":" << Num(t.period_max_s * 1e3) << ",\"overruns\":" << t.overruns
-        << ",\"realtime\":" << (t.realtime ? "true" : "false");
+        << ",\"realtime\":" << (t.realtime ? "true" : "false")
+        << ",\"cues_invalid\":" << t.cues_invalid
+        << ",\"device_samples_invalid\":" << t.device_samples_invalid;
     }
     if (v.score.latest) {
       const net::Score& s = *v.score.latest;

@@ -5,17 +5,22 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <deque>
 #include <fastdds/dds/core/condition/GuardCondition.hpp>
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/core/status/LivelinessChangedStatus.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
+#include <unordered_map>
 
 #include "common/base/check.h"
 #include "common/net/convert.h"
@@ -53,6 +58,72 @@ std::string HandleKey(const eprosima::fastrtps::rtps::InstanceHandle_t& h) {
   return std::string(reinterpret_cast<const char*>(bytes), 16);
 }
 
+// A remote writer's GUID as the 16 bytes of its instance handle (SampleInfo's
+// publication_handle), a map key that needs no allocation.
+using WriterKey = std::array<std::uint8_t, 16>;
+WriterKey KeyOf(const eprosima::fastrtps::rtps::InstanceHandle_t& h) {
+  WriterKey k;
+  std::memcpy(k.data(), h.value, k.size());
+  return k;
+}
+struct WriterKeyHash {
+  std::size_t operator()(const WriterKey& k) const {
+    std::uint64_t a = 0, b = 0;  // the prefix's last bytes and the entity id differ most
+    std::memcpy(&a, k.data(), 8);
+    std::memcpy(&b, k.data() + 8, 8);
+    return std::hash<std::uint64_t>()(a * 0x9e3779b97f4a7c15ULL ^ b);
+  }
+};
+
+// The partitions of every remote writer as discovery reported them. Fast DDS calls
+// on_publisher_discovery on its discovery thread when it adds the writer's proxy, before it
+// pairs the writer with a reader, so before any sample of it can be taken.
+// (DataReader::get_matched_publication_data, the standard way, returns RETCODE_UNSUPPORTED in
+// Fast DDS 2.9.) A removed writer is kept for kRemovedKeep_ns: its last samples (a final
+// score, a StationInfo disposal) may still wait in a reader.
+class WriterPartitions final : public dds::DomainParticipantListener {
+ public:
+  static constexpr std::int64_t kRemovedKeep_ns = 60'000'000'000;
+
+  void on_publisher_discovery(dds::DomainParticipant* /*participant*/,
+                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
+    using Info = eprosima::fastrtps::rtps::WriterDiscoveryInfo;
+    const WriterKey key = KeyOf(eprosima::fastrtps::rtps::InstanceHandle_t(info.info.guid()));
+    const std::int64_t now = MonotonicNowNs();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (info.status == Info::REMOVED_WRITER) {
+      removed_.emplace_back(now, key);
+    } else {
+      writers_[key] = info.info.m_qos.m_partition.names();
+      // A changed QoS may have changed the partition: the DDS thread's copies are stale.
+      if (info.status == Info::CHANGED_QOS_WRITER) ++changes_;
+    }
+    while (!removed_.empty() && now - removed_.front().first > kRemovedKeep_ns) {
+      writers_.erase(removed_.front().second);
+      removed_.pop_front();
+    }
+  }
+
+  // The writer's partitions; false when discovery never reported it.
+  bool Find(const WriterKey& key, std::vector<std::string>* partitions) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = writers_.find(key);
+    if (it == writers_.end()) return false;
+    *partitions = it->second;
+    return true;
+  }
+  std::uint64_t changes() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return changes_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::unordered_map<WriterKey, std::vector<std::string>, WriterKeyHash> writers_;
+  std::deque<std::pair<std::int64_t, WriterKey>> removed_;
+  std::uint64_t changes_ = 0;
+};
+
 }  // namespace
 
 std::int64_t MonotonicNowNs() {
@@ -74,6 +145,15 @@ const char* PresenceName(Presence p) {
 }
 
 struct Instructor::Dds {
+  // Per-station partitions (the secure instructor's COURSE/*): "COURSE/", the prefix of every
+  // station's partition; empty otherwise (no check). Declared before the context, which
+  // calls the listener until it is destroyed.
+  std::string station_partition_prefix;
+  WriterPartitions writer_partitions;
+  // The DDS thread's copy: the station each writer may speak for ("" none), by writer.
+  std::unordered_map<WriterKey, std::string, WriterKeyHash> writer_station;
+  std::uint64_t writer_changes_seen = 0;
+  std::vector<std::string> partitions_scratch;
   std::unique_ptr<net::DdsContext> context;
   dds::DataReader* info = nullptr;
   dds::DataReader* input = nullptr;
@@ -132,7 +212,12 @@ Instructor::Instructor(const InstructorOptions& options)
                      record::KnownTopics()[static_cast<std::size_t>(i)].type);
     }
   }
-  d.context = std::make_unique<net::DdsContext>(options_.dds);
+  net::DdsOptions dds_options = options_.dds;
+  dds_options.participant_listener = &d.writer_partitions;
+  d.context = std::make_unique<net::DdsContext>(dds_options);
+  if (const std::string& part = d.context->partition(); part.ends_with("/*")) {
+    d.station_partition_prefix = part.substr(0, part.size() - 1);
+  }
   d.info = d.context->CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic);
   // Recording: readers that keep every sample until it is taken (net::RecordingReaderSpec).
   const auto spec = [&](const net::TopicSpec& s) {
@@ -172,6 +257,7 @@ Instructor::~Instructor() {
   stop_ = true;
   dds_->guard.set_trigger_value(true);
   if (thread_.joinable()) thread_.join();
+  RecordRejected(true);  // the final counts (the recorder writes them as it stops)
   Dds& d = *dds_;
   d.waitset.detach_condition(d.guard);
   for (dds::DataReader* r : {d.info, d.input, d.tool, d.needle, d.thread, d.tissue, d.telemetry,
@@ -220,6 +306,51 @@ void Instructor::Reject(const char* topic, const std::string& why) {
   rejected_.last_reason = std::string(topic) + ": " + why;
 }
 
+bool Instructor::FromItsStation(const void* sample_info, const char* station_id, const char* topic,
+                                bool second_device_key) {
+  Dds& d = *dds_;
+  if (d.station_partition_prefix.empty()) return true;  // no per-station partitions
+  const auto& si = *static_cast<const dds::SampleInfo*>(sample_info);
+  if (const std::uint64_t changes = d.writer_partitions.changes();
+      changes != d.writer_changes_seen || d.writer_station.size() > kMaxWriterCache) {
+    d.writer_station.clear();
+    d.writer_changes_seen = changes;
+  }
+  const WriterKey key = KeyOf(si.publication_handle);
+  auto it = d.writer_station.find(key);
+  if (it == d.writer_station.end()) {
+    // Once per writer: the station its partition names ("" when it names none, or several).
+    std::string station;
+    if (d.writer_partitions.Find(key, &d.partitions_scratch) && d.partitions_scratch.size() == 1) {
+      const std::string& p = d.partitions_scratch.front();
+      if (p.size() > d.station_partition_prefix.size() &&
+          p.starts_with(d.station_partition_prefix) &&
+          p.find_first_of("*?[]\\", d.station_partition_prefix.size()) == std::string::npos) {
+        station = p.substr(d.station_partition_prefix.size());
+      }
+    }
+    it = d.writer_station.emplace(key, std::move(station)).first;
+  }
+  const std::string& allowed = it->second;
+  const std::size_t n = std::strlen(station_id);
+  if (!allowed.empty() && n >= allowed.size() &&
+      std::memcmp(station_id, allowed.data(), allowed.size()) == 0 &&
+      (n == allowed.size() ||
+       (second_device_key && std::strcmp(station_id + allowed.size(), "/2") == 0))) {
+    return true;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::string named(station_id, std::min<std::size_t>(n, 64));
+  for (char& ch : named) {
+    if (ch < ' ' || ch > '~') ch = '?';  // quoted in tables and pages
+  }
+  Reject(topic,
+         allowed.empty()
+             ? "station_id '" + named + "' from a writer in no station's partition"
+             : "station_id '" + named + "' from a writer in the partition of '" + allowed + "'");
+  return false;
+}
+
 bool Instructor::Admit(const std::string& station_id, const char* topic) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (stations_.count(station_id) > 0 || stations_.size() < kMaxStations) return true;
@@ -259,8 +390,9 @@ void Instructor::Run() {
     HandleScores();
     HandleSceneDescriptions();
     HandleOverlays();
-    RecordOnly<msg::DeviceForce>(dds_->force, record::TopicIndex::kDeviceForce);
+    RecordOnly<msg::DeviceForce>(dds_->force, record::TopicIndex::kDeviceForce, "device_force");
     CheckSilence();
+    RecordRejected(false);
   }
 }
 
@@ -279,6 +411,7 @@ void Instructor::HandleStationInfo() {
   while (dds_->info->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
     net::StationInfo info;
     if (si.valid_data) {
+      if (!FromItsStation(&si, m.station_id().c_str(), "station_info")) continue;
       std::string why;
       if (!net::FromMsg(m, info, &why)) {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -287,6 +420,19 @@ void Instructor::HandleStationInfo() {
       }
       if (!Admit(info.header.station_id, "station_info")) continue;
       Record(static_cast<int>(record::TopicIndex::kStationInfo), m, &si);
+    }
+    std::string disposed_station;  // the station of a disposed or writerless instance
+    if (!si.valid_data) {
+      // dds_->instance_to_station: the DDS thread's own (written below, under mutex_ only
+      // because the registry is).
+      auto it = dds_->instance_to_station.find(HandleKey(si.instance_handle));
+      if (it == dds_->instance_to_station.end()) continue;
+      // Only the station's own writer may announce its departure.
+      if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE &&
+          !FromItsStation(&si, it->second.c_str(), "station_info")) {
+        continue;
+      }
+      disposed_station = it->second;
     }
     const std::int64_t now = MonotonicNowNs();
     std::lock_guard<std::mutex> lock(mutex_);
@@ -303,13 +449,11 @@ void Instructor::HandleStationInfo() {
       v.info = std::move(info);
       continue;
     }
-    auto it = dds_->instance_to_station.find(HandleKey(si.instance_handle));
-    if (it == dds_->instance_to_station.end()) continue;
     if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE &&
-        dds_->current_info_writer[it->second] != HandleKey(si.publication_handle)) {
+        dds_->current_info_writer[disposed_station] != HandleKey(si.publication_handle)) {
       continue;  // an earlier run's departure, arriving after the current run's StationInfo
     }
-    StationView& v = ViewFor(it->second);
+    StationView& v = ViewFor(disposed_station);
     if (si.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
       if (v.presence != Presence::kDeparted) v.presence_changed_ns = now;
       v.presence = Presence::kDeparted;
@@ -369,7 +513,7 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
   Msg m;
   dds::SampleInfo si;
   while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (!si.valid_data) continue;
+    if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), topic)) continue;
     Plain p;
     std::string why;
     if (!net::FromMsg(m, p, &why)) {
@@ -403,13 +547,17 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
 }
 
 template <class Msg>
-void Instructor::RecordOnly(void* reader_ptr, record::TopicIndex topic) {
+void Instructor::RecordOnly(void* reader_ptr, record::TopicIndex topic, const char* name) {
   auto* reader = static_cast<dds::DataReader*>(reader_ptr);
   if (reader == nullptr) return;
   Msg m;
   dds::SampleInfo si;
   while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (si.valid_data) Record(static_cast<int>(topic), m, &si);
+    // DeviceForce: a bimanual station's second device writes under STATION/2.
+    if (si.valid_data && FromItsStation(&si, m.station_id().c_str(), name,
+                                        /*second_device_key=*/true)) {
+      Record(static_cast<int>(topic), m, &si);
+    }
   }
 }
 
@@ -418,7 +566,7 @@ void Instructor::HandleInputs() {
   dds::SampleInfo si;
   net::DeviceInput p;
   while (dds_->input->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (!si.valid_data) continue;
+    if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "device_input")) continue;
     std::string why;
     if (!net::FromMsg(m, p, &why)) {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -457,7 +605,7 @@ void Instructor::HandleEvents() {
   msg::TaskEvent m;
   dds::SampleInfo si;
   while (dds_->events->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (!si.valid_data) continue;
+    if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "task_event")) continue;
     net::TaskEvent e;
     std::string why;
     if (!net::FromMsg(m, e, &why)) {
@@ -565,8 +713,21 @@ std::optional<record::RecorderStats> Instructor::RecorderStats() const {
   return recorder_->stats();
 }
 
+void Instructor::RecordRejected(bool now) {
+  if (!recorder_) return;
+  const std::int64_t t = MonotonicNowNs();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (rejected_.total == rejected_recorded_ || (!now && t < next_rejected_record_ns_)) return;
+  rejected_recorded_ = rejected_.total;
+  next_rejected_record_ns_ = t + kRejectedRecordPeriod_ns;
+  recorder_->SetMetadata("rejected_samples", FormatRejectedMetadata(rejected_));
+  recorder_->SetMetadata("rejected_latest", rejected_.last_reason);
+}
+
 void Instructor::FlushRecording() {
-  if (recorder_) recorder_->Flush();
+  if (!recorder_) return;
+  RecordRejected(true);
+  recorder_->Flush();
 }
 
 std::vector<StationView> Instructor::Stations() const {
@@ -587,7 +748,9 @@ void Instructor::HandleSceneDescriptions() {
   msg::SceneDescription m;
   dds::SampleInfo si;
   while (dds_->scene->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (!si.valid_data) continue;
+    if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "scene_description")) {
+      continue;
+    }
     const std::string station = m.station_id().to_string();
     if (station.empty() || std::any_of(station.begin(), station.end(),
                                        [](char ch) { return ch <= ' ' || ch > '~'; })) {
@@ -636,7 +799,7 @@ void Instructor::HandleOverlays() {
   dds::SampleInfo si;
   OverlayMirror o;
   while (dds_->overlay->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
-    if (!si.valid_data) continue;
+    if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "cue_overlay")) continue;
     std::string why;
     if (!net::FromMsg(m, o.header, o.active_cues, o.overlay, &why)) {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -693,6 +856,26 @@ std::vector<InputGap> Instructor::InputGaps() const {
   return gaps_;
 }
 
+std::string FormatRejected(const RejectedSamples& rejected) {
+  if (rejected.total == 0) return {};
+  std::string out = "rejected " + std::to_string(rejected.total) + " received samples:";
+  bool first = true;
+  for (const auto& [topic, n] : rejected.by_topic) {
+    out += first ? " " : ", ";
+    out += topic;
+    out += ' ';
+    out += std::to_string(n);
+    first = false;
+  }
+  return out + " (latest: " + rejected.last_reason + ")";
+}
+
+std::string FormatRejectedMetadata(const RejectedSamples& rejected) {
+  std::string out;
+  for (const auto& [topic, n] : rejected.by_topic) out += topic + " " + std::to_string(n) + "\n";
+  return out;
+}
+
 std::string FormatInputGaps(const std::vector<InputGap>& gaps) {
   std::string out;
   for (const auto& g : gaps) {
@@ -706,9 +889,9 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
   std::ostringstream os;
   char line[512];
   std::snprintf(line, sizeof line,
-                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-28s %4s %-12s %6s %-6s %7s %13s\n",
+                "%-12s %-18s %-22s %-20s %-6s %7s %5s %-28s %4s %-12s %6s %-6s %7s %13s %11s\n",
                 "STATION", "TRAINEE", "SCENE", "MODULES", "STATE", "P99_ms", "OVR", "MODULE_STATE",
-                "FLT", "CUES", "SCORE", "TASK", "AGE_ms", "INPUT_rx/lost");
+                "FLT", "CUES", "SCORE", "TASK", "AGE_ms", "INPUT_rx/lost", "INVALID_c/d");
   os << line;
   for (const StationView& v : stations) {
     std::string modules;
@@ -722,10 +905,14 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
     double p99 = NAN, score = NAN, age = NAN;
     std::uint64_t overruns = 0;
     std::uint32_t contacts = 0;
+    // The station's own count of the invalid samples it received: cues / device samples.
+    std::string invalid = "-";
     std::string cues;  // active cue kinds, "" shown as "-"
     if (v.telemetry.latest) {
       p99 = v.telemetry.latest->period_p99_s * 1e3;
       overruns = v.telemetry.latest->overruns;
+      invalid = std::to_string(v.telemetry.latest->cues_invalid) + "/" +
+                std::to_string(v.telemetry.latest->device_samples_invalid);
     }
     // The latest mirrored module states, briefly: needle clearance, thread strain and grasp
     // force, tissue depth.
@@ -773,11 +960,12 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
                   static_cast<unsigned long long>(v.inputs_lost));
     std::snprintf(line, sizeof line,
                   "%-12.12s %-18.18s %-22.22s %-20.20s %-6s %7.3f %5llu %-28.28s %4u %-12.12s "
-                  "%6.1f %-6.6s %7.1f %13s\n",
+                  "%6.1f %-6.6s %7.1f %13s %11s\n",
                   v.info.header.station_id.c_str(), v.info.trainee.c_str(), scene.c_str(),
                   modules.c_str(), PresenceName(v.presence), p99,
                   static_cast<unsigned long long>(overruns), state.empty() ? "-" : state.c_str(),
-                  contacts, cues.empty() ? "-" : cues.c_str(), score, task.c_str(), age, io);
+                  contacts, cues.empty() ? "-" : cues.c_str(), score, task.c_str(), age, io,
+                  invalid.c_str());
     os << line;
   }
   return os.str();

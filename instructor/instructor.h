@@ -133,6 +133,10 @@ class Instructor {
   // sample naming a new station beyond this is dropped and counted, so that a hostile
   // participant cannot grow the registry without bound.
   static constexpr std::size_t kMaxStations = 64;
+  // Writers whose station the DDS thread keeps (FromItsStation); cleared and filled again
+  // when more.
+  static constexpr std::size_t kMaxWriterCache = 4096;
+  static constexpr std::int64_t kRejectedRecordPeriod_ns = 500'000'000;
 
   // Creates the participant (throws std::runtime_error naming the profile) and starts the
   // DDS thread.
@@ -182,7 +186,8 @@ class Instructor {
 
   // The recorder's counters (record_file only); nullopt without a recording.
   std::optional<record::RecorderStats> RecorderStats() const;
-  // Writes what the recorder holds and waits for the commit (record_file only).
+  // Writes what the recorder holds, with the rejected counts so far, and waits for the commit
+  // (record_file only).
   void FlushRecording();
 
  private:
@@ -192,9 +197,10 @@ class Instructor {
   void HandleLiveliness();
   template <class Msg, class Plain>
   void TakeAll(void* reader, Mirror<Plain> StationView::*mirror, const char* topic);
-  // Takes every sample of a topic only recorded (no mirror): CueOverlay, DeviceForce.
+  // Takes every sample of a topic only recorded (no mirror): DeviceForce. `name`: the
+  // topic's name for the rejected counts ("device_force").
   template <class Msg>
-  void RecordOnly(void* reader, record::TopicIndex topic);
+  void RecordOnly(void* reader, record::TopicIndex topic, const char* name);
   void HandleInputs();
   void HandleEvents();
   void HandleScores();
@@ -202,10 +208,19 @@ class Instructor {
   void HandleOverlays();
   void SendQueuedCues();
   void CheckSilence();
+  // The rejected counts into the recording's metadata when they changed (recording only):
+  // at most every kRejectedRecordPeriod_ns unless `now`.
+  void RecordRejected(bool now);
   // Hands the sample to the recorder (serialized again to CDR with its type); DDS thread only.
   template <class Msg>
   void Record(int topic, Msg& m, const void* sample_info);
   StationView& ViewFor(const std::string& station_id);
+  // With per-station partitions (a secure instructor's COURSE/*): true when the writer that
+  // sent the sample (its SampleInfo) publishes in partition COURSE/station_id (or, with
+  // second_device_key, station_id is that station's second device key STATION/2); otherwise
+  // counts it rejected. Always true without them. DDS thread only; takes mutex_ to reject.
+  bool FromItsStation(const void* sample_info, const char* station_id, const char* topic,
+                      bool second_device_key = false);
   // Counts a dropped sample (mutex_ held).
   void Reject(const char* topic, const std::string& why);
   // True when a valid sample from station_id may be used: the station is known or the
@@ -232,6 +247,8 @@ class Instructor {
   std::vector<net::CueCommand> queued_cues_;
   LatencySamples latency_;
   RejectedSamples rejected_;
+  std::uint64_t rejected_recorded_ = 0;  // rejected_.total when last put in the metadata
+  std::int64_t next_rejected_record_ns_ = 0;
   std::vector<InputGap> gaps_;
 
   std::thread thread_;
@@ -239,6 +256,12 @@ class Instructor {
 
 // The text view: one line per station.
 std::string FormatStationTable(const std::vector<StationView>& stations, std::int64_t now_ns);
+
+// "rejected N received samples: TOPIC n, ... (latest: TOPIC: reason)" ("" when none).
+std::string FormatRejected(const RejectedSamples& rejected);
+
+// The recording's "rejected_samples" metadata: one line per topic, "TOPIC COUNT".
+std::string FormatRejectedMetadata(const RejectedSamples& rejected);
 
 // The recording's "input_gaps" metadata: one line per gap, "STATION SESSION FIRST_MISSING_STEP
 // LAST_MISSING_STEP RECEIVE_NS".

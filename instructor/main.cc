@@ -244,6 +244,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
       if (headless && table_period_s > 0 && now >= next_table) {
         std::printf("--- t = %.1f s\n%s", t,
                     instructor::FormatStationTable(console.Stations(), now).c_str());
+        if (const std::string rej = instructor::FormatRejected(console.Rejected()); !rej.empty()) {
+          std::printf("%s\n", rej.c_str());
+        }
         next_table += static_cast<std::int64_t>(table_period_s * 1e9);
       }
       std::fflush(stdout);
@@ -271,9 +274,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                   v.info.header.station_id.c_str(), s.score, s.is_final ? " final" : "",
                   s.time_in_contact_s, s.contacts, clearance, s.tremor_rms_m * 1e6);
     }
-    if (const auto rej = console.Rejected(); rej.total > 0) {
-      std::printf("rejected %llu received samples (latest: %s)\n",
-                  static_cast<unsigned long long>(rej.total), rej.last_reason.c_str());
+    if (const std::string rej = instructor::FormatRejected(console.Rejected()); !rej.empty()) {
+      std::printf("%s\n", rej.c_str());
     }
     for (const auto& g : console.InputGaps()) {
       std::printf("input gap %s: steps %llu..%llu missing\n", g.station_id.c_str(),

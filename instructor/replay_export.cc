@@ -138,7 +138,7 @@ const TopicCsv kTopicCsv[record::kTopicCount] = {
        return true;
      }},
     {"stamp_ns,ticks,period_mean_s,period_p99_s,period_max_s,overruns,ring_dropped,realtime,"
-     "has_state_hash,state_hash_step,state_hash",
+     "has_state_hash,state_hash_step,state_hash,cues_invalid,device_samples_invalid",
      [](std::span<const std::uint8_t> b, Row& r) {
        msg::Telemetry m;
        if (!DecodeSample<msg::TelemetryPubSubType>(b, m)) return false;
@@ -146,7 +146,8 @@ const TopicCsv kTopicCsv[record::kTopicCount] = {
          << m.period_p99_s() << m.period_max_s() << std::uint64_t{m.overruns()}
          << std::uint64_t{m.ring_dropped()} << std::uint8_t{m.realtime()}
          << std::uint8_t{m.has_state_hash()} << std::uint64_t{m.state_hash_step()}
-         << std::uint64_t{m.state_hash()};
+         << std::uint64_t{m.state_hash()} << std::uint64_t{m.cues_invalid()}
+         << std::uint64_t{m.device_samples_invalid()};
        return true;
      }},
     {"stamp_ns,cue_id,kind,param,issuer",

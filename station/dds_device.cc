@@ -1,6 +1,7 @@
 #include "station/dds_device.h"
 
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -9,6 +10,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <stdexcept>
 
+#include "common/net/convert.h"
 #include "common/net/topics.h"
 #include "device_forcePubSubTypes.h"
 #include "device_inputPubSubTypes.h"
@@ -29,6 +31,10 @@ class DdsDevice::Listener final : public dds::DataReaderListener {
     dds::SampleInfo info;
     while (reader->take_next_sample(&msg_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data || msg_.station_id().to_string() != device_.station_id_) continue;
+      if (!net::FromMsg(msg_, checked_)) {
+        device_.invalid_.fetch_add(1, std::memory_order_relaxed);
+        if (Finite(msg_)) continue;  // a non-finite one is the guard's fault (kNonFinite)
+      }
       BridgeSample s{};
       for (int i = 0; i < 3; ++i) s.p[i] = msg_.p_WT()[i];
       for (int i = 0; i < 4; ++i) s.q[i] = msg_.q_WT()[i];
@@ -42,8 +48,16 @@ class DdsDevice::Listener final : public dds::DataReaderListener {
   }
 
  private:
+  static bool Finite(const msg::DeviceInput& m) {
+    bool ok = std::isfinite(m.gripper());
+    for (double v : m.p_WT()) ok = ok && std::isfinite(v);
+    for (double v : m.q_WT()) ok = ok && std::isfinite(v);
+    return ok;
+  }
+
   DdsDevice& device_;
   msg::DeviceInput msg_;
+  net::DeviceInput checked_;  // reused: FromMsg's output
 };
 
 std::string SecondDeviceKey(const std::string& station_id) {

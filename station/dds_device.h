@@ -58,6 +58,11 @@ class DdsDevice final : public Device {
 
   // Any thread: samples received (valid or not) and forces the ring could not take.
   std::uint64_t samples_received() const { return received_.load(std::memory_order_relaxed); }
+  // Any thread: samples addressed to this device that fail net::FromMsg's checks (a number
+  // not finite, a quaternion not of unit length, a gripper outside 0..1, a position beyond
+  // 10 m, an id not printable). Those with a number that is not finite still go to the guard
+  // (its fault holds the last valid sample); the others are dropped here.
+  std::uint64_t samples_invalid() const { return invalid_.load(std::memory_order_relaxed); }
   std::uint64_t forces_dropped() const { return dropped_.load(std::memory_order_relaxed); }
   // The participant's Fast DDS threads made SCHED_FIFO kDdsThreadPriority (tuning rt), and
   // the participant profile it came from.
@@ -120,6 +125,7 @@ class DdsDevice final : public Device {
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> received_{0};
   std::atomic<std::uint64_t> dropped_{0};
+  std::atomic<std::uint64_t> invalid_{0};
   rt::MonotonicClock clock_;
   // Haptic thread only.
   DeviceGuard guard_;

@@ -133,6 +133,7 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
       << ", \"off\": " << (a.cue.off ? "true" : "false") << ", \"step\": " << a.step << "}";
   }
   f << "],\n  \"cues_rejected\": " << t.cues_rejected << ",\n";
+  f << "  \"cues_invalid\": " << t.cues_invalid << ",\n";
   f << "  \"state_hash\": \"" << StateHashHex(state::CalcStateHash(loop.state())) << "\",\n";
   f << "  \"state_hash_version\": " << state::kStateHashVersion << "\n}\n";
 }
@@ -230,6 +231,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
                                  "-" + std::to_string(getpid());
   std::unique_ptr<Device> device_owner;
   PageDevice* page_device = nullptr;
+  std::vector<const DdsDevice*> bridges;  // --device dds: its samples refused (Telemetry)
   if (o.device == "page") {
     auto page = std::make_unique<PageDevice>(scene.CalcIdealToolPose(0));
     page_device = page.get();
@@ -245,6 +247,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
     spdlog::info("device bridge: participant '{}', {} DDS threads SCHED_FIFO {} (tuning {})",
                  bridge->participant_profile(), bridge->dds_threads_realtime(),
                  DdsDevice::kDdsThreadPriority, o.device_bridge_tuning.Name());
+    bridges.push_back(bridge.get());
     device_owner = std::move(bridge);
   } else {
     device_owner = std::make_unique<SimTrainee>(scene, trainee_def);
@@ -266,9 +269,11 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
       // The second device's driver publishes and reads under the key STATION/2.
       const DeviceMappingDef mapping =
           DdsDeviceMapping(scene, o.device_map, 1, X_WT2_start.translation());
-      second_device = std::make_unique<DdsDevice>(o.dds, SecondDeviceKey(o.station_id),
-                                                  session_id.substr(0, 64), mapping,
-                                                  DeviceGuardDef{}, o.device_bridge_tuning);
+      auto bridge = std::make_unique<DdsDevice>(o.dds, SecondDeviceKey(o.station_id),
+                                                session_id.substr(0, 64), mapping,
+                                                DeviceGuardDef{}, o.device_bridge_tuning);
+      bridges.push_back(bridge.get());
+      second_device = std::move(bridge);
     } else {
       SimTraineeDef other_hand = trainee_def;
       other_hand.hand = 1;
@@ -326,6 +331,13 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   // A recorded station (--wait-for-recorder) leaves only once the recorder has every step.
   if (o.wait_for_recorder_s > 0) pc.input_ack_wait_s = std::max(2.0, o.wait_for_recorder_s);
   pc.mirror_rate_hz = o.mirror_rate_hz;
+  if (!bridges.empty()) {
+    pc.device_samples_invalid = [bridges] {
+      std::uint64_t n = 0;
+      for (const DdsDevice* b : bridges) n += b->samples_invalid();
+      return n;
+    };
+  }
   // The page's audio (--view): blocks of the audio cues for the pages that ask for them.
   std::unique_ptr<StationView> view;
   std::unique_ptr<AudioBlockStream> live_audio;

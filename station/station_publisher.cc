@@ -319,6 +319,7 @@ void StationPublisher::HandleCues() {
     std::string why;
     if (!net::FromMsg(w_->cue_msg, cue, &why)) {
       ++totals_.cues_rejected;
+      ++totals_.cues_invalid;
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, w_->cue_msg.cue_id(), 0,
                    "malformed cue: " + why);
       continue;
@@ -347,6 +348,7 @@ void StationPublisher::HandleCues() {
     }
     if (const std::string why_not = CheckCue(cue.kind, cue.param, cue.off); !why_not.empty()) {
       ++totals_.cues_rejected;
+      ++totals_.cues_invalid;
       PublishEvent(net::TaskEventKind::kCueRejected, last_.step, cue.cue_id, cue.param, why_not);
       continue;
     }
@@ -569,6 +571,8 @@ void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
   t.has_state_hash = totals_.has_state_hash;
   t.state_hash_step = totals_.state_hash_step;
   t.state_hash = totals_.state_hash;
+  t.cues_invalid = totals_.cues_invalid;
+  if (config_.device_samples_invalid) t.device_samples_invalid = config_.device_samples_invalid();
   for (std::size_t i = 0; i < scene_.modules.size(); ++i) {
     net::ModuleTelemetry m;
     m.name = scene_.modules[i];

@@ -56,6 +56,9 @@ struct PublisherConfig {
   std::int64_t wake_offset_ns = 60'000;
   // Called on the publisher thread with every snapshot, in step order (the audio output).
   std::function<void(const TickSnapshot&)> on_snapshot;
+  // Device bridge samples refused so far (--device dds: DdsDevice::samples_invalid() of each
+  // device); empty: none. Called on the publisher thread for each Telemetry.
+  std::function<std::uint64_t()> device_samples_invalid;
 };
 
 // A cue as the haptic thread acknowledged it, with the step it took effect at.
@@ -70,6 +73,8 @@ struct PublisherTotals {
   std::uint64_t input_write_failed = 0;
   std::uint64_t overruns = 0;
   std::uint64_t cues_rejected = 0;
+  // Of those, the invalid ones (malformed, or a parameter outside the kind's limits).
+  std::uint64_t cues_invalid = 0;
   // The latest state hash the haptic thread took (once a second), and its step.
   bool has_state_hash = false;
   std::uint64_t state_hash_step = 0;

@@ -657,6 +657,8 @@ void ToMsg(const Telemetry& in, msg::Telemetry& out) {
   out.has_state_hash(in.has_state_hash ? 1 : 0);
   out.state_hash_step(in.state_hash_step);
   out.state_hash(in.state_hash);
+  out.cues_invalid(in.cues_invalid);
+  out.device_samples_invalid(in.device_samples_invalid);
   out.modules().resize(in.modules.size());
   for (std::size_t i = 0; i < in.modules.size(); ++i) {
     const auto& m = in.modules[i];
@@ -693,6 +695,8 @@ bool FromMsg(const msg::Telemetry& in, Telemetry& out, std::string* why) {
   out.has_state_hash = in.has_state_hash() != 0;
   out.state_hash_step = in.state_hash_step();
   out.state_hash = in.state_hash();
+  out.cues_invalid = in.cues_invalid();
+  out.device_samples_invalid = in.device_samples_invalid();
   out.realtime = in.realtime() == 1;
   out.modules.resize(in.modules().size());
   for (std::size_t i = 0; i < in.modules().size(); ++i) {

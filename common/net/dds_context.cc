@@ -102,7 +102,8 @@ DdsContext::DdsContext(const DdsOptions& options) : options_(options) {
     participant_profile_ = options_.participant_profile;
   }
   if (options_.security_dir.empty()) {
-    participant_ = factory->create_participant_with_profile(domain, participant_profile_);
+    participant_ = factory->create_participant_with_profile(
+        domain, participant_profile_, options_.participant_listener, dds::StatusMask::none());
   } else {
     const SecurityFiles files = LoadSecurityFiles(options_.security_dir);
     if (!options_.partition.empty() && options_.partition != files.course) {
@@ -121,7 +122,8 @@ DdsContext::DdsContext(const DdsOptions& options) : options_(options) {
     for (const auto& [name, value] : SecurityProperties(files)) {
       qos.properties().properties().emplace_back(name, value);
     }
-    participant_ = factory->create_participant(domain, qos);
+    participant_ = factory->create_participant(domain, qos, options_.participant_listener,
+                                               dds::StatusMask::none());
     if (participant_ == nullptr) {
       throw std::runtime_error(
           "security '" + files.dir + "': Fast DDS refused the secure participant on domain " +

@@ -41,6 +41,10 @@ struct DdsOptions {
   // With security: the station this participant acts for (a station, a device driver), or
   // empty for the instructor (every station).
   std::string security_station;
+  // Called by Fast DDS from the participant's creation on (its discovery callbacks: the
+  // instructor learns each remote writer's partition); nullptr: none. Not owned: it must
+  // outlive the context.
+  dds::DomainParticipantListener* participant_listener = nullptr;
   // Empty when valid; otherwise a one-line reason naming the field.
   std::string Validate() const;
 };

@@ -145,6 +145,10 @@ struct Telemetry {
   bool has_state_hash = false;
   std::uint64_t state_hash_step = 0;
   std::uint64_t state_hash = 0;
+  // Invalid samples the station received and dropped, totals: cue commands, device bridge
+  // samples.
+  std::uint64_t cues_invalid = 0;
+  std::uint64_t device_samples_invalid = 0;
 };
 
 struct CueCommand {

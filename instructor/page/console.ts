@@ -35,7 +35,11 @@ interface StationJson {
   lost_by: string; heard_ms_ago: number; modules: string[]; period_p99_ms?: number;
   overruns?: number; score?: number; progress?: number; outcome?: number; task?: string;
   cues: CueJson[]; scene_error?: string;
+  cues_invalid?: number; device_samples_invalid?: number; // the station's own counts
 }
+// The samples the instructor refused (invalid, a station beyond the registry, a station_id
+// not its writer's partition's), by topic.
+interface RejectedJson { total: number; by_topic: Record<string, number>; latest: string }
 
 class Tile {
   readonly el: HTMLDivElement;
@@ -155,8 +159,11 @@ class Tile {
     this.station = station;
     const lost = station.presence !== 'alive';
     const f = this.view?.lastFrame;
+    const invalid = (station.cues_invalid ?? 0) + (station.device_samples_invalid ?? 0);
     const health = station.period_p99_ms !== undefined
-        ? `loop p99 ${station.period_p99_ms.toFixed(2)} ms · ${station.overruns} overruns` : '';
+        ? `loop p99 ${station.period_p99_ms.toFixed(2)} ms · ${station.overruns} overruns` +
+          (invalid > 0 ? ` · <span class="lost">invalid rx ${station.cues_invalid} cues, ${station.device_samples_invalid} device</span>` : '')
+        : '';
     const score = station.score !== undefined
         ? `score ${station.score.toFixed(1)} · ${((station.progress ?? 0) * 100).toFixed(0)} % · ${OUTCOMES[station.outcome ?? 0]}` : 'score –';
     const age = f ? `${f.scalars[S.toolAgeMs].toFixed(0)} ms` : '–';
@@ -223,7 +230,9 @@ function main(): void {
     framesBySlot: [] as number[], errors: [] as string[], latencyMs: [] as number[],
     receivedMs: [] as number[], budget: 0, tileDrawsPerSecond: 0, tileDrawsTotal: 0,
     sceneNames: {} as Record<string, string>, // station → the name of the scene its tile draws
+    rejected: { total: 0, by_topic: {}, latest: '' } as RejectedJson,
   };
+  let rejectedHtml = '';
   (window as any).microdexConsole = probe;
 
   const link = new FrameLink(socketUrl(), 'frame_worker.js', {
@@ -246,6 +255,17 @@ function main(): void {
           if (!slots.includes(id)) { tile.el.remove(); tiles.delete(id); }
         }
         document.getElementById('count')!.textContent = `${list.length} station(s)`;
+        const rej = m.rejected as RejectedJson | undefined;
+        if (rej) {
+          probe.rejected = rej;
+          const topics = Object.entries(rej.by_topic).map(([t, n]) => `${esc(t)} ${n}`).join(', ');
+          const html = rej.total > 0
+              ? `<span class="lost">rejected ${rej.total} received samples</span> (${topics}; latest: ${esc(rej.latest)})` : '';
+          if (html !== rejectedHtml) {
+            rejectedHtml = html;
+            document.getElementById('rejected')!.innerHTML = html;
+          }
+        }
         const rows = list.map((s) => `<tr data-station="${esc(s.id)}"><td>${esc(s.id)}</td><td>${esc(s.trainee)}</td>` +
             `<td>${esc(s.scene.split('/').pop() ?? '')}</td><td>${esc(s.task ?? '')}</td>` +
             `<td class="num">${s.score?.toFixed(1) ?? '–'}</td><td class="num">${s.progress !== undefined ? (s.progress * 100).toFixed(0) + ' %' : '–'}</td>` +

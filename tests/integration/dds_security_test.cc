@@ -2,21 +2,27 @@
 // participants of this process with and without its identities. Without a valid certificate
 // a participant matches and reads nothing; a station identity cannot publish cue commands nor
 // write into another station's partition (nor a device driver drive another station); a tampered
-// permissions file stops the app with a clear error. Each check has a positive control with a valid
-// identity, so it can fail.
+// permissions file stops the app with a clear error; inside its own partition a station identity
+// cannot speak for another station (the instructor refuses, counts and does not record such
+// samples). Each check has a positive control with a valid identity, so it can fail.
 #include "common/net/dds_security.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 
+#include "common/net/convert.h"
 #include "common/net/dds_context.h"
 #include "common/net/topics.h"
 #include "cue_commandPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
+#include "instructor/instructor.h"
 #include "station_infoPubSubTypes.h"
+#include "task_eventPubSubTypes.h"
 #include "tests/integration/process.h"
 
 namespace microdex {
@@ -187,6 +193,169 @@ TEST_F(DdsSecurity, AStationIdentityCannotPublishCuesNorWriteForAnotherStation) 
       },
       15000ms))
       << "station s1 did not receive the instructor's cue";
+}
+
+// "TOPIC STATION" → rows of the recording, and its metadata.
+struct Recorded {
+  std::map<std::string, int> rows;
+  std::map<std::string, std::string> metadata;
+};
+Recorded ReadRecording(const std::string& file) {
+  Recorded r;
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(file.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    sqlite3_close(db);
+    return r;
+  }
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(db,
+                     "SELECT t.name || ' ' || m.station, count(*) FROM messages m JOIN topics t "
+                     "ON t.id = m.topic_id GROUP BY 1",
+                     -1, &st, nullptr);
+  while (sqlite3_step(st) == SQLITE_ROW) {
+    r.rows[reinterpret_cast<const char*>(sqlite3_column_text(st, 0))] = sqlite3_column_int(st, 1);
+  }
+  sqlite3_finalize(st);
+  sqlite3_prepare_v2(db, "SELECT key, value FROM metadata", -1, &st, nullptr);
+  while (sqlite3_step(st) == SQLITE_ROW) {
+    r.metadata[reinterpret_cast<const char*>(sqlite3_column_text(st, 0))] =
+        reinterpret_cast<const char*>(sqlite3_column_text(st, 1));
+  }
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return r;
+}
+
+// Samples of station `id` that pass every check of net::FromMsg.
+msg::StationInfo InfoMsg(const std::string& id, const std::string& trainee) {
+  net::StationInfo p;
+  p.header = {id, id + "-session", 0, 1};
+  p.trainee = trainee;
+  p.scene = "needle_tube.yaml";
+  msg::StationInfo m;
+  net::ToMsg(p, m);
+  return m;
+}
+msg::DeviceInput InputMsg(const std::string& id, std::uint64_t step) {
+  net::DeviceInput p;
+  p.header = {id, id + "-session", step, 1};
+  msg::DeviceInput m;
+  net::ToMsg(p, m);
+  return m;
+}
+msg::TaskEvent EventMsg(const std::string& id, std::uint64_t step) {
+  net::TaskEvent p;
+  p.header = {id, id + "-session", step, 1};
+  p.kind = net::TaskEventKind::kContactBegin;
+  msg::TaskEvent m;
+  net::ToMsg(p, m);
+  return m;
+}
+
+// A station identity writes, in its own partition, samples claiming to be another station
+// (StationInfo, DeviceInput, TaskEvent, and a disposal of the other's StationInfo): the
+// instructor mirrors none of them, records none and counts each by topic, while the same
+// writers' samples of their own station (the control) are mirrored and recorded.
+TEST_F(DdsSecurity, AStationIdentityCannotSpeakForAnotherStationInItsPartition) {
+  const std::string file = *root_ + "/spoof.db";
+  instructor::InstructorOptions io;
+  io.dds = Options(Dir("c1", "instructor-i1"), "", "secure-instructor");
+  io.issuer = "i1";
+  io.record_file = file;
+  auto console = std::make_unique<instructor::Instructor>(io);
+
+  // The real s2 announces itself first.
+  net::DdsContext s2(Options(Dir("c1", "station-s2"), "s2", "station-s2"));
+  dds::DataWriter* s2_info = s2.CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+  msg::StationInfo real_s2 = InfoMsg("s2", "real s2");
+  ASSERT_TRUE(s2_info->write(&real_s2));
+  ASSERT_TRUE(testing::WaitUntil([&] { return console->Station("s2").has_value(); }, 15000ms))
+      << "the instructor never saw station s2";
+
+  // s1's identity: writers for its own samples (the control) and, beside them in the same
+  // partition, writers for samples that claim to be s2 (a writer holds one instance).
+  net::DdsContext s1(Options(Dir("c1", "station-s1"), "s1", "station-s1"));
+  dds::DataWriter* info = s1.CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+  dds::DataWriter* input = s1.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+  dds::DataWriter* events = s1.CreateWriter<msg::TaskEventPubSubType>(net::kTaskEventTopic);
+  dds::DataWriter* fake_info = s1.CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+  dds::DataWriter* fake_input = s1.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+  dds::DataWriter* fake_events = s1.CreateWriter<msg::TaskEventPubSubType>(net::kTaskEventTopic);
+  // Wait for the instructor's readers (DeviceInput is volatile: samples written before the
+  // match are not delivered).
+  ASSERT_TRUE(testing::WaitUntil(
+      [&] {
+        for (dds::DataWriter* w : {input, events, fake_input, fake_events}) {
+          dds::PublicationMatchedStatus st;
+          w->get_publication_matched_status(st);
+          if (st.current_count == 0) return false;
+        }
+        return true;
+      },
+      15000ms));
+  constexpr int kSteps = 40;
+  msg::StationInfo spoofed = InfoMsg("s2", "spoofed");
+  ASSERT_TRUE(fake_info->write(&spoofed));
+  for (int i = 1; i <= kSteps; ++i) {
+    msg::DeviceInput fake = InputMsg("s2", i);
+    ASSERT_TRUE(fake_input->write(&fake));
+    if (i % 10 == 0) {
+      msg::TaskEvent fake_event = EventMsg("s2", i);
+      ASSERT_TRUE(fake_events->write(&fake_event));
+    }
+  }
+  ASSERT_EQ(fake_info->dispose(&spoofed, fake_info->register_instance(&spoofed)),
+            ReturnCode_t::RETCODE_OK);
+  // The control: s1's own samples.
+  msg::StationInfo own = InfoMsg("s1", "s1 trainee");
+  ASSERT_TRUE(info->write(&own));
+  for (int i = 1; i <= kSteps; ++i) {
+    msg::DeviceInput m = InputMsg("s1", i);
+    ASSERT_TRUE(input->write(&m));
+  }
+  msg::TaskEvent own_event = EventMsg("s1", 1);
+  ASSERT_TRUE(events->write(&own_event));
+
+  const bool all_in = testing::WaitUntil(
+      [&] {
+        const auto v = console->Station("s1");
+        return v && v->inputs_received == kSteps && !v->events.empty() &&
+               console->Rejected().total >= kSteps + 4 + 2;
+      },
+      15000ms);
+  const instructor::RejectedSamples rejected = console->Rejected();
+  ASSERT_TRUE(all_in) << instructor::FormatRejected(rejected);
+  const auto v1 = console->Station("s1");
+  EXPECT_EQ(v1->info.trainee, "s1 trainee");
+  const auto v2 = console->Station("s2");
+  ASSERT_TRUE(v2.has_value());
+  EXPECT_EQ(v2->info.trainee, "real s2");
+  EXPECT_NE(v2->presence, instructor::Presence::kDeparted) << "the spoofed disposal was taken";
+  EXPECT_EQ(v2->inputs_received, 0u);
+  EXPECT_TRUE(v2->events.empty());
+  EXPECT_EQ(console->Stations().size(), 2u);
+  // The spoofed StationInfo and its disposal, the 40 inputs, the 4 events.
+  EXPECT_EQ(rejected.by_topic.count("station_info") ? rejected.by_topic.at("station_info") : 0, 2u);
+  EXPECT_EQ(rejected.by_topic.count("device_input") ? rejected.by_topic.at("device_input") : 0,
+            static_cast<std::uint64_t>(kSteps));
+  EXPECT_EQ(rejected.by_topic.count("task_event") ? rejected.by_topic.at("task_event") : 0, 4u);
+  EXPECT_EQ(rejected.total, static_cast<std::uint64_t>(kSteps) + 6);
+  EXPECT_NE(rejected.last_reason.find("from a writer in the partition of 's1'"), std::string::npos)
+      << rejected.last_reason;
+
+  console->FlushRecording();
+  const Recorded rec = ReadRecording(file);
+  EXPECT_EQ(
+      rec.rows.count("microdex/station_info s2") ? rec.rows.at("microdex/station_info s2") : 0, 1)
+      << "only the real s2's StationInfo";
+  EXPECT_EQ(rec.rows.count("microdex/device_input s2"), 0u);
+  EXPECT_EQ(rec.rows.count("microdex/task_event s2"), 0u);
+  EXPECT_EQ(
+      rec.rows.count("microdex/device_input s1") ? rec.rows.at("microdex/device_input s1") : 0,
+      kSteps);
+  EXPECT_EQ(rec.metadata.count("rejected_samples") ? rec.metadata.at("rejected_samples") : "",
+            "device_input 40\nstation_info 2\ntask_event 4\n");
+  EXPECT_NE(rec.metadata.count("rejected_latest") ? rec.metadata.at("rejected_latest") : "", "");
 }
 
 // A copy of `from` whose permissions.p7s grants partition c1/* instead of c1/s1 (the

@@ -351,11 +351,15 @@ TEST(NetConvert, TelemetryAndScoreRoundTrip) {
   t.period_max_s = 3e-3;
   t.overruns = 1;
   t.realtime = true;
+  t.cues_invalid = 3;
+  t.device_samples_invalid = 41;
   t.modules.push_back({"needle", 1e-6, 4e-6, 2e-9, "sp_vs_exact_m", 0});
   msg::Telemetry tm;
   ToMsg(t, tm);
   Telemetry t2;
   ASSERT_TRUE(FromMsg(tm, t2));
+  EXPECT_EQ(t2.cues_invalid, 3u);
+  EXPECT_EQ(t2.device_samples_invalid, 41u);
   ASSERT_EQ(t2.modules.size(), 1u);
   EXPECT_EQ(t2.modules[0].name, "needle");
   EXPECT_EQ(t2.modules[0].error_estimate, 2e-9);
