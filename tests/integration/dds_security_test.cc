@@ -304,6 +304,11 @@ TEST_F(DdsSecurity, AStationIdentityCannotSpeakForAnotherStationInItsPartition) 
       ASSERT_TRUE(fake_events->write(&fake_event));
     }
   }
+  // StationInfo keeps one sample per instance: the disposal would replace the spoofed sample
+  // if it came before the instructor took it.
+  ASSERT_TRUE(testing::WaitUntil(
+      [&] { return console->Rejected().by_topic.count("station_info") > 0; }, 15000ms))
+      << "the spoofed StationInfo was not refused";
   ASSERT_EQ(fake_info->dispose(&spoofed, fake_info->register_instance(&spoofed)),
             ReturnCode_t::RETCODE_OK);
   // The control: s1's own samples.
