@@ -62,9 +62,13 @@ inline void WriteWanProfiles(const std::string& dir, const std::string& ds_addre
   const std::string gen = SourceDir() + "/deploy/dds/gen-profiles";
   for (const char* role : {"server", "instructor", "station"}) {
     const char* transport = std::getenv("MICRODEX_WAN_TRANSPORT");
+    // With TCP: a station may listen on a port of its own (deploy/README.md, TCP).
+    const char* listen = std::getenv("MICRODEX_WAN_STATION_LISTEN");
+    const bool station_listens = listen != nullptr && std::string(role) == "station";
     ASSERT_TRUE(Shell(gen + " --wan " + role + " --server " + ds_address + ":11811" +
                       (transport != nullptr ? std::string(" --transport ") + transport : "") +
-                      " > " + dir + "/" + role + ".xml"))
+                      (station_listens ? std::string(" --listen ") + listen : "") + " > " + dir +
+                      "/" + role + ".xml"))
         << role;
   }
 }
