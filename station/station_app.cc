@@ -270,8 +270,8 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
       const DeviceMappingDef mapping =
           DdsDeviceMapping(scene, o.device_map, 1, X_WT2_start.translation());
       auto bridge = std::make_unique<DdsDevice>(o.dds, SecondDeviceKey(o.station_id),
-                                                session_id.substr(0, 64), mapping,
-                                                DeviceGuardDef{}, o.device_bridge_tuning);
+                                                session_id.substr(0, 64), mapping, DeviceGuardDef{},
+                                                o.device_bridge_tuning);
       bridges.push_back(bridge.get());
       second_device = std::move(bridge);
     } else {
