@@ -94,7 +94,7 @@ int RunRecord(int argc, char** argv) {
     return 2;
   }
   const char* src = std::getenv("MICRODEX_SOURCE_DIR");
-  const std::string scene =
+  const std::string scene_source =
       std::string(src ? src : MICRODEX_BENCH_SOURCE_DIR) + "/assets/scenes/needle_tube.yaml";
   std::string dir = "/tmp/microdex-bench-record-XXXXXX";
   if (mkdtemp(dir.data()) == nullptr) {
@@ -102,6 +102,25 @@ int RunRecord(int argc, char** argv) {
     return 2;
   }
   const std::string file = dir + "/session.db";
+  // The needle-in-tube scene with a time limit beyond the recording and passes without end, so
+  // that every station runs for --seconds (the scene's own limit is 60 s).
+  const std::string scene = dir + "/needle_tube_record.yaml";
+  {
+    std::ifstream in(scene_source);
+    std::ofstream out(scene);
+    std::string line;
+    while (std::getline(in, line)) {
+      out << line << '\n';
+      if (line == "task:") {
+        out << "  time_limit_s: " << std::min(3600.0, seconds + 60.0) << "\n  passes: 100000\n";
+      }
+    }
+    if (!in.eof() || !out) {
+      std::fprintf(stderr, "microdex-bench record: cannot write %s from %s\n", scene.c_str(),
+                   scene_source.c_str());
+      return 2;
+    }
+  }
 
   const double capacity = WriterCapacity(dir);
 
