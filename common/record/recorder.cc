@@ -17,9 +17,12 @@ double ThreadCpuS() {
 
 Recorder::Recorder(const std::string& path, const std::map<std::string, std::string>& metadata,
                    const RecorderConfig& config)
-    : path_(path), config_(config), writer_(std::make_unique<SessionWriter>(path, metadata)) {
+    : path_(path),
+      config_(config),
+      writer_(std::make_unique<SessionWriter>(path, metadata, !config.checkpoint_thread)) {
   queue_.reserve(config_.batch_wake);
   thread_ = std::thread([this] { Run(); });
+  if (config_.checkpoint_thread) checkpoint_thread_ = std::thread([this] { RunCheckpoints(); });
 }
 
 Recorder::~Recorder() {
@@ -28,6 +31,9 @@ Recorder::~Recorder() {
     stop_ = true;
   }
   wake_.notify_one();
+  checkpoint_wake_.notify_one();
+  // The checkpointer first: the writer's close then checkpoints what is left on its own.
+  if (checkpoint_thread_.joinable()) checkpoint_thread_.join();
   thread_.join();
 }
 
@@ -90,6 +96,8 @@ void Recorder::Run() {
     } catch (const std::exception& e) {
       error = e.what();
     }
+    const double write_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - now).count();
     const double cpu = ThreadCpuS();
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -98,6 +106,7 @@ void Recorder::Run() {
         ++stats_.commits;
         stats_.max_commit_gap_s = std::max(
             stats_.max_commit_gap_s, std::chrono::duration<double>(now - last_commit).count());
+        stats_.max_write_s = std::max(stats_.max_write_s, write_s);
       }
       if (!error.empty() && stats_.error.empty()) stats_.error = error;
       stats_.thread_cpu_s = cpu;
@@ -111,6 +120,29 @@ void Recorder::Run() {
     if (stopping) break;
   }
   writer_.reset();  // closes the file (WAL checkpointed)
+}
+
+void Recorder::RunCheckpoints() {
+  std::string error;
+  try {
+    WalCheckpointer checkpointer(path_);
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!stop_) {
+      checkpoint_wake_.wait_for(lock, config_.checkpoint_period, [&] { return stop_; });
+      if (stop_) break;
+      lock.unlock();
+      const int copied = checkpointer.Checkpoint();
+      lock.lock();
+      if (copied > 0) ++stats_.checkpoints;
+    }
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (!error.empty()) {
+    // The WAL then grows until the file is closed; the recording itself goes on.
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_.checkpoint_error = error;
+  }
 }
 
 }  // namespace microdex::record

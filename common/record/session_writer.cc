@@ -49,7 +49,8 @@ std::int64_t RealtimeNowNs() {
 }  // namespace
 
 SessionWriter::SessionWriter(const std::string& path,
-                             const std::map<std::string, std::string>& metadata)
+                             const std::map<std::string, std::string>& metadata,
+                             bool auto_checkpoint)
     : path_(path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0) {
@@ -65,8 +66,10 @@ SessionWriter::SessionWriter(const std::string& path,
   // WAL: a reader may open the file while it is written, and a killed recorder leaves every
   // committed transaction readable. synchronous=NORMAL: a commit survives the process being
   // killed (it is in the OS's buffers); only a power cut may lose the last ones.
+  // The WAL is checkpointed by a WalCheckpointer on its own connection, not inside a commit.
   Exec("PRAGMA journal_mode=WAL");
   Exec("PRAGMA synchronous=NORMAL");
+  if (!auto_checkpoint) Exec("PRAGMA wal_autocheckpoint=0");
   Exec("BEGIN");
   Exec(kSchemaSql);
   {
@@ -154,6 +157,39 @@ void SessionWriter::Write(std::span<const RecordedMessage> messages) {
     }
   }
   Exec("COMMIT");
+}
+
+WalCheckpointer::WalCheckpointer(const std::string& path) : path_(path) {
+  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
+    const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw std::runtime_error(path + ": cannot open for checkpoints: " + why);
+  }
+  sqlite3_busy_timeout(db_, 0);
+  // A connection learns that the file is in WAL mode when it first reads it; until then a
+  // checkpoint does nothing.
+  if (sqlite3_exec(db_, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr) !=
+      SQLITE_OK) {
+    const std::string why = sqlite3_errmsg(db_);
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw std::runtime_error(path + ": cannot read for checkpoints: " + why);
+  }
+}
+
+WalCheckpointer::~WalCheckpointer() { sqlite3_close(db_); }
+
+int WalCheckpointer::Checkpoint() {
+  int log_frames = 0;
+  int copied = 0;
+  const int rc =
+      sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_PASSIVE, &log_frames, &copied);
+  if (rc == SQLITE_BUSY || rc == SQLITE_LOCKED) return -1;
+  if (rc != SQLITE_OK) {
+    throw std::runtime_error(path_ + ": checkpoint: " + sqlite3_errmsg(db_));
+  }
+  return copied;
 }
 
 }  // namespace microdex::record

@@ -81,6 +81,11 @@ int RunRecord(int argc, char** argv) {
   app.add_option("--seconds", seconds, "seconds of recording (default 60)");
   app.add_option("--stations", stations, "station processes (default 8)");
   app.add_option("--domain", domain, "DDS domain id (default 92)");
+  std::string checkpoint = "thread";
+  app.add_option("--checkpoint", checkpoint,
+                 "who copies the WAL into the file: thread (default, a checkpoint thread) or "
+                 "commit (SQLite inside the commits, the earlier behaviour)")
+      ->check(CLI::IsMember({"thread", "commit"}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -129,6 +134,7 @@ int RunRecord(int argc, char** argv) {
   o.dds.domain_id = domain;
   o.issuer = "bench";
   o.record_file = file;
+  o.recorder.checkpoint_thread = checkpoint == "thread";
   std::optional<instructor::Instructor> console;
   console.emplace(o);
 
@@ -259,24 +265,26 @@ int RunRecord(int argc, char** argv) {
   const double lost =
       input_lost + sequence_gaps + missing_before_first + static_cast<double>(rs.dropped);
   char out[4096];
-  std::snprintf(out, sizeof out,
-                "{\n  \"stations\": %d,\n  \"seconds\": %.1f,\n  \"samples\": %llu,\n"
-                "  \"lost\": %.0f,\n  \"input_lost\": %.0f,\n  \"input_missing_first\": %.0f,\n"
-                "  \"input_missing_last\": %.0f,\n  \"station_steps\": %.0f,\n"
-                "  \"sequence_gaps\": %.0f,\n  \"sequence_gaps_by_topic\": {%s},\n"
-                "  \"missing_before_first\": %.0f,\n  \"lost_by_topic\": {%s},\n"
-                "  \"load_average_1min\": %.2f,\n"
-                "  \"recorder_dropped\": %llu,\n  \"mb_per_min\": %.2f,\n"
-                "  \"recorder_cpu\": %.4f,\n  \"instructor_cpu\": %.4f,\n"
-                "  \"commits\": %llu,\n  \"max_commit_gap_ms\": %.1f,\n"
-                "  \"offered_msgs_per_s\": %.0f,\n  \"writer_capacity_msgs_per_s\": %.0f,\n"
-                "  \"capacity_over_offered\": %.1f\n}\n",
-                stations, wall, static_cast<unsigned long long>(samples), lost, input_lost,
-                missing_first, missing_last, station_steps, sequence_gaps, by_topic.c_str(),
-                missing_before_first, lost_by_topic.c_str(), load_average,
-                static_cast<unsigned long long>(rs.dropped), bytes / 1e6 / (wall / 60),
-                recorder_cpu, instructor_cpu, static_cast<unsigned long long>(rs.commits),
-                rs.max_commit_gap_s * 1e3, offered, capacity, capacity / offered);
+  std::snprintf(
+      out, sizeof out,
+      "{\n  \"stations\": %d,\n  \"seconds\": %.1f,\n  \"samples\": %llu,\n"
+      "  \"lost\": %.0f,\n  \"input_lost\": %.0f,\n  \"input_missing_first\": %.0f,\n"
+      "  \"input_missing_last\": %.0f,\n  \"station_steps\": %.0f,\n"
+      "  \"sequence_gaps\": %.0f,\n  \"sequence_gaps_by_topic\": {%s},\n"
+      "  \"missing_before_first\": %.0f,\n  \"lost_by_topic\": {%s},\n"
+      "  \"load_average_1min\": %.2f,\n"
+      "  \"recorder_dropped\": %llu,\n  \"mb_per_min\": %.2f,\n"
+      "  \"recorder_cpu\": %.4f,\n  \"instructor_cpu\": %.4f,\n"
+      "  \"checkpoint\": \"%s\",\n  \"checkpoints\": %llu,\n"
+      "  \"commits\": %llu,\n  \"max_commit_gap_ms\": %.1f,\n  \"max_write_ms\": %.1f,\n"
+      "  \"offered_msgs_per_s\": %.0f,\n  \"writer_capacity_msgs_per_s\": %.0f,\n"
+      "  \"capacity_over_offered\": %.1f\n}\n",
+      stations, wall, static_cast<unsigned long long>(samples), lost, input_lost, missing_first,
+      missing_last, station_steps, sequence_gaps, by_topic.c_str(), missing_before_first,
+      lost_by_topic.c_str(), load_average, static_cast<unsigned long long>(rs.dropped),
+      bytes / 1e6 / (wall / 60), recorder_cpu, instructor_cpu, checkpoint.c_str(),
+      static_cast<unsigned long long>(rs.checkpoints), static_cast<unsigned long long>(rs.commits),
+      rs.max_commit_gap_s * 1e3, rs.max_write_s * 1e3, offered, capacity, capacity / offered);
   std::fputs(out, stdout);
   std::printf("goals: no sample lost: %s; recorder under half a core: %s\n",
               lost == 0 ? "met" : "NOT met", recorder_cpu < 0.5 ? "met" : "NOT met");

@@ -5,8 +5,11 @@
 // whose type hash is unknown is skipped while the rest stays readable.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <thread>
@@ -288,6 +291,61 @@ TEST_F(SessionTest, ATruncatedFileFailsCleanlyOrReadsItsReadablePart) {
       EXPECT_EQ(std::string(e.what()).rfind(cut + ": ", 0), 0u) << e.what();
     }
   }
+}
+
+// The WAL is copied into the file by the checkpoint thread, not inside the commits: the writer's
+// own connection never checkpoints (its WAL grows with what is written), the recorder's WAL
+// stays a fraction of it, and everything written reads back.
+TEST_F(SessionTest, TheCheckpointThreadKeepsTheWalShortAndLosesNothing) {
+  auto wal_bytes = [](const std::string& db) {
+    struct stat st {};
+    return ::stat((db + "-wal").c_str(), &st) == 0 ? static_cast<long long>(st.st_size) : 0LL;
+  };
+  constexpr int kBatches = 40, kPerBatch = 500, kBytes = 1000;  // 20 MB of samples
+  auto fill = [&](auto&& write) {
+    for (int b = 0; b < kBatches; ++b) {
+      std::vector<RecordedMessage> batch;
+      for (int i = 0; i < kPerBatch; ++i) {
+        RecordedMessage m = Message(static_cast<int>(TopicIndex::kDeviceInput), "a",
+                                    static_cast<std::uint64_t>(b * kPerBatch + i));
+        m.cdr.assign(kBytes, static_cast<std::uint8_t>(i));
+        batch.push_back(std::move(m));
+      }
+      write(std::move(batch));
+    }
+  };
+  constexpr long long kWritten = 1LL * kBatches * kPerBatch * kBytes;
+  const std::string plain = dir_ + "/plain.db";
+  {
+    SessionWriter w(plain, {});
+    fill([&](std::vector<RecordedMessage> batch) { w.Write(batch); });
+    EXPECT_GT(wal_bytes(plain), kWritten) << "the writer checkpointed by itself";
+  }
+  const std::string file = dir_ + "/checkpointed.db";
+  RecorderConfig config;
+  config.checkpoint_period = std::chrono::milliseconds(5);
+  long long wal_max = 0;
+  {
+    Recorder rec(file, {}, config);
+    fill([&](std::vector<RecordedMessage> batch) {
+      for (RecordedMessage& m : batch) ASSERT_TRUE(rec.Push(std::move(m)));
+      rec.Flush();
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));  // a checkpoint period or two
+      wal_max = std::max(wal_max, wal_bytes(file));
+    });
+    const RecorderStats s = rec.stats();
+    EXPECT_GT(s.checkpoints, 0u);
+    EXPECT_TRUE(s.checkpoint_error.empty()) << s.checkpoint_error;
+    EXPECT_EQ(s.written, std::uint64_t{kBatches * kPerBatch});
+  }
+  EXPECT_LT(wal_max, kWritten / 4);
+  SessionReader r(file);
+  std::size_t n = 0;
+  r.ForEach({}, [&](const MessageView& m) {
+    EXPECT_EQ(m.step, n);
+    return ++n, true;
+  });
+  EXPECT_EQ(n, std::size_t{kBatches * kPerBatch});
 }
 
 }  // namespace
