@@ -223,7 +223,9 @@ Instructor::Instructor(const InstructorOptions& options)
   const auto spec = [&](const net::TopicSpec& s) {
     return recorder_ ? net::RecordingReaderSpec(s) : s;
   };
-  d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(spec(net::kDeviceInputTopic));
+  if (recorder_ || options_.receive_inputs) {
+    d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(spec(net::kDeviceInputTopic));
+  }
   d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(spec(net::kToolStateTopic));
   d.needle = d.context->CreateReader<msg::NeedleStatePubSubType>(spec(net::kNeedleStateTopic));
   d.thread = d.context->CreateReader<msg::ThreadStatePubSubType>(spec(net::kThreadStateTopic));
@@ -365,6 +367,7 @@ StationView& Instructor::ViewFor(const std::string& station_id) {
     it = stations_.emplace(station_id, StationView{}).first;
     it->second.info.header.station_id = station_id;
     it->second.presence_changed_ns = MonotonicNowNs();
+    it->second.inputs_taken = dds_->input != nullptr;
   }
   return it->second;
 }
@@ -565,6 +568,7 @@ void Instructor::HandleInputs() {
   msg::DeviceInput m;
   dds::SampleInfo si;
   net::DeviceInput p;
+  if (dds_->input == nullptr) return;  // not taken (InstructorOptions::receive_inputs)
   while (dds_->input->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
     if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "device_input")) continue;
     std::string why;
@@ -955,9 +959,11 @@ std::string FormatStationTable(const std::vector<StationView>& stations, std::in
         task = std::to_string(static_cast<int>(std::lround(100 * sc.progress))) + "%";
       }
     }
-    char io[64];
-    std::snprintf(io, sizeof io, "%llu/%llu", static_cast<unsigned long long>(v.inputs_received),
-                  static_cast<unsigned long long>(v.inputs_lost));
+    char io[64] = "-";  // DeviceInput not taken (no recording, no --inputs)
+    if (v.inputs_taken) {
+      std::snprintf(io, sizeof io, "%llu/%llu", static_cast<unsigned long long>(v.inputs_received),
+                    static_cast<unsigned long long>(v.inputs_lost));
+    }
     std::snprintf(line, sizeof line,
                   "%-12.12s %-18.18s %-22.22s %-20.20s %-6s %7.3f %5llu %-28.28s %4u %-12.12s "
                   "%6.1f %-6.6s %7.1f %13s %11s\n",

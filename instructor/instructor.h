@@ -37,6 +37,11 @@ struct InstructorOptions {
   // Record every sample of every station, and the cues sent, to this SQLite file ("": none).
   std::string record_file;
   record::RecorderConfig recorder;
+  // Take every station's DeviceInput (1 kHz each: counted, gaps marked) even when not
+  // recording. A recording always takes them; a console without one draws the mirrored states
+  // (60 Hz) and leaves the 1 kHz inputs unread, which with 8 stations is most of the
+  // instructor's work and of the stations' sends.
+  bool receive_inputs = false;
 };
 
 enum class Presence {
@@ -83,6 +88,7 @@ struct StationView {
   Mirror<net::TissueState> tissue;
   Mirror<net::Telemetry> telemetry;
   Mirror<net::Score> score;
+  bool inputs_taken = false;  // DeviceInput read (recording or receive_inputs)
   std::uint64_t inputs_received = 0;
   std::uint64_t inputs_lost = 0;  // gaps in the DeviceInput step sequence of a session
   std::uint64_t last_input_step = 0;

@@ -84,6 +84,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
           microdex::cues::CueKindNames() + "; STATION may be 'all'");
   app.add_option("--table-period", table_period_s, "seconds between tables (0: only at the end)");
   app.add_option("--issuer", o.issuer, "name of this console in the cues it sends");
+  app.add_flag("--inputs", o.receive_inputs,
+               "take every station's 1 kHz DeviceInput without recording (counted in the table; "
+               "always taken with --record)");
   microdex::net::AddDdsOptions(app, o.dds);
   app.add_option("--record", o.record_file,
                  "record the session (every station's topics, the cues sent) to this new SQLite "

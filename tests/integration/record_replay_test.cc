@@ -207,6 +207,7 @@ TEST_F(RecordReplayTest, EveryTrainingSceneReSimulatesAndAnAlteredSampleIsFound)
   instructor::InstructorOptions options;
   options.dds.profile_file = net::DefaultDdsProfileFile();
   options.dds.domain_id = kReplayDomain;
+  options.receive_inputs = true;  // the replayed inputs are counted below
   instructor::Instructor mirror(options);
   const std::string log3 = dir_ + "/replay.log";
   ASSERT_EQ(RunReplay({file, "--speed", "1", "--from", "1", "--to", "2.5", "--domain",

@@ -55,6 +55,7 @@ TEST_F(StationInstructorTest, DiscoveryCuesLivelinessRestartAndShutdown) {
   options.dds.profile_file = net::DefaultDdsProfileFile();
   options.dds.domain_id = kDomain;
   options.issuer = "test-console";
+  options.receive_inputs = true;  // every DeviceInput step is checked below
   instructor::Instructor console(options);
 
   pid_t st[5] = {0, 0, 0, 0, 0};

@@ -3,6 +3,7 @@
 // state-to-screen latency (the tick stamp of the state → the page drawing it, both
 // CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
 // node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N] [--limit S]
+//   [--only station|console] [--replay 0|1] [--instructor_args "ARGS"] (e.g. "--inputs")
 // Bounded: every wait has its own time-out and the whole run stops after --limit seconds
 // (default 300), writing what it measured so far; each step is reported on stderr with the
 // time since the start.
@@ -21,7 +22,7 @@ const here = dirname(fileURLToPath(import.meta.url));
 const a = args({ web: join(sourceDir, 'build/web'), bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
                  seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0',
                  width: '1280', height: '720', only: '', query: '', limit: '300', replay: '1',
-                 console_query: '' });
+                 console_query: '', instructor_args: '' });
 const seconds = Number(a.seconds);
 const t0 = Date.now();
 const progress = (what) => process.stderr.write(`[${((Date.now() - t0) / 1000).toFixed(0).padStart(4)} s] ${what}\n`);
@@ -110,7 +111,8 @@ try {
   progress(`console: the instructor and ${n} stations`);
   const dds = ['--partition', `measure-${process.pid}-c`];
   const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
-                                        ['--http', '0', '--duration', String(seconds + 90), ...dds],
+                                        ['--http', '0', '--duration', String(seconds + 90), ...dds,
+                                         ...a.instructor_args.split(' ').filter(Boolean)],
                                         /console: http:\/\/127\.0\.0\.1:(\d+)\//);
   // The module scenes run until stopped (the training scenes end with their task).
   const scenes = ['needle_tube', 'thread_pull', 'tissue_press', 'suture_on_tissue',

@@ -80,6 +80,7 @@ int RunNet(int argc, char** argv) {
   o.dds.domain_id = domain;
   o.issuer = "bench";
   o.record_latency = true;
+  o.receive_inputs = true;  // the DeviceInput loss is part of the report
   instructor::Instructor console(o);
 
   // Stations run for the measured duration plus a second of start-up.
