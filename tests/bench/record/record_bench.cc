@@ -8,6 +8,7 @@
 //
 // The stations are microdex-station processes (next to this binary); this process is the
 // recording instructor (microdex::instructor::Instructor with record_file).
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -70,6 +71,8 @@ double WriterCapacity(const std::string& dir) {
   std::sort(rates.begin(), rates.end());
   return rates[rates.size() / 2];
 }
+
+constexpr double kStopGrace_s = 120;
 
 int RunRecord(int argc, char** argv) {
   std::string json_path;
@@ -186,6 +189,21 @@ int RunRecord(int argc, char** argv) {
       }
     }
     const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (el > seconds + kStopGrace_s && done < pids.size()) {
+      // Bounded: a station that has not stopped two minutes after its run (seen once under
+      // load 17: Fast DDS 2.9's writer teardown walking its history) is killed, and the run
+      // fails naming it.
+      for (std::size_t i = 0; i < pids.size(); ++i) {
+        if (pids[i] < 0) continue;
+        kill(pids[i], SIGKILL);
+        waitpid(pids[i], nullptr, 0);
+        std::fprintf(stderr,
+                     "microdex-bench record: station bench-%zu still running %.0f s after its "
+                     "%.0f s run: killed (logs in %s)\n",
+                     i + 1, el - seconds, seconds, dir.c_str());
+      }
+      return 1;
+    }
     if (tty)
       std::fprintf(stderr, "\rrecording: %.0f / %.0f s, ETA %.0f s ", el, seconds,
                    std::max(0.0, seconds - el));
