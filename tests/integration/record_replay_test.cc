@@ -35,9 +35,13 @@ using testing::WaitExit;
 constexpr int kDomain = 131;
 constexpr int kReplayDomain = 132;
 
+// The training scenes recorded together in one session (the needle through tissue and the
+// bimanual thread scene in a session of their own, below: two FEM/thread stations more would
+// load the two cores beyond what the paced stations of the first session keep up with).
 const char* const kTrainingScenes[] = {"tremor_hold",   "loop_along_wire", "needle_along_tube",
                                        "grasp",         "nylon_loop",      "knot_topology",
                                        "knot_placement"};
+const char* const kHeavyScenes[] = {"needle_through_tissue", "thread_two_hands"};
 
 std::string TmpDir() {
   std::string dir = "/tmp/microdex-record-XXXXXX";
@@ -225,6 +229,56 @@ TEST_F(RecordReplayTest, EveryTrainingSceneReSimulatesAndAnAlteredSampleIsFound)
             " inputs\n";
   }
   EXPECT_EQ(mirrored, std::size(kTrainingScenes)) << seen << ReadFile(log3);
+}
+
+// The composite needle-through-tissue scene (FEM tissue, puncture) and the bimanual thread
+// scene (two devices' inputs) record and re-simulate with every step's hash matching.
+TEST_F(RecordReplayTest, TheTissueAndBimanualScenesReSimulate) {
+  const std::string file = dir_ + "/heavy.db";
+  const pid_t console =
+      Spawn("microdex-instructor",
+            {"--headless", "--table-period", "0", "--domain", std::to_string(kDomain), "--record",
+             file, "--cue", "all:convergent:150@1.5"},
+            dir_ + "/instructor-heavy.log");
+  pids_.push_back(console);
+  std::vector<pid_t> stations;
+  for (std::size_t i = 0; i < std::size(kHeavyScenes); ++i) {
+    const std::string id = kHeavyScenes[i];
+    stations.push_back(
+        Spawn("microdex-station",
+              {"--scene", "assets/scenes/" + id + ".yaml", "--station-id", id, "--seed",
+               std::to_string(60 + i), "--skill", "0.4", "--duration", "4", "--no-realtime",
+               "--domain", std::to_string(kDomain), "--wait-for-recorder", "20"},
+              dir_ + "/" + id + ".log"));
+    pids_.push_back(stations.back());
+  }
+  for (std::size_t i = 0; i < stations.size(); ++i) {
+    const auto status = WaitExit(stations[i], 60s);
+    ASSERT_TRUE(status.has_value()) << kHeavyScenes[i];
+    EXPECT_EQ(*status, 0) << ReadFile(dir_ + "/" + kHeavyScenes[i] + ".log");
+  }
+  std::this_thread::sleep_for(500ms);
+  kill(console, SIGINT);
+  const auto console_status = WaitExit(console, 20s);
+  ASSERT_TRUE(console_status.has_value());
+  ASSERT_EQ(*console_status, 0) << ReadFile(dir_ + "/instructor-heavy.log");
+
+  const std::string log = dir_ + "/resim-heavy.log";
+  ASSERT_EQ(RunReplay({file, "--resimulate"}, log), 0) << ReadFile(log);
+  const std::string out = ReadFile(log);
+  for (const char* id : kHeavyScenes) {
+    const auto at = out.find(std::string("station ") + id + " ");
+    ASSERT_NE(at, std::string::npos) << id << "\n" << out;
+    const std::string line = out.substr(at, out.find('\n', at) - at);
+    unsigned long long steps = 0, hashes = 0;
+    const auto n = line.find("): ");
+    ASSERT_EQ(std::sscanf(line.c_str() + n + 3, "%llu steps re-simulated, %llu step hashes", &steps,
+                          &hashes),
+              2)
+        << line;
+    EXPECT_GE(steps, 3000u) << line;
+    EXPECT_EQ(hashes, steps) << line;
+  }
 }
 
 TEST_F(RecordReplayTest, AKilledRecorderLeavesAReadableFileUpToTheLast200Ms) {
