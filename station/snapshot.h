@@ -138,6 +138,10 @@ struct TickSnapshot {
   std::uint8_t has_state_hash = 0;
   std::uint64_t step_hash = 0;  // CalcStateHash after this step, every step (DeviceInput)
   state::ScoreState score;
+  // Knot placement: the stitches placed so far (state.placement).
+  int stitch_count = 0;
+  std::array<float, state::kMaxStitches> stitch_azimuth_rad{};
+  std::array<float, state::kMaxStitches> stitch_bite_m{};
 };
 
 }  // namespace microdex::station

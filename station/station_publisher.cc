@@ -477,6 +477,10 @@ void StationPublisher::PublishMirror() {
     w_->tool_plain.q_WT2 = Q(s.second.q_WT_device);
     w_->tool_plain.f_T2_W = E(s.second.f_T_W);
   }
+  static_assert(net::kMaxStitches == state::kMaxStitches);
+  w_->tool_plain.stitch_count = s.stitch_count;
+  w_->tool_plain.stitch_azimuth_rad = s.stitch_azimuth_rad;
+  w_->tool_plain.stitch_bite_m = s.stitch_bite_m;
   net::ToMsg(w_->tool_plain, w_->tool_msg);
   w_->tool->write(&w_->tool_msg);
   PublishOverlay();

@@ -512,6 +512,16 @@ void ProjectSnapshot(const Simulation& sim, const state::StationState& s, TickSn
     n.p_WD = ToVec3(c.p_WD);
     n.p_WB = ToVec3(c.p_WB);
   }
+  out.stitch_count = 0;
+  if (s.placement) {
+    const state::PlacementState& p = *s.placement;
+    out.stitch_count = std::clamp(p.count, 0, state::kMaxStitches);
+    for (int i = 0; i < out.stitch_count; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      out.stitch_azimuth_rad[k] = static_cast<float>(p.azimuth_rad[k]);
+      out.stitch_bite_m[k] = static_cast<float>(p.bite_m[k]);
+    }
+  }
   out.has_tremor = s.tremor ? 1 : 0;
   if (s.tremor) {
     out.tremor_band_m = s.tremor->band_m;

@@ -1,5 +1,6 @@
 #include "common/net/convert.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string_view>
@@ -479,6 +480,9 @@ void ToMsg(const ToolState& in, msg::ToolState& out) {
   out.p_WT2(V(in.p_WT2));
   out.q_WT2(Q(in.q_WT2));
   out.f_T2_W(V(in.f_T2_W));
+  const auto n = static_cast<std::size_t>(std::clamp<int>(in.stitch_count, 0, kMaxStitches));
+  out.stitch_azimuth_rad().assign(in.stitch_azimuth_rad.begin(), in.stitch_azimuth_rad.begin() + n);
+  out.stitch_bite_m().assign(in.stitch_bite_m.begin(), in.stitch_bite_m.begin() + n);
 }
 
 bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
@@ -508,6 +512,23 @@ bool FromMsg(const msg::ToolState& in, ToolState& out, std::string* why) {
     out.p_WT2.setZero();
     out.q_WT2.setIdentity();
     out.f_T2_W.setZero();
+  }
+  const std::vector<float>& az = in.stitch_azimuth_rad();
+  const std::vector<float>& bite = in.stitch_bite_m();
+  out.stitch_count = 0;
+  if (az.size() != bite.size() || az.size() > kMaxStitches) {
+    c.Fail("stitch_azimuth_rad, stitch_bite_m: expected as many of each, at most " +
+           std::to_string(kMaxStitches));
+  } else {
+    for (std::size_t i = 0; i < az.size(); ++i) {
+      // Azimuth in [0, 2π] (float rounding may reach 2π itself); a bite where a tool tip can
+      // be (the module records wherever the trainee places it).
+      if (!(az[i] >= 0.0F && az[i] <= 6.2832F)) c.Fail("stitch_azimuth_rad: outside [0, 2 pi)");
+      if (!(std::abs(bite[i]) <= 1.0F)) c.Fail("stitch_bite_m: not finite or beyond 1 m");
+      out.stitch_azimuth_rad[i] = az[i];
+      out.stitch_bite_m[i] = bite[i];
+    }
+    if (c.ok()) out.stitch_count = static_cast<int>(az.size());
   }
   return c.ok();
 }

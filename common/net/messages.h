@@ -4,6 +4,7 @@
 // Bounds (kMax...) are those of the IDL; FromMsg rejects a sample that exceeds them.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@ inline constexpr std::size_t kMaxModuleNameLength = 32;
 inline constexpr std::size_t kMaxThreadNodes = 512;    // ThreadState.nodes
 inline constexpr std::size_t kMaxTissueNodes = 16384;  // TissueState.displacement_m
 inline constexpr std::size_t kMaxTelemetryModules = 16;
+inline constexpr std::size_t kMaxStitches = 16;     // ToolState.stitch_* (state::kMaxStitches)
 inline constexpr const char* kAllStations = "all";  // CueCommand target for every station
 
 // Fields every sample carries.
@@ -69,6 +71,10 @@ struct ToolState {
   Eigen::Vector3d p_WT2 = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_WT2 = Eigen::Quaterniond::Identity();
   Eigen::Vector3d f_T2_W = Eigen::Vector3d::Zero();
+  // Knot placement: the stitches placed so far (the others: 0).
+  int stitch_count = 0;
+  std::array<float, kMaxStitches> stitch_azimuth_rad{};  // [0, 2π)
+  std::array<float, kMaxStitches> stitch_bite_m{};       // below the cut edge, m
 };
 
 enum class ClearanceStatus : std::uint8_t { kOk = 0, kEmptyRange = 1, kInvalidInput = 2 };

@@ -39,6 +39,12 @@ void EncodeFrame(const FrameSource& src, FrameBytes& out) {
       PutQ(s.data(), kTool2Q, t.q_WT2);
       Put3(s.data(), kTool2Force, t.f_T2_W);
     }
+    const int stitches = std::clamp(t.stitch_count, 0, static_cast<int>(net::kMaxStitches));
+    s[kStitchCount] = stitches;
+    for (int i = 0; i < stitches; ++i) {
+      s[kStitchAzimuth + i] = t.stitch_azimuth_rad[static_cast<std::size_t>(i)];
+      s[kStitchBite + i] = t.stitch_bite_m[static_cast<std::size_t>(i)];
+    }
   } else {
     s[kToolQ] = 1;
   }

@@ -27,7 +27,7 @@
 namespace microdex::view {
 
 inline constexpr std::uint32_t kFrameMagic = 0x4658444d;  // "MDXF" read as little-endian u32
-inline constexpr std::uint16_t kFrameVersion = 3;
+inline constexpr std::uint16_t kFrameVersion = 4;
 inline constexpr std::size_t kFrameHeaderBytes = 16;
 
 // Section flags.
@@ -64,15 +64,18 @@ enum Scalar : int {
   kTissueLy = 37,
   kScore = 38,
   kProgress = 39,
-  kOutcome = 40,      // state::TaskOutcome: 0 running, 1 completed, 2 time limit
-  kPeriodP99Ms = 41,  // haptic period p99 of the last telemetry window
-  kOverruns = 42,     // in that window
-  kPresence = 43,     // console: 0 alive, 1 lost, 2 departed
-  kToolAgeMs = 44,    // console: age of the mirrored tool state when encoded
-  kTool2P = 48,       // bimanual: the second tool's p_WT x, y, z (m)
-  kTool2Q = 51,       // its q_WT w, x, y, z
-  kTool2Force = 55,   // the force sent to it, x, y, z (N)
-  kScalarCount = 58,
+  kOutcome = 40,        // state::TaskOutcome: 0 running, 1 completed, 2 time limit
+  kPeriodP99Ms = 41,    // haptic period p99 of the last telemetry window
+  kOverruns = 42,       // in that window
+  kPresence = 43,       // console: 0 alive, 1 lost, 2 departed
+  kToolAgeMs = 44,      // console: age of the mirrored tool state when encoded
+  kTool2P = 48,         // bimanual: the second tool's p_WT x, y, z (m)
+  kTool2Q = 51,         // its q_WT w, x, y, z
+  kTool2Force = 55,     // the force sent to it, x, y, z (N)
+  kStitchCount = 58,    // knot placement: the stitches placed so far (0..16)
+  kStitchAzimuth = 59,  // their azimuths about the vessel axis, rad (16 slots)
+  kStitchBite = 75,     // their bites below the cut edge, m (16 slots)
+  kScalarCount = 91,
 };
 
 inline constexpr std::size_t kMaxFrameThreadNodes = net::kMaxThreadNodes;

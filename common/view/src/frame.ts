@@ -3,9 +3,10 @@
 // message: no copies, nothing drawn here.
 
 export const FRAME_MAGIC = 0x4658444d; // "MDXF"
-export const FRAME_VERSION = 3;
+export const FRAME_VERSION = 4;
 export const HEADER_BYTES = 16;
-export const SCALAR_COUNT = 58;
+export const SCALAR_COUNT = 91;
+export const MAX_STITCHES = 16;
 
 export const HAS_NEEDLE = 1;
 export const HAS_THREAD = 2;
@@ -54,6 +55,9 @@ export const S = {
   tool2P: 48,
   tool2Q: 51,
   tool2Force: 55,
+  stitchCount: 58, // knot placement: the stitches placed so far
+  stitchAzimuth: 59, // MAX_STITCHES slots, rad about the vessel axis
+  stitchBite: 75, // MAX_STITCHES slots, m below the cut edge
 } as const;
 
 // The visual cues as drawing data (common/cues/cue_overlay.h): world points, colours 0..1.

@@ -5,7 +5,7 @@
 import * as THREE from 'three';
 import {
   Frame, HAS_NEEDLE, HAS_SCORE, HAS_THREAD, HAS_TISSUE, MAX_OVERLAY_LABELS, MAX_OVERLAY_POINTS,
-  MAX_OVERLAY_POLYLINES, HAS_SECOND_TOOL, Overlay, S,
+  MAX_OVERLAY_POLYLINES, MAX_STITCHES, HAS_SECOND_TOOL, Overlay, S,
 } from './frame';
 
 export type V3 = [number, number, number];
@@ -245,6 +245,8 @@ export class SceneView {
   private tissueKey = '';
   knot: PolylineTube | null = null;
   knotItem = -1; // the quiz item drawn (-1 none; items.length: the quiz is done)
+  // Knot placement: the stitches placed so far (hidden until placed), from the frames.
+  readonly stitches: THREE.Mesh[] = [];
   readonly overlay: CueOverlayView;
   // The thread's extent so far (grows only): the console frames a thread tile on it.
   readonly threadBox = new THREE.Box3();
@@ -318,9 +320,18 @@ export class SceneView {
       this.root.add(new THREE.Mesh(geom, material(0xd0606a, { side: THREE.DoubleSide })));
     }
     if (scene.placement) {
-      // Where the stitches go: evenly around the vessel, bite below the cut edge (a guide;
-      // the stitches placed are not mirrored yet, only their count in the score's progress).
+      // Where the stitches go: evenly around the vessel, bite below the cut edge (a guide);
+      // the stitches placed are drawn as they arrive in the frames (stitch_* of the tool
+      // state), a suture-blue bead through the wall at each.
       const p = scene.placement;
+      const beadGeom = new THREE.SphereGeometry(p.vessel_radius * 0.11, d.radial, d.radial / 2);
+      const beadMat = new THREE.MeshBasicMaterial({ color: KNOT_COLOR });
+      for (let k = 0; k < MAX_STITCHES; ++k) {
+        const bead = new THREE.Mesh(beadGeom, beadMat);
+        bead.visible = false;
+        this.stitches.push(bead);
+        this.root.add(bead);
+      }
       const z = p.end_height - p.bite;
       const r = p.vessel_radius * 1.04;
       const dotGeom = new THREE.SphereGeometry(p.vessel_radius * 0.09, d.radial, d.radial / 2);
@@ -457,6 +468,23 @@ export class SceneView {
       this.showKnot(Math.round(s[S.progress] * this.scene.knots.items.length));
     }
     if (f.overlay) this.overlay.apply(f.overlay);
+    this.applyStitches(s);
+  }
+
+  // The knot placement's stitches placed so far, on the vessel wall at their azimuth and bite.
+  applyStitches(s: Float64Array): void {
+    const p = this.scene.placement;
+    if (!p || this.stitches.length === 0) return;
+    const n = Math.max(0, Math.min(MAX_STITCHES, Math.round(s[S.stitchCount])));
+    for (let k = 0; k < this.stitches.length; ++k) {
+      const bead = this.stitches[k];
+      bead.visible = k < n;
+      if (k >= n) continue;
+      const a = s[S.stitchAzimuth + k];
+      // Just outside the wall (as the targets), so that the wall does not hide half of it.
+      const r = p.vessel_radius * 1.04;
+      bead.position.set(r * Math.cos(a), r * Math.sin(a), p.end_height - s[S.stitchBite + k]);
+    }
   }
 
   // The thread drawn at least a few pixels wide for a view showing `field` (m) high (a tile

@@ -298,6 +298,39 @@ TEST(NetConvert, ActiveCuesCrossByKindName) {
   EXPECT_NE(why.find("active_cues"), std::string::npos) << why;
 }
 
+TEST(NetConvert, PlacedStitchesCrossAndBadOnesAreRefused) {
+  ToolState in;
+  in.header = MakeHeader();
+  in.stitch_count = 2;
+  in.stitch_azimuth_rad = {0.25F, 6.2F};
+  in.stitch_bite_m = {3e-4F, -1e-4F};
+  msg::ToolState m;
+  ToMsg(in, m);
+  ASSERT_EQ(m.stitch_azimuth_rad().size(), 2u);
+  ToolState out;
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_EQ(out.stitch_count, 2);
+  EXPECT_EQ(out.stitch_azimuth_rad[1], 6.2F);
+  EXPECT_EQ(out.stitch_bite_m[1], -1e-4F);
+  // Another scene: none.
+  ToMsg(ToolState{.header = MakeHeader()}, m);
+  ASSERT_TRUE(FromMsg(m, out));
+  EXPECT_EQ(out.stitch_count, 0);
+  // Refused, naming the field: unequal lengths, an azimuth outside [0, 2π), a NaN bite.
+  const auto refused = [&](std::vector<float> az, std::vector<float> bite, const char* field) {
+    ToMsg(in, m);
+    m.stitch_azimuth_rad(az);
+    m.stitch_bite_m(bite);
+    std::string why;
+    EXPECT_FALSE(FromMsg(m, out, &why)) << field;
+    EXPECT_NE(why.find(field), std::string::npos) << why;
+  };
+  refused({0.1F, 0.2F}, {1e-4F}, "stitch_azimuth_rad");
+  refused({-0.1F}, {1e-4F}, "stitch_azimuth_rad");
+  refused({7.0F}, {1e-4F}, "stitch_azimuth_rad");
+  refused({0.1F}, {std::numeric_limits<float>::quiet_NaN()}, "stitch_bite_m");
+}
+
 TEST(NetConvert, SecondToolCrossesAndIsCheckedOnlyWhenPresent) {
   ToolState in;
   in.header = MakeHeader();

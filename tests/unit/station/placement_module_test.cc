@@ -6,7 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <memory>
 #include <numbers>
+
+#include "common/scene/scene.h"
+#include "station/snapshot.h"
+#include "station/station_step.h"
 
 namespace microdex::station {
 namespace {
@@ -64,6 +70,36 @@ TEST(PlacementModule, ButtonPressPlacesAStitchAtTheTip) {
   m.Step(in, s, f);
   EXPECT_EQ(s.placement->count, 2);
   EXPECT_EQ(f, Eigen::Vector3d::Zero());
+}
+
+// The stitches placed reach the tick's snapshot, from which the mirrored tool state and the
+// view frames carry them to the pages.
+TEST(PlacementModule, TheStitchesPlacedReachTheSnapshot) {
+  const scene::SceneModel scene = scene::LoadScene(
+      std::string(std::getenv("MICRODEX_SOURCE_DIR") ? std::getenv("MICRODEX_SOURCE_DIR") : ".") +
+      "/assets/scenes/knot_placement.yaml");
+  Simulation sim(scene);
+  state::StationState s = sim.MakeInitialState(3);
+  const double h = scene.placement->end_height_m;
+  const double r = scene.placement->vessel_radius_m;
+  for (int k = 0; k < 3; ++k) {
+    const double a = 0.5 + 2.0 * k;
+    StationInput in;
+    in.device.X_WT.translation() = Eigen::Vector3d(r * std::cos(a), r * std::sin(a), h - 0.3e-3);
+    for (const std::uint32_t buttons : {0u, 1u}) {
+      in.device.buttons = buttons;
+      StepStation(sim, in, s);
+    }
+  }
+  ASSERT_EQ(s.placement->count, 3);
+  auto snap = std::make_unique<TickSnapshot>();
+  ProjectSnapshot(sim, s, *snap);
+  ASSERT_EQ(snap->stitch_count, 3);
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    EXPECT_EQ(snap->stitch_azimuth_rad[i], static_cast<float>(s.placement->azimuth_rad[i]));
+    EXPECT_EQ(snap->stitch_bite_m[i], static_cast<float>(s.placement->bite_m[i]));
+  }
 }
 
 }  // namespace

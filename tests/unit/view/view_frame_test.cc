@@ -82,6 +82,27 @@ TEST(ViewFrame, SecondToolOfABimanualScene) {
   EXPECT_LE(kTool2Force + 3, kScalarCount);
 }
 
+TEST(ViewFrame, PlacedStitchesFollowTheToolState) {
+  net::ToolState tool;
+  tool.stitch_count = 3;
+  tool.stitch_azimuth_rad = {0.5F, 2.0F, 6.0F};
+  tool.stitch_bite_m = {3e-4F, 2.5e-4F, 3.5e-4F};
+  FrameSource src;
+  src.tool = &tool;
+  auto f = std::make_unique<FrameBytes>();
+  EncodeFrame(src, *f);
+  EXPECT_EQ(Scalar(*f, kStitchCount), 3);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(Scalar(*f, kStitchAzimuth + i), tool.stitch_azimuth_rad[static_cast<std::size_t>(i)]);
+    EXPECT_EQ(Scalar(*f, kStitchBite + i), tool.stitch_bite_m[static_cast<std::size_t>(i)]);
+  }
+  EXPECT_EQ(Scalar(*f, kStitchAzimuth + 3), 0) << "slots beyond the count stay zero";
+  tool.stitch_count = 40;  // beyond the bound: cut to it
+  EncodeFrame(src, *f);
+  EXPECT_EQ(Scalar(*f, kStitchCount), 16);
+  EXPECT_EQ(kStitchBite + 16, kScalarCount);
+}
+
 TEST(ViewFrame, ThreadAndTissueFollowTheScalars) {
   net::ToolState tool;
   net::ThreadState thread;

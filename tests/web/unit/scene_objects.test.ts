@@ -118,6 +118,25 @@ test('the vessel is the torus segment of the scene, the needle follows the frame
   assert.equal(v.needleMaterial!.color.getHex(), NEEDLE_COLOR);
 });
 
+test('knot placement: the stitches placed appear on the vessel wall at their azimuth and bite', () => {
+  const placement = { vessel_radius: 1e-3, end_height: 4e-3, stitches: 8, bite: 0.3e-3 };
+  const v = new SceneView({ ...base, modules: ['placement'], vessel: undefined, needle: undefined, placement },
+                          LOW_DETAIL);
+  assert.equal(v.stitches.length, 16);
+  assert.ok(v.stitches.every((b) => !b.visible), 'none placed yet');
+  v.apply(frame(0, { [S.stitchCount]: 2, [S.stitchAzimuth]: 0, [S.stitchBite]: 0.3e-3,
+                     [S.stitchAzimuth + 1]: Math.PI / 2, [S.stitchBite + 1]: 0.5e-3 }));
+  assert.deepEqual(v.stitches.map((b) => b.visible).slice(0, 3), [true, true, false]);
+  const near = (a: number[], b: number[]) => a.every((x, i) => Math.abs(x - b[i]) < 1e-12);
+  assert.ok(near(v.stitches[0].position.toArray(), [1.04e-3, 0, 3.7e-3]));
+  assert.ok(near(v.stitches[1].position.toArray(), [0, 1.04e-3, 3.5e-3]));
+  // A count beyond the slots is cut; a later frame with fewer hides the rest (a new run).
+  v.apply(frame(0, { [S.stitchCount]: 99 }));
+  assert.ok(v.stitches.every((b) => b.visible));
+  v.apply(frame(0, { [S.stitchCount]: 0 }));
+  assert.ok(v.stitches.every((b) => !b.visible));
+});
+
 test('the tool takes the frame pose', () => {
   const v = new SceneView(base, LOW_DETAIL);
   assert.deepEqual(v.tool.position.toArray(), [0.001, 0, 0]);
