@@ -9,7 +9,10 @@
 namespace microdex::thread {
 
 BandedSpd::BandedSpd(int size, int half_bandwidth)
-    : size_(size), p_(half_bandwidth), band_(Eigen::MatrixXd::Zero(half_bandwidth + 1, size)) {
+    : size_(size),
+      p_(half_bandwidth),
+      band_(Eigen::MatrixXd::Zero(half_bandwidth + 1, size)),
+      inv_diag_(Eigen::VectorXd::Zero(size)) {
   MICRODEX_CHECK(size >= 1 && half_bandwidth >= 0);
 }
 
@@ -38,6 +41,8 @@ void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
   }
 }
 
+// The divisions by the pivots are multiplications by their inverses, kept for the solves: each
+// row's entries depend on the ones before them, so a division's latency would be on that chain.
 bool BandedSpd::Factorize() {
   for (int i = 0; i < size_; ++i) {
     const int lo = std::max(0, i - p_);
@@ -46,28 +51,29 @@ bool BandedSpd::Factorize() {
       const int klo = std::max(lo, j - p_);
       for (int k = klo; k < j; ++k) sum -= band_(i - k, i) * band_(j - k, j);
       if (j < i) {
-        band_(i - j, i) = sum / band_(0, j);
+        band_(i - j, i) = sum * inv_diag_[j];
       } else {
         if (!(sum > 0.0) || !std::isfinite(sum)) return false;
         band_(0, i) = std::sqrt(sum);
+        inv_diag_[i] = 1.0 / band_(0, i);
       }
     }
   }
   return true;
 }
 
-void BandedSpd::Solve(Eigen::VectorXd& b) const {
-  for (int i = 0; i < size_; ++i) {  // L y = b
+void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
+  for (int i = std::max(0, first_row); i < size_; ++i) {  // L y = b
     double sum = b[i];
-    const int lo = std::max(0, i - p_);
+    const int lo = std::max(first_row, i - p_);
     for (int k = lo; k < i; ++k) sum -= band_(i - k, i) * b[k];
-    b[i] = sum / band_(0, i);
+    b[i] = sum * inv_diag_[i];
   }
   for (int i = size_ - 1; i >= 0; --i) {  // L^T x = y
     double sum = b[i];
     const int hi = std::min(size_ - 1, i + p_);
     for (int k = i + 1; k <= hi; ++k) sum -= band_(k - i, k) * b[k];
-    b[i] = sum / band_(0, i);
+    b[i] = sum * inv_diag_[i];
   }
 }
 
@@ -77,13 +83,34 @@ void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols) const {
   for (int i = 0; i < size_; ++i) {  // L Y = B
     auto row = b.row(i).head(cols);
     for (int k = std::max(0, i - p_); k < i; ++k) row -= band_(i - k, i) * b.row(k).head(cols);
-    row *= 1.0 / band_(0, i);
+    row *= inv_diag_[i];
   }
   for (int i = size_ - 1; i >= 0; --i) {  // L^T X = Y
     auto row = b.row(i).head(cols);
     const int hi = std::min(size_ - 1, i + p_);
     for (int k = i + 1; k <= hi; ++k) row -= band_(k - i, k) * b.row(k).head(cols);
-    row *= 1.0 / band_(0, i);
+    row *= inv_diag_[i];
+  }
+}
+
+void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const {
+  MICRODEX_CHECK(b.rows() == size_ && cols <= b.cols());
+  if (cols <= 0 || first_rows[0] >= size_) return;
+  const int top = first_rows[0];
+  int active = 0;                      // columns that start at or above row i
+  for (int i = top; i < size_; ++i) {  // L Y = B, leading zeros skipped
+    while (active < cols && first_rows[active] <= i) ++active;
+    auto row = b.row(i).head(active);
+    for (int k = std::max(top, i - p_); k < i; ++k) {
+      row -= band_(i - k, i) * b.row(k).head(active);
+    }
+    row *= inv_diag_[i];
+  }
+  for (int i = size_ - 1; i >= top; --i) {  // L^T X = Y, down to the first touched row
+    auto row = b.row(i).head(cols);
+    const int hi = std::min(size_ - 1, i + p_);
+    for (int k = i + 1; k <= hi; ++k) row -= band_(k - i, k) * b.row(k).head(cols);
+    row *= inv_diag_[i];
   }
 }
 
@@ -137,6 +164,11 @@ LowRankSolver::LowRankSolver(int size, int max_columns)
     : size_(size),
       max_columns_(max_columns),
       y_(BandedSpd::RowMajorMatrix::Zero(size, std::max(1, max_columns))),
+      order_(Eigen::VectorXi::Zero(std::max(1, max_columns))),
+      slot_(Eigen::VectorXi::Zero(std::max(1, max_columns))),
+      column_first_(Eigen::VectorXi::Zero(std::max(1, max_columns))),
+      first_row_(Eigen::VectorXi::Zero(std::max(1, max_columns))),
+      work_(Eigen::VectorXd::Zero(size)),
       h_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
       x_ut_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
       small_(Eigen::VectorXd::Zero(std::max(1, max_columns))) {
@@ -147,27 +179,51 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
                             const double* d) {
   const int m = static_cast<int>(columns.size());
   MICRODEX_CHECK(m <= max_columns_ && num_u >= 0 && num_u <= m && factor.size() == size_);
+  factor_ = &factor;
   columns_ = columns;
   num_u_ = num_u;
   num_t_ = m - num_u;
   if (m == 0) return true;
-  y_.leftCols(m).setZero();
+  // Columns in the order of their first touched row (a column of grasped nodes only is zero
+  // and goes last).
+  for (int j = 0; j < m; ++j) {
+    const NodeColumn& c = columns[j];
+    int first = size_;
+    for (int k = 0; k < c.count; ++k) {
+      if (c.weight[k] != 0.0) first = std::min(first, 3 * c.node[k]);
+    }
+    column_first_[j] = first;
+    order_[j] = j;
+  }
+  std::sort(order_.data(), order_.data() + m, [&](int a, int b) {
+    return column_first_[a] != column_first_[b] ? column_first_[a] < column_first_[b] : a < b;
+  });
+  for (int s = 0; s < m; ++s) {
+    slot_[order_[s]] = s;
+    first_row_[s] = column_first_[order_[s]];
+  }
+  const int top = first_row_[0];
+  if (top < size_) y_.block(top, 0, size_ - top, m).setZero();
   for (int j = 0; j < m; ++j) {
     const NodeColumn& c = columns[j];
     for (int k = 0; k < c.count; ++k) {
-      for (int r = 0; r < 3; ++r) y_(3 * c.node[k] + r, j) += c.weight[k] * c.dir[r];
+      if (c.weight[k] == 0.0) continue;
+      for (int r = 0; r < 3; ++r) y_(3 * c.node[k] + r, slot_[j]) += c.weight[k] * c.dir[r];
     }
   }
-  factor.SolveColumns(y_, m);
-  // H = V^T Y, symmetric: the lower triangle from the sparse columns.
+  factor.SolveColumns(y_, m, first_row_.data());
+  // H = V^T Y, symmetric: the lower triangle from the sparse columns (zero weights skipped: a
+  // zero column's rows of Y are not solved).
   for (int i = 0; i < m; ++i) {
     const NodeColumn& c = columns[i];
     for (int j = 0; j <= i; ++j) {
+      const int sj = slot_[j];
       double sum = 0.0;
       for (int k = 0; k < c.count; ++k) {
+        if (c.weight[k] == 0.0) continue;
         const int row = 3 * c.node[k];
         sum += c.weight[k] *
-               (c.dir[0] * y_(row, j) + c.dir[1] * y_(row + 1, j) + c.dir[2] * y_(row + 2, j));
+               (c.dir[0] * y_(row, sj) + c.dir[1] * y_(row + 1, sj) + c.dir[2] * y_(row + 2, sj));
       }
       h_(i, j) = sum;
     }
@@ -189,13 +245,31 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
   return true;
 }
 
+void LowRankSolver::AddSolvedColumns(const double* coefficients, int first, int count,
+                                     Eigen::Ref<Eigen::VectorXd> x) {
+  work_.setZero();
+  int top = size_;
+  for (int j = 0; j < count; ++j) {
+    const NodeColumn& c = columns_[first + j];
+    for (int k = 0; k < c.count; ++k) {
+      if (c.weight[k] == 0.0) continue;
+      work_.segment<3>(3 * c.node[k]) += (coefficients[j] * c.weight[k]) * c.dir;
+      top = std::min(top, 3 * c.node[k]);
+    }
+  }
+  if (top >= size_) return;
+  factor_->Solve(work_, top);
+  x += work_;
+}
+
 void LowRankSolver::CorrectSolution(Eigen::Ref<Eigen::VectorXd> x) {
   if (num_u_ == 0) return;
-  // x -= Y_U S^-1 U^T x.
+  // x -= A^-1 U S^-1 U^T x.
   for (int i = 0; i < num_u_; ++i) small_[i] = columns_[i].Dot(x);
   ForwardSolve(h_, num_u_, small_.data());
   BackSolve(h_, num_u_, small_.data());
-  for (int i = 0; i < size_; ++i) x[i] -= y_.row(i).head(num_u_).dot(small_.head(num_u_));
+  for (int i = 0; i < num_u_; ++i) small_[i] = -small_[i];
+  AddSolvedColumns(small_.data(), 0, num_u_, x);
 }
 
 void LowRankSolver::Delassus(Eigen::MatrixXd& g) {
@@ -213,13 +287,12 @@ void LowRankSolver::Delassus(Eigen::MatrixXd& g) {
 void LowRankSolver::AddResponse(const Eigen::Ref<const Eigen::VectorXd>& p,
                                 Eigen::Ref<Eigen::VectorXd> x) {
   if (num_t_ == 0) return;
-  // (A + U D U^T)^-1 T p = Y_T p - Y_U S^-1 H_UT p, with S^-1 H_UT p = L_S^-T X p.
+  // (A + U D U^T)^-1 T p = A^-1 (T p - U S^-1 H_UT p), with S^-1 H_UT p = L_S^-T X p.
   for (int k = 0; k < num_u_; ++k) small_[k] = x_ut_.row(k).head(num_t_).dot(p.head(num_t_));
   BackSolve(h_, num_u_, small_.data());
-  for (int i = 0; i < size_; ++i) {
-    x[i] += y_.row(i).segment(num_u_, num_t_).dot(p.head(num_t_)) -
-            y_.row(i).head(num_u_).dot(small_.head(num_u_));
-  }
+  for (int k = 0; k < num_u_; ++k) small_[k] = -small_[k];
+  for (int j = 0; j < num_t_; ++j) small_[num_u_ + j] = p[j];
+  AddSolvedColumns(small_.data(), 0, num_u_ + num_t_, x);
 }
 
 }  // namespace microdex::thread

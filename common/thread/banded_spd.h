@@ -32,17 +32,24 @@ class BandedSpd {
 
   // In place A = L L^T. Returns false (and leaves garbage) on a non-positive pivot.
   bool Factorize();
-  // Solves L L^T x = b in place, after Factorize().
-  void Solve(Eigen::VectorXd& b) const;
+  // Solves L L^T x = b in place, after Factorize(). b's rows above first_row must be zero on
+  // entry (a sparse right-hand side): the forward substitution starts there.
+  void Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row = 0) const;
   // The same for the first `cols` columns of b at once (row-major: each row's columns are
   // contiguous, so the substitutions run across them).
   using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   void SolveColumns(RowMajorMatrix& b, int cols) const;
+  // The same for sparse columns: column j is zero above row first_rows[j] on entry, first_rows
+  // ascending. The forward substitution of row i runs only over the columns that start at or
+  // above it, and only the rows from first_rows[0] down are solved (the rows above it are left
+  // unsolved: L^T's back substitution never needs them for the rows below).
+  void SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const;
 
  private:
   int size_ = 0;
   int p_ = 0;
-  Eigen::MatrixXd band_;  // band_(d, i) = A(i, i - d), d in [0, p]
+  Eigen::MatrixXd band_;      // band_(d, i) = A(i, i - d), d in [0, p]
+  Eigen::VectorXd inv_diag_;  // 1 / L(i, i) after Factorize()
 };
 
 // A column of a low-rank term over 3-vector node blocks (the matrix is 3N x 3N, node i owns rows
@@ -63,7 +70,11 @@ struct NodeColumn {
 // by Woodbury's identity, and gives the Delassus operator G = T^T (A + U D U^T)^-1 T of further
 // columns T (contact impulses of the same system). One multi-column banded solve Y = A^-1 [U T],
 // then small dense algebra: S = D^-1 + U^T A^-1 U (Cholesky), G = T^T Y_T - (U^T Y_T)^T S^-1
-// (U^T Y_T). Storage sized at construction; nothing allocates afterwards.
+// (U^T Y_T). Y is needed only at the rows the columns touch: the columns are solved in the
+// order of their first row (the forward substitution skips each column's leading zeros, the
+// back substitution stops at the first touched row), and the solution corrections, which are
+// Y times a vector, are one banded solve of that vector's sparse right-hand side instead.
+// Storage sized at construction; nothing allocates afterwards.
 class LowRankSolver {
  public:
   LowRankSolver() = default;
@@ -87,8 +98,18 @@ class LowRankSolver {
   int max_columns_ = 0;
   int num_u_ = 0;
   int num_t_ = 0;
+  // The columns' vector U s + T p (sparse), solved with the factor: x += A^-1 (...).
+  void AddSolvedColumns(const double* coefficients, int first, int count,
+                        Eigen::Ref<Eigen::VectorXd> x);
+
+  const BandedSpd* factor_ = nullptr;    // the caller's, from Prepare
   std::span<const NodeColumn> columns_;  // the caller's, from Prepare
-  BandedSpd::RowMajorMatrix y_;          // A^-1 [U T]
+  BandedSpd::RowMajorMatrix y_;          // A^-1 [U T], columns in the order of their first row
+  Eigen::VectorXi order_;                // y_'s column s is column order_[s] of [U T]
+  Eigen::VectorXi slot_;                 // and column j of [U T] is y_'s column slot_[j]
+  Eigen::VectorXi column_first_;         // first touched row of column j of [U T]
+  Eigen::VectorXi first_row_;            // first touched row of y_'s columns, ascending
+  Eigen::VectorXd work_;                 // length size
   Eigen::MatrixXd h_;      // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
   Eigen::MatrixXd x_ut_;   // L_S^-1 H_UT
   Eigen::VectorXd small_;  // length max_columns

@@ -54,10 +54,10 @@ double ContactStiffness(const ThreadDef& def, double gap_m) {
   return def.contact_force_N / def.contact_decay_m * std::exp(e);
 }
 
-void FindThreadContacts(const ThreadModel& model, std::span<const Collider> colliders,
-                        ThreadWorkspace& w, ThreadState& state) {
+int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state,
+                       double extra_inflate_m) {
   const Eigen::Matrix3Xd& x = state.x_W;
-  RefitSphereBvh(model.bvh, x, model.bvh_inflate_m, w.spheres);
+  RefitSphereBvh(model.bvh, x, model.bvh_inflate_m + extra_inflate_m, w.spheres);
   const int capacity = model.contact_capacity;
   int found = FindSelfCollisions(model.bvh, w.spheres, w.pairs.data(), capacity);
   if (found > capacity) {
@@ -65,6 +65,14 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
     found = capacity;
   }
   state.status.num_candidate_pairs = found;
+  return found;
+}
+
+void FindThreadContacts(const ThreadModel& model, std::span<const Collider> colliders,
+                        ThreadWorkspace& w, ThreadState& state) {
+  const Eigen::Matrix3Xd& x = state.x_W;
+  const int capacity = model.contact_capacity;
+  const int found = FindCandidatePairs(model, w, state);
   const double cutoff = model.def.contact_cutoff_m;
   int n_self = 0;
   for (int k = 0; k < found; ++k) {
@@ -154,15 +162,29 @@ void AddContactForces(const ThreadModel& model, ThreadWorkspace& w, Eigen::Matri
   }
 }
 
+void FindPairStarts(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state) {
+  const Eigen::Matrix3Xd& x = state.x_W;
+  const int found = FindCandidatePairs(model, w, state);
+  for (int k = 0; k < found; ++k) {
+    const LinkPair& pair = w.pairs[k];
+    const geometry::SegmentClosest c = geometry::ClosestSegmentSegment(
+        x.col(pair.a), x.col(pair.a + 1), x.col(pair.b), x.col(pair.b + 1));
+    PairStart& start = w.pair_start[k];
+    start.distance_m = c.distance_m;
+    start.interior = c.distance_m > 0.0 && c.s > kInterior && c.s < 1.0 - kInterior &&
+                     c.t > kInterior && c.t < 1.0 - kInterior;
+    if (start.interior) start.n_W = (c.p - c.q) / c.distance_m;
+  }
+}
+
 ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Collider> colliders,
-                                  double h, double strain_limit, ThreadWorkspace& w,
-                                  ThreadState& state) {
+                                  double strain_limit, const Eigen::Matrix3Xd& x0,
+                                  ThreadWorkspace& w, ThreadState& state) {
   ContactProjection result;
   const ThreadDef& def = model.def;
   const double fraction = def.guard_fraction;
   if (fraction <= 0.0 && strain_limit <= 0.0) return result;
   Eigen::Matrix3Xd& x = state.x_W;
-  const Eigen::Matrix3Xd& x0 = w.x_prev_W;
   const double min_dist = fraction * def.diameter_m;
   const double min_gap = (fraction - 1.0) * model.radius_m;
   const double tolerance = kProjectionTolerance * def.diameter_m;
@@ -292,11 +314,6 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
   }
   w.projection_sweeps = sweep;
   w.projection_residual_m = residual;
-  if (result.contact_corrections + result.strain_corrections > 0) {
-    for (int i = 0; i < model.num_nodes; ++i) {
-      if (w.grasp_slot[i] < 0) state.v_W.col(i) = (x.col(i) - x0.col(i)) / h;
-    }
-  }
   return result;
 }
 

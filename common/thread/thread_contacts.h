@@ -11,6 +11,16 @@
 
 namespace microdex::thread {
 
+// Refits the hierarchy on state.x_W and finds the candidate link pairs (w.pairs); returns their
+// number (also in state.status.num_candidate_pairs). extra_inflate_m grows every link's sphere
+// beyond the model's inflation (pairs that may come close while the links move that far).
+int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state,
+                       double extra_inflate_m = 0.0);
+
+// The candidate pairs at state.x_W and their closest points there (w.pair_start), for a
+// contact projection that starts from state.x_W.
+void FindPairStarts(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state);
+
 // Refits the hierarchy on state.x_W, finds candidate link pairs and the contacts within the
 // cutoff (self and object) into the workspace's lists.
 void FindThreadContacts(const ThreadModel& model, std::span<const Collider> colliders,
@@ -30,21 +40,21 @@ void AddContactForces(const ThreadModel& model, ThreadWorkspace& w, Eigen::Matri
 
 // Contact projection after the step (Gauss-Seidel on position constraints, one pass for all
 // of them): non-adjacent links at least guard_fraction * diameter apart (centrelines; the sign
-// taken along the start-of-step normal, so links that crossed within the step are put back on
-// their side), link surfaces at least (guard_fraction - 1) * radius from objects, and, when
+// taken along the normal at x0, so links that crossed since x0 are put back on their side),
+// link surfaces at least (guard_fraction - 1) * radius from objects, and, when
 // strain_limit > 0, link lengths within [1 - strain_limit, 1 + strain_limit] rest lengths.
 // Each contact correction carries Coulomb friction at position level: the contact points'
-// relative tangential displacement over the step is removed up to mu times the normal
-// correction. Sweeps until no constraint is violated by more than 0.5 % of the diameter
-// (at most 64). Velocities follow: v = (x - x_prev) / h. Uses the candidate pairs and their
-// start-of-step closest points from FindThreadContacts.
+// relative tangential displacement since x0 is removed up to mu times the normal correction.
+// Sweeps until no constraint is violated by more than 0.5 % of the diameter (at most 32).
+// Uses the candidate pairs and their closest points at x0 (FindThreadContacts or
+// FindPairStarts on x0). Moves state.x_W only; the caller sets the velocities.
 struct ContactProjection {
   int contact_corrections = 0;
   int strain_corrections = 0;
 };
 ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Collider> colliders,
-                                  double h, double strain_limit, ThreadWorkspace& w,
-                                  ThreadState& state);
+                                  double strain_limit, const Eigen::Matrix3Xd& x0,
+                                  ThreadWorkspace& w, ThreadState& state);
 
 // Smallest centreline distance between non-adjacent links, over all pairs (O(n^2) reference).
 double CalcMinNonAdjacentDistance(const ThreadModel& model, const Eigen::Matrix3Xd& x_W);

@@ -75,6 +75,8 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   ThreadWorkspace w;
   w.f_W = Eigen::Matrix3Xd::Zero(3, n);
   w.x_prev_W = Eigen::Matrix3Xd::Zero(3, n);
+  w.x_end_W = Eigen::Matrix3Xd::Zero(3, n);
+  w.x_part_W = Eigen::Matrix3Xd::Zero(3, n);
   w.v_prev_W = Eigen::Matrix3Xd::Zero(3, n);
   w.q_prev_rad = Eigen::VectorXd::Zero(n);
   w.qdot_prev_rad_per_s = Eigen::VectorXd::Zero(n);

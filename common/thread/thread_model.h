@@ -98,6 +98,10 @@ struct ThreadStatus {
 struct ThreadWorkspace {
   Eigen::Matrix3Xd f_W;       // force per node
   Eigen::Matrix3Xd x_prev_W;  // state at the start of the step, for rollback
+  // Swept contact projection (StepThreadWith): the implicit step's end positions and the start
+  // of the current part of the step.
+  Eigen::Matrix3Xd x_end_W;
+  Eigen::Matrix3Xd x_part_W;
   Eigen::Matrix3Xd v_prev_W;
   Eigen::VectorXd q_prev_rad;
   Eigen::VectorXd qdot_prev_rad_per_s;
@@ -116,6 +120,7 @@ struct ThreadWorkspace {
   // The last step's contact projection: sweeps run, and its largest remaining deficit (m).
   int projection_sweeps = 0;
   double projection_residual_m = 0.0;
+  int projection_parts = 0;  // the step's motion was projected in this many parts
   std::vector<SelfContact> self_contacts;
   std::vector<ObjectContact> object_contacts;
   int num_self_contacts = 0;

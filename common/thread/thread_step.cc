@@ -491,6 +491,92 @@ void RefreshGraspSlots(const ThreadState& state, ThreadWorkspace& w) {
   }
 }
 
+// Stage: the contact projection of the step's motion (ProjectContacts), swept: where two links
+// that may meet moved relative to each other by more than 2 kPartMove diameters in the step (a
+// loop that snaps shut when the instrument holding it open is withdrawn, an end whipping out of
+// a throw), the motion from x_prev to the integrator's x is projected in parts, each from the
+// projected end of the one before with its own candidate pairs, so that no part moves a pair by
+// more than that. Contacts are then constraints on the path, not only on its end: a strand
+// cannot pass through another within one step, which a single projection at the end of a large
+// move does not see (the candidate pairs and the sign of each pair's separation are taken at
+// the start). The pairs that may meet come from the hierarchy at x_prev with every sphere grown
+// by the largest deformation (a node's move less the thread's mean move: a rigid jump of the
+// whole thread stays one part). Moves beyond kMaxParts parts are projected in one. Velocities
+// follow the projected positions: v = (x - x_prev) / h.
+constexpr double kPartMove = 0.4;
+constexpr int kMaxParts = 32;
+int CountProjectionParts(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state) {
+  const int n = model.num_nodes;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) mean += state.x_W.col(i) - w.x_prev_W.col(i);
+  mean /= n;
+  double deform = 0.0;
+  for (int i = 0; i < n; ++i) {
+    deform = std::max(deform, (state.x_W.col(i) - w.x_prev_W.col(i) - mean).squaredNorm());
+  }
+  deform = std::sqrt(deform);
+  const double part = 2.0 * kPartMove * model.def.diameter_m;  // relative move per part
+  if (2.0 * deform <= part) return 1;
+  w.x_end_W = state.x_W;
+  state.x_W = w.x_prev_W;
+  const int found = FindCandidatePairs(model, w, state, deform);
+  double relative = 0.0;
+  for (int k = 0; k < found; ++k) {
+    const LinkPair& pair = w.pairs[k];
+    for (const int a : {pair.a, pair.a + 1}) {
+      for (const int b : {pair.b, pair.b + 1}) {
+        const Eigen::Vector3d move =
+            (w.x_end_W.col(a) - w.x_prev_W.col(a)) - (w.x_end_W.col(b) - w.x_prev_W.col(b));
+        relative = std::max(relative, move.squaredNorm());
+      }
+    }
+  }
+  relative = std::sqrt(relative);
+  // Beyond kMaxParts parts (a teleported or violently jerked grasp, metres per second) no
+  // affordable number of parts keeps a pair's move below a diameter: one part, as for small
+  // moves.
+  const double needed = std::ceil(relative / part);
+  const int parts = needed > 1.0 && needed <= kMaxParts ? static_cast<int>(needed) : 1;
+  // One part: the step's candidate pairs and their start again (the query replaced them).
+  if (parts == 1) FindPairStarts(model, w, state);
+  state.x_W = w.x_end_W;
+  return parts;
+}
+
+void ProjectStep(const ThreadModel& model, std::span<const Collider> colliders, double h,
+                 double strain_limit, ThreadWorkspace& w, ThreadState& state) {
+  const int parts = CountProjectionParts(model, w, state);
+  w.projection_parts = parts;
+  ContactProjection total;
+  if (parts == 1) {
+    total = ProjectContacts(model, colliders, strain_limit, w.x_prev_W, w, state);
+  } else {
+    w.x_end_W = state.x_W;
+    w.x_part_W = w.x_prev_W;
+    int sweeps = 0;
+    for (int k = 1; k <= parts; ++k) {
+      state.x_W = w.x_part_W;
+      FindPairStarts(model, w, state);
+      // The part's motion: 1/parts of the integrator's, from where the last part was projected.
+      state.x_W = w.x_part_W + (w.x_end_W - w.x_prev_W) / parts;
+      const ContactProjection p =
+          ProjectContacts(model, colliders, strain_limit, w.x_part_W, w, state);
+      total.contact_corrections += p.contact_corrections;
+      total.strain_corrections += p.strain_corrections;
+      sweeps = std::max(sweeps, w.projection_sweeps);
+      w.x_part_W = state.x_W;
+    }
+    w.projection_sweeps = sweeps;
+  }
+  state.status.guard_corrections += total.contact_corrections;
+  state.status.strain_corrections += total.strain_corrections;
+  if (total.contact_corrections + total.strain_corrections > 0) {
+    for (int i = 0; i < model.num_nodes; ++i) {
+      if (w.grasp_slot[i] < 0) state.v_W.col(i) = (state.x_W.col(i) - w.x_prev_W.col(i)) / h;
+    }
+  }
+}
+
 }  // namespace
 
 void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
@@ -519,9 +605,7 @@ void StepThreadWith(const ThreadModel& model, Integrator integrator, double h,
     // moves along the links and the contacts' moves across them converge together.
     const double limit =
         integrator == Integrator::kLinearlyImplicitEuler ? model.def.strain_limit : 0.0;
-    const ContactProjection p = ProjectContacts(model, colliders, h, limit, w, state);
-    state.status.guard_corrections += p.contact_corrections;
-    state.status.strain_corrections += p.strain_corrections;
+    ProjectStep(model, colliders, h, limit, w, state);
     ok = state.x_W.allFinite() && state.v_W.allFinite() && state.q_rad.allFinite() &&
          state.qdot_rad_per_s.allFinite();
     if (!ok) ++state.status.nonfinite_resets;

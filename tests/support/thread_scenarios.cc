@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -542,6 +544,8 @@ TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
     out.phases.push_back(r);
     if (on_phase != nullptr) on_phase(r);
   };
+  // Diagnosis: MICRODEX_TIE_TRACE set prints every step of the throws (knot, largest node move).
+  const char* trace = std::getenv("MICRODEX_TIE_TRACE");
   double knot_x = 4e-3;
   for (size_t t = 0; t < throws.size(); ++t) {
     throws[t].knot_x_m = knot_x;
@@ -558,6 +562,16 @@ TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
         meter.Start(static_cast<int>(t) + 1, PhaseWord(last));
       }
       meter.Add(us, BruteForceMinDistance(state.x_W, d) / d, state, &script.workspace(), hands);
+      if (trace != nullptr) {
+        const Eigen::Matrix3Xd& x0 = script.workspace().x_prev_W;
+        std::printf(
+            "trace %zu %s %d knot %s move %.3f d contacts %d pairs %d sweeps %d strain %.3f\n",
+            t + 1, PhaseWord(script.phase()), meter.report.steps,
+            std::string(knot::KnotName(AnalyzeThread(model, state, false).type)).c_str(),
+            (state.x_W - x0).colwise().norm().maxCoeff() / d, state.status.num_self_contacts,
+            state.status.num_candidate_pairs, script.workspace().projection_sweeps,
+            state.status.max_strain);
+      }
       out.max_strain = std::max(out.max_strain, state.status.max_strain);
       if (!more) break;
     }
