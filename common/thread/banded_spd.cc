@@ -41,22 +41,22 @@ void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
   }
 }
 
-// The divisions by the pivots are multiplications by their inverses, kept for the solves: each
-// row's entries depend on the ones before them, so a division's latency would be on that chain.
+// Right-looking (column by column): column j is scaled by its pivot's inverse and at once
+// subtracted from the p x p block below it. The block's updates are independent of each other,
+// so only the pivots form a dependency chain (a row-by-row factorisation chains every entry of
+// a row to the one before it). The inverse pivots are kept for the solves.
 bool BandedSpd::Factorize() {
-  for (int i = 0; i < size_; ++i) {
-    const int lo = std::max(0, i - p_);
-    for (int j = lo; j <= i; ++j) {
-      double sum = band_(i - j, i);
-      const int klo = std::max(lo, j - p_);
-      for (int k = klo; k < j; ++k) sum -= band_(i - k, i) * band_(j - k, j);
-      if (j < i) {
-        band_(i - j, i) = sum * inv_diag_[j];
-      } else {
-        if (!(sum > 0.0) || !std::isfinite(sum)) return false;
-        band_(0, i) = std::sqrt(sum);
-        inv_diag_[i] = 1.0 / band_(0, i);
-      }
+  for (int j = 0; j < size_; ++j) {
+    const double pivot = band_(0, j);
+    if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
+    band_(0, j) = std::sqrt(pivot);
+    const double inv = 1.0 / band_(0, j);
+    inv_diag_[j] = inv;
+    const int hi = std::min(size_ - 1, j + p_);
+    for (int i = j + 1; i <= hi; ++i) band_(i - j, i) *= inv;  // L(i, j)
+    for (int i = j + 1; i <= hi; ++i) {
+      const double lij = band_(i - j, i);
+      for (int k = j + 1; k <= i; ++k) band_(i - k, i) -= lij * band_(k - j, k);
     }
   }
   return true;
@@ -171,7 +171,8 @@ LowRankSolver::LowRankSolver(int size, int max_columns)
       work_(Eigen::VectorXd::Zero(size)),
       h_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
       x_ut_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
-      small_(Eigen::VectorXd::Zero(std::max(1, max_columns))) {
+      small_(Eigen::VectorXd::Zero(std::max(1, max_columns))),
+      correction_(Eigen::VectorXd::Zero(std::max(1, max_columns))) {
   MICRODEX_CHECK(size >= 1 && max_columns >= 0);
 }
 
@@ -270,6 +271,29 @@ void LowRankSolver::CorrectSolution(Eigen::Ref<Eigen::VectorXd> x) {
   BackSolve(h_, num_u_, small_.data());
   for (int i = 0; i < num_u_; ++i) small_[i] = -small_[i];
   AddSolvedColumns(small_.data(), 0, num_u_, x);
+}
+
+void LowRankSolver::BeginCorrection(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  for (int i = 0; i < num_u_; ++i) correction_[i] = columns_[i].Dot(x);
+  ForwardSolve(h_, num_u_, correction_.data());
+  BackSolve(h_, num_u_, correction_.data());
+}
+
+double LowRankSolver::CorrectionDot(int t) const {
+  // T_t^T A^-1 U s = (H_TU s)_t; H_TU is below the factorised block of h_.
+  double sum = 0.0;
+  for (int i = 0; i < num_u_; ++i) sum += h_(num_u_ + t, i) * correction_[i];
+  return sum;
+}
+
+void LowRankSolver::FinishCorrection(const Eigen::Ref<const Eigen::VectorXd>& p,
+                                     Eigen::Ref<Eigen::VectorXd> x) {
+  // x - A^-1 U s + A^-1 (T p - U S^-1 H_UT p) = x + A^-1 (T p - U (s + L_S^-T X p)).
+  for (int k = 0; k < num_u_; ++k) small_[k] = x_ut_.row(k).head(num_t_).dot(p.head(num_t_));
+  BackSolve(h_, num_u_, small_.data());
+  for (int k = 0; k < num_u_; ++k) small_[k] = -(small_[k] + correction_[k]);
+  for (int j = 0; j < num_t_; ++j) small_[num_u_ + j] = p[j];
+  AddSolvedColumns(small_.data(), 0, num_u_ + num_t_, x);
 }
 
 void LowRankSolver::Delassus(Eigen::MatrixXd& g) {

@@ -92,6 +92,14 @@ class LowRankSolver {
   void Delassus(Eigen::MatrixXd& g);
   // x += (A + U D U^T)^-1 T p, p of length num_t.
   void AddResponse(const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> x);
+  // CorrectSolution and AddResponse with one banded solve: BeginCorrection(x) with x = A^-1 b
+  // keeps the correction's coefficients s = S^-1 U^T x; CorrectionDot(t) is column t of T
+  // dotted with the correction (x_corrected = x - A^-1 U s, so T_t^T x_corrected =
+  // T_t^T x - CorrectionDot(t)); FinishCorrection(p, x) turns x into
+  // (A + U D U^T)^-1 b + (A + U D U^T)^-1 T p.
+  void BeginCorrection(const Eigen::Ref<const Eigen::VectorXd>& x);
+  double CorrectionDot(int t) const;
+  void FinishCorrection(const Eigen::Ref<const Eigen::VectorXd>& p, Eigen::Ref<Eigen::VectorXd> x);
 
  private:
   int size_ = 0;
@@ -110,9 +118,10 @@ class LowRankSolver {
   Eigen::VectorXi column_first_;         // first touched row of column j of [U T]
   Eigen::VectorXi first_row_;            // first touched row of y_'s columns, ascending
   Eigen::VectorXd work_;                 // length size
-  Eigen::MatrixXd h_;      // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
-  Eigen::MatrixXd x_ut_;   // L_S^-1 H_UT
-  Eigen::VectorXd small_;  // length max_columns
+  Eigen::MatrixXd h_;           // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
+  Eigen::MatrixXd x_ut_;        // L_S^-1 H_UT
+  Eigen::VectorXd small_;       // length max_columns
+  Eigen::VectorXd correction_;  // S^-1 U^T x of BeginCorrection, length max_columns
 };
 
 }  // namespace microdex::thread

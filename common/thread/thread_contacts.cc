@@ -54,10 +54,9 @@ double ContactStiffness(const ThreadDef& def, double gap_m) {
   return def.contact_force_N / def.contact_decay_m * std::exp(e);
 }
 
-int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state,
-                       double extra_inflate_m) {
+int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state) {
   const Eigen::Matrix3Xd& x = state.x_W;
-  RefitSphereBvh(model.bvh, x, model.bvh_inflate_m + extra_inflate_m, w.spheres);
+  RefitSphereBvh(model.bvh, x, model.bvh_inflate_m, w.spheres);
   const int capacity = model.contact_capacity;
   int found = FindSelfCollisions(model.bvh, w.spheres, w.pairs.data(), capacity);
   if (found > capacity) {
@@ -66,6 +65,14 @@ int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState
   }
   state.status.num_candidate_pairs = found;
   return found;
+}
+
+int FindSweptPairs(const ThreadModel& model, const Eigen::Matrix3Xd& x0_W, double move_m,
+                   ThreadWorkspace& w) {
+  RefitSphereBvh(model.bvh, x0_W, model.bvh_inflate_m + move_m, w.spheres);
+  const int capacity = model.contact_capacity;
+  return std::min(capacity,
+                  FindSelfCollisions(model.bvh, w.spheres, w.swept_pairs.data(), capacity));
 }
 
 void FindThreadContacts(const ThreadModel& model, std::span<const Collider> colliders,

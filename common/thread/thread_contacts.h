@@ -12,10 +12,14 @@
 namespace microdex::thread {
 
 // Refits the hierarchy on state.x_W and finds the candidate link pairs (w.pairs); returns their
-// number (also in state.status.num_candidate_pairs). extra_inflate_m grows every link's sphere
-// beyond the model's inflation (pairs that may come close while the links move that far).
-int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state,
-                       double extra_inflate_m = 0.0);
+// number (also in state.status.num_candidate_pairs).
+int FindCandidatePairs(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state);
+
+// The link pairs at x0_W that may come into contact while every node moves by up to move_m
+// (the hierarchy's spheres grown by move_m) into w.swept_pairs; returns their number (at most
+// the contact capacity).
+int FindSweptPairs(const ThreadModel& model, const Eigen::Matrix3Xd& x0_W, double move_m,
+                   ThreadWorkspace& w);
 
 // The candidate pairs at state.x_W and their closest points there (w.pair_start), for a
 // contact projection that starts from state.x_W.

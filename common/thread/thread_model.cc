@@ -86,6 +86,7 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.grasp_slot = Eigen::VectorXi::Constant(n, -1);
   w.spheres = MakeSphereBvhSpheres(model.bvh);
   w.pairs.assign(model.contact_capacity, LinkPair{});
+  w.swept_pairs.assign(model.contact_capacity, LinkPair{});
   w.pair_start.assign(model.contact_capacity, PairStart{});
   w.object_candidates.assign(model.contact_capacity, LinkPair{});
   w.self_contacts.assign(model.contact_capacity, SelfContact{});

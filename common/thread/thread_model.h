@@ -98,8 +98,9 @@ struct ThreadStatus {
 struct ThreadWorkspace {
   Eigen::Matrix3Xd f_W;       // force per node
   Eigen::Matrix3Xd x_prev_W;  // state at the start of the step, for rollback
-  // Swept contact projection (StepThreadWith): the implicit step's end positions and the start
-  // of the current part of the step.
+  // Swept contact projection (StepThreadWith): the pairs that may meet during the step, the
+  // implicit step's end positions and the start of the current part of the step.
+  std::vector<LinkPair> swept_pairs;
   Eigen::Matrix3Xd x_end_W;
   Eigen::Matrix3Xd x_part_W;
   Eigen::Matrix3Xd v_prev_W;

@@ -98,10 +98,11 @@ void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadWorkspace
   state.status.num_sliding_contacts = 0;
 }
 
-// Stage: Coulomb friction in the implicit system. dv is the step's velocity change without
-// friction; the friction impulses p (two per contact, in the tangent plane) change it by
-// (A + U D U^T)^-1 T p, so the relative tangential velocities after the step are
-// v_t = T^T (v + dv) + G p with G the Delassus operator of the implicit system. Projected
+// Stage: Coulomb friction in the implicit system. dv is A^-1 b on entry (the banded part's
+// solution; BeginCorrection holds the exact pairs' correction to it) and the step's velocity
+// change with the pairs and friction on return; the friction impulses p (two per contact, in the
+// tangent plane) change it by (A + U D U^T)^-1 T p, so the relative tangential velocities after the
+// step are v_t = T^T (v + dv) + G p with G the Delassus operator of the implicit system. Projected
 // Gauss-Seidel over the contacts: each contact takes the impulse that stops its slip, projected
 // onto the disc |p_c| <= mu f_n h (stick inside, slide at the rim). The implicit system's G,
 // not the node masses, is what resists: a node of a stiff chain is held by its neighbours.
@@ -115,8 +116,10 @@ void SolveFriction(ThreadWorkspace& w, ThreadState& state, Eigen::VectorXd& dv) 
   w.low_rank.Delassus(G);
   double max_bound = 0.0;
   for (int c = 0; c < nf; ++c) max_bound = std::max(max_bound, w.friction_bound[c]);
+  // dv is A^-1 b: the exact pairs' correction (Woodbury) enters the velocities through H_TU.
   for (int j = 0; j < nt; ++j) {
-    w.friction_vt[j] = w.friction_columns[j].Dot(v) + w.friction_columns[j].Dot(dv);
+    w.friction_vt[j] =
+        w.friction_columns[j].Dot(v) + w.friction_columns[j].Dot(dv) - w.low_rank.CorrectionDot(j);
     w.friction_p[j] = 0.0;
   }
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
@@ -150,7 +153,7 @@ void SolveFriction(ThreadWorkspace& w, ThreadState& state, Eigen::VectorXd& dv) 
     if (norm >= (1.0 - 1e-9) * w.friction_bound[c]) ++sliding;
   }
   state.status.num_sliding_contacts = sliding;
-  w.low_rank.AddResponse(w.friction_p.head(nt), dv);
+  w.low_rank.FinishCorrection(w.friction_p.head(nt), dv);
 }
 
 // Stage: friction after the explicit baseline step (5.2), per contact with the node masses
@@ -362,8 +365,13 @@ bool SolveImplicitSystem(int m, ThreadWorkspace& w, ThreadState& state) {
     }
     const std::span<const NodeColumn> cols(w.columns.data(), m + 2 * nf);
     if (!w.low_rank.Prepare(A, cols, m, w.pair_d.data())) return false;
-    w.low_rank.CorrectSolution(dv);
-    if (nf > 0) SolveFriction(w, state, dv);
+    if (nf > 0) {
+      // The pairs' correction and the friction response in one banded solve.
+      w.low_rank.BeginCorrection(dv);
+      SolveFriction(w, state, dv);
+    } else {
+      w.low_rank.CorrectSolution(dv);
+    }
   }
   return true;
 }
@@ -505,7 +513,7 @@ void RefreshGraspSlots(const ThreadState& state, ThreadWorkspace& w) {
 // follow the projected positions: v = (x - x_prev) / h.
 constexpr double kPartMove = 0.4;
 constexpr int kMaxParts = 32;
-int CountProjectionParts(const ThreadModel& model, ThreadWorkspace& w, ThreadState& state) {
+int CountProjectionParts(const ThreadModel& model, ThreadWorkspace& w, const ThreadState& state) {
   const int n = model.num_nodes;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) mean += state.x_W.col(i) - w.x_prev_W.col(i);
@@ -517,16 +525,14 @@ int CountProjectionParts(const ThreadModel& model, ThreadWorkspace& w, ThreadSta
   deform = std::sqrt(deform);
   const double part = 2.0 * kPartMove * model.def.diameter_m;  // relative move per part
   if (2.0 * deform <= part) return 1;
-  w.x_end_W = state.x_W;
-  state.x_W = w.x_prev_W;
-  const int found = FindCandidatePairs(model, w, state, deform);
+  const int found = FindSweptPairs(model, w.x_prev_W, deform, w);
   double relative = 0.0;
   for (int k = 0; k < found; ++k) {
-    const LinkPair& pair = w.pairs[k];
+    const LinkPair& pair = w.swept_pairs[k];
     for (const int a : {pair.a, pair.a + 1}) {
       for (const int b : {pair.b, pair.b + 1}) {
         const Eigen::Vector3d move =
-            (w.x_end_W.col(a) - w.x_prev_W.col(a)) - (w.x_end_W.col(b) - w.x_prev_W.col(b));
+            (state.x_W.col(a) - w.x_prev_W.col(a)) - (state.x_W.col(b) - w.x_prev_W.col(b));
         relative = std::max(relative, move.squaredNorm());
       }
     }
@@ -537,9 +543,6 @@ int CountProjectionParts(const ThreadModel& model, ThreadWorkspace& w, ThreadSta
   // moves.
   const double needed = std::ceil(relative / part);
   const int parts = needed > 1.0 && needed <= kMaxParts ? static_cast<int>(needed) : 1;
-  // One part: the step's candidate pairs and their start again (the query replaced them).
-  if (parts == 1) FindPairStarts(model, w, state);
-  state.x_W = w.x_end_W;
   return parts;
 }
 

@@ -106,6 +106,17 @@ TEST(LowRankSolver, MatchesDenseCholeskyOfTheFullMatrix) {
   solver.AddResponse(impulse, y);
   const Eigen::VectorXd y_dense = llt.solve(tt * impulse);
   EXPECT_LT((y - y_dense).norm(), 1e-10 * y_dense.norm());
+  // The correction and the response in one solve, from A^-1 b: the same as both in turn.
+  Eigen::VectorXd fused = b;
+  band.Solve(fused);
+  solver.BeginCorrection(fused);
+  for (int j = 0; j < num_t; ++j) {
+    EXPECT_NEAR(tt.col(j).dot(fused) - solver.CorrectionDot(j), tt.col(j).dot(expected),
+                1e-10 * expected.norm() * tt.col(j).norm());
+  }
+  solver.FinishCorrection(impulse, fused);
+  const Eigen::VectorXd fused_dense = expected + y_dense;
+  EXPECT_LT((fused - fused_dense).norm(), 1e-10 * fused_dense.norm());
   // NodeColumn's own products agree with the dense columns.
   EXPECT_NEAR(cols[0].Dot(b), uu.col(0).dot(b), 1e-12);
 }
