@@ -246,8 +246,7 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
   return true;
 }
 
-void LowRankSolver::AddSolvedColumns(const double* coefficients, int first, int count,
-                                     Eigen::Ref<Eigen::VectorXd> x) {
+bool LowRankSolver::SolveColumnSum(const double* coefficients, int first, int count) {
   work_.setZero();
   int top = size_;
   for (int j = 0; j < count; ++j) {
@@ -258,9 +257,9 @@ void LowRankSolver::AddSolvedColumns(const double* coefficients, int first, int 
       top = std::min(top, 3 * c.node[k]);
     }
   }
-  if (top >= size_) return;
+  if (top >= size_) return false;
   factor_->Solve(work_, top);
-  x += work_;
+  return true;
 }
 
 void LowRankSolver::CorrectSolution(Eigen::Ref<Eigen::VectorXd> x) {
@@ -270,7 +269,7 @@ void LowRankSolver::CorrectSolution(Eigen::Ref<Eigen::VectorXd> x) {
   ForwardSolve(h_, num_u_, small_.data());
   BackSolve(h_, num_u_, small_.data());
   for (int i = 0; i < num_u_; ++i) small_[i] = -small_[i];
-  AddSolvedColumns(small_.data(), 0, num_u_, x);
+  if (SolveColumnSum(small_.data(), 0, num_u_)) x += work_;
 }
 
 void LowRankSolver::BeginCorrection(const Eigen::Ref<const Eigen::VectorXd>& x) {
@@ -293,7 +292,7 @@ void LowRankSolver::FinishCorrection(const Eigen::Ref<const Eigen::VectorXd>& p,
   BackSolve(h_, num_u_, small_.data());
   for (int k = 0; k < num_u_; ++k) small_[k] = -(small_[k] + correction_[k]);
   for (int j = 0; j < num_t_; ++j) small_[num_u_ + j] = p[j];
-  AddSolvedColumns(small_.data(), 0, num_u_ + num_t_, x);
+  if (SolveColumnSum(small_.data(), 0, num_u_ + num_t_)) x += work_;
 }
 
 void LowRankSolver::Delassus(Eigen::MatrixXd& g) {
@@ -316,7 +315,7 @@ void LowRankSolver::AddResponse(const Eigen::Ref<const Eigen::VectorXd>& p,
   BackSolve(h_, num_u_, small_.data());
   for (int k = 0; k < num_u_; ++k) small_[k] = -small_[k];
   for (int j = 0; j < num_t_; ++j) small_[num_u_ + j] = p[j];
-  AddSolvedColumns(small_.data(), 0, num_u_ + num_t_, x);
+  if (SolveColumnSum(small_.data(), 0, num_u_ + num_t_)) x += work_;
 }
 
 }  // namespace microdex::thread

@@ -106,9 +106,9 @@ class LowRankSolver {
   int max_columns_ = 0;
   int num_u_ = 0;
   int num_t_ = 0;
-  // The columns' vector U s + T p (sparse), solved with the factor: x += A^-1 (...).
-  void AddSolvedColumns(const double* coefficients, int first, int count,
-                        Eigen::Ref<Eigen::VectorXd> x);
+  // work_ = A^-1 (sum of the columns first.. first + count - 1 times the coefficients), one
+  // banded solve of that sparse vector; false (work_ zero) if the sum touches no row.
+  bool SolveColumnSum(const double* coefficients, int first, int count);
 
   const BandedSpd* factor_ = nullptr;    // the caller's, from Prepare
   std::span<const NodeColumn> columns_;  // the caller's, from Prepare
