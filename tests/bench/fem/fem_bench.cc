@@ -119,6 +119,7 @@ struct Moving {
   // The step's CPU time (this thread): what the step costs when the shared machine preempts it.
   double cpu_median_us, cpu_p99_us;
   double static_median_us;  // same model, tool held still, same run
+  double iterations;        // median (P)CG iterations of the moving steps
 };
 
 struct Options {
@@ -128,6 +129,7 @@ struct Options {
   double budget_s = 0.4;
   double grading = 2.0;
   double end_resolution = TissueDef{}.end_resolution;
+  bool moving_only = false;  // only the moving-tool rows of the stations' solver (iterating)
 };
 
 // Times steps of a bar whose depth oscillates ±10 % around 1 cm (the selection and the
@@ -188,6 +190,8 @@ int RunFem(int argc, char** argv) {
       opt.max_level = std::stoi(value());
       if (opt.max_level < 1 || opt.max_level > 8)
         throw std::invalid_argument("--max-level: expected 1..8");
+    } else if (a == "--moving-only") {
+      opt.moving_only = true;
     } else if (a == "--grading") {
       opt.grading = std::stod(value());
     } else if (a == "--end-resolution") {
@@ -197,7 +201,7 @@ int RunFem(int argc, char** argv) {
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "microdex-bench fem [--json FILE] [--plot DIR] [--quick] [--max-level N] "
-          "[--grading G] [--end-resolution R]\n  the thesis §3.3 study: force along the bar, RMS "
+          "[--grading G] [--end-resolution R] [--moving-only]\n  the thesis §3.3 study: force along the bar, RMS "
           "error "
           "and CPU time by "
           "level,\n  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n");
@@ -214,6 +218,7 @@ int RunFem(int argc, char** argv) {
   std::vector<std::pair<std::string, std::vector<double>>> navier_density;  // case → q samples
   std::vector<std::pair<std::string, double>> navier_force;
   for (const Case& c : kCases) {
+    if (opt.moving_only) break;
     std::optional<NavierBar> navier;
     if (c.has_navier) {
       navier.emplace(domain, c.cx_m - kBarLength_m / 2, c.cx_m + kBarLength_m / 2, c.cy_m,
@@ -327,6 +332,9 @@ int RunFem(int argc, char** argv) {
       {SolverKind::kCholmod, Ordering::kNestedDissection}};
   for (int level = std::max(1, opt.max_level - 1); level <= opt.max_level; ++level) {
     for (const Variant& v : variants) {
+      if (opt.moving_only && (v.solver == SolverKind::kCholmod || v.solver == SolverKind::kCg ||
+                              v.constraint != ToolConstraint::kPenaltyPoints))
+        continue;
       TissueDef def =
           StudyDef(level, MeshKind::kMultiscale, v.solver, opt.grading, opt.end_resolution);
       def.ordering = v.ordering;
@@ -335,7 +343,7 @@ int RunFem(int argc, char** argv) {
       TissueWorkspace ws(model), ws_static(model);
       ws_static.reuse_values = false;
       TissueState state = MakeTissueState(model), state_static = MakeTissueState(model);
-      std::vector<double> us, us_static, select, assemble, solve, cpu;
+      std::vector<double> us, us_static, select, assemble, solve, cpu, iterations;
       int reused = 0, failed = 0;
       double unknowns = 0;
       auto pose = [](int k) {
@@ -363,6 +371,7 @@ int RunFem(int argc, char** argv) {
         select.push_back(ws.stats.select_us);
         assemble.push_back(ws.stats.assemble_us);
         solve.push_back(ws.stats.solve_us);
+        iterations.push_back(ws.stats.iterations);
         reused += ws.stats.pattern_reused;
         failed += !IsGood(state.status);
         unknowns += ws.stats.unknowns;
@@ -372,15 +381,15 @@ int RunFem(int argc, char** argv) {
                         static_cast<double>(reused) / us.size(), failed,
                         static_cast<int>(us.size()), unknowns / us.size(), Median(select),
                         Median(assemble), Median(solve), Median(cpu), Percentile(cpu, 0.99),
-                        Median(us_static)});
+                        Median(us_static), Median(iterations)});
       std::fprintf(stderr,
                    "moving L%d %-10s %-17s %-14s median %7.1f us (select %6.1f assemble %6.1f "
-                   "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f\n",
+                   "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f  it %.0f\n",
                    level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
                    moving.back().median_us, moving.back().select_us, moving.back().assemble_us,
                    moving.back().solve_us, moving.back().p99_us, moving.back().static_median_us,
                    moving.back().cpu_median_us, moving.back().cpu_p99_us,
-                   moving.back().mean_unknowns);
+                   moving.back().mean_unknowns, moving.back().iterations);
     }
   }
 
@@ -388,7 +397,8 @@ int RunFem(int argc, char** argv) {
   contact_options.max_level = opt.max_level;
   contact_options.quick = opt.max_level < 7;
   contact_options.plot_dir = opt.plot_dir;
-  const ContactReport contact = RunContactReport(contact_options);
+  const ContactReport contact =
+      opt.moving_only ? ContactReport{"[]", "[]", "{}"} : RunContactReport(contact_options);
 
   auto find = [&](const std::string& cs, int level, const std::string& mesh,
                   const std::string& solver) -> const Run* {
@@ -581,13 +591,14 @@ int RunFem(int argc, char** argv) {
                  "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
                  "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
                  "\"failed_steps\": %d, \"mean_unknowns\": %s, \"cpu_median_us\": %s, "
-                 "\"cpu_p99_us\": %s}%s\n",
+                 "\"cpu_p99_us\": %s, \"median_iterations\": %s}%s\n",
                  m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(), m.steps,
                  Num(m.median_us).c_str(), Num(m.p99_us).c_str(), Num(m.max_us).c_str(),
                  Num(m.select_us).c_str(), Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
                  Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(), m.failed,
                  Num(m.mean_unknowns).c_str(), Num(m.cpu_median_us).c_str(),
-                 Num(m.cpu_p99_us).c_str(), i + 1 < moving.size() ? "," : "");
+                 Num(m.cpu_p99_us).c_str(), Num(m.iterations).c_str(),
+                 i + 1 < moving.size() ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"force_distribution\": [\n");
   for (size_t i = 0; i < distributions.size(); ++i) {
