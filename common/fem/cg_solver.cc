@@ -44,8 +44,7 @@ double MultiplyDot(const CsrView& a, const double* p, double* q) {
 }
 
 // x += α p, r −= α q, and returns rᵀ r (one pass).
-double UpdateSolution(int n, double alpha, const double* p, const double* q, double* x,
-                      double* r) {
+double UpdateSolution(int n, double alpha, const double* p, const double* q, double* x, double* r) {
   double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
   int i = 0;
   for (; i + 4 <= n; i += 4) {

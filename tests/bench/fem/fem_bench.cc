@@ -201,7 +201,8 @@ int RunFem(int argc, char** argv) {
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "microdex-bench fem [--json FILE] [--plot DIR] [--quick] [--max-level N] "
-          "[--grading G] [--end-resolution R] [--moving-only]\n  the thesis §3.3 study: force along the bar, RMS "
+          "[--grading G] [--end-resolution R] [--moving-only]\n  the thesis §3.3 study: force "
+          "along the bar, RMS "
           "error "
           "and CPU time by "
           "level,\n  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n");
@@ -382,14 +383,15 @@ int RunFem(int argc, char** argv) {
                         static_cast<int>(us.size()), unknowns / us.size(), Median(select),
                         Median(assemble), Median(solve), Median(cpu), Percentile(cpu, 0.99),
                         Median(us_static), Median(iterations)});
-      std::fprintf(stderr,
-                   "moving L%d %-10s %-17s %-14s median %7.1f us (select %6.1f assemble %6.1f "
-                   "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f  it %.0f\n",
-                   level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
-                   moving.back().median_us, moving.back().select_us, moving.back().assemble_us,
-                   moving.back().solve_us, moving.back().p99_us, moving.back().static_median_us,
-                   moving.back().cpu_median_us, moving.back().cpu_p99_us,
-                   moving.back().mean_unknowns, moving.back().iterations);
+      std::fprintf(
+          stderr,
+          "moving L%d %-10s %-17s %-14s median %7.1f us (select %6.1f assemble %6.1f "
+          "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f  it %.0f\n",
+          level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
+          moving.back().median_us, moving.back().select_us, moving.back().assemble_us,
+          moving.back().solve_us, moving.back().p99_us, moving.back().static_median_us,
+          moving.back().cpu_median_us, moving.back().cpu_p99_us, moving.back().mean_unknowns,
+          moving.back().iterations);
     }
   }
 
