@@ -20,6 +20,7 @@
 #include "common/fem/navier.h"
 #include "common/fem/tissue_step.h"
 #include "tests/bench/fem/fem_contact_report.h"
+#include "tests/bench/fem/fem_two_level_probe.h"
 
 namespace microdex::fem {
 namespace {
@@ -130,6 +131,7 @@ struct Options {
   double grading = 2.0;
   double end_resolution = TissueDef{}.end_resolution;
   bool moving_only = false;  // only the moving-tool rows of the stations' solver (iterating)
+  bool two_level_probe = false;
 };
 
 // Times steps of a bar whose depth oscillates ±10 % around 1 cm (the selection and the
@@ -192,6 +194,8 @@ int RunFem(int argc, char** argv) {
         throw std::invalid_argument("--max-level: expected 1..8");
     } else if (a == "--moving-only") {
       opt.moving_only = true;
+    } else if (a == "--two-level-probe") {
+      opt.two_level_probe = true;
     } else if (a == "--grading") {
       opt.grading = std::stod(value());
     } else if (a == "--end-resolution") {
@@ -201,15 +205,30 @@ int RunFem(int argc, char** argv) {
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "microdex-bench fem [--json FILE] [--plot DIR] [--quick] [--max-level N] "
-          "[--grading G] [--end-resolution R] [--moving-only]\n  the thesis §3.3 study: force "
-          "along the bar, RMS "
-          "error "
-          "and CPU time by "
-          "level,\n  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n");
+          "[--grading G] [--end-resolution R] [--moving-only] [--two-level-probe]\n"
+          "  the thesis §3.3 study: force along the bar, RMS error and CPU time by level,\n"
+          "  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n"
+          "  --moving-only: only the moving-tool rows of pcg_jacobi and pcg_ic\n"
+          "  --two-level-probe: PCG iterations of IC(0) against two-level preconditioners\n");
       return 0;
     } else {
       throw std::invalid_argument("unknown option '" + a + "'");
     }
+  }
+  if (opt.two_level_probe) {  // the moving bar's first 40 poses at level 7
+    TissueDef def =
+        StudyDef(7, MeshKind::kMultiscale, SolverKind::kPcgIc, opt.grading, opt.end_resolution);
+    const TissueModel model = BuildTissueModel(def);
+    std::vector<ToolContact> tools;
+    for (int k = 0; k < 40; ++k) {
+      const double t = 1e-3 * k;
+      const double cx = 0.06 + 0.08 * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * t / 0.16));
+      tools.push_back(
+          BarTool(Case{"moving", cx, 0.10 + 0.03 * std::sin(2 * std::numbers::pi * t / 0.2),
+                       0.5 * t, false},
+                  kPress_m));
+    }
+    return RunTwoLevelProbe(model, tools);
   }
   const SolverKind solvers[] = {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc,
                                 SolverKind::kCholmod};
