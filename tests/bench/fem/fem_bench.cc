@@ -196,6 +196,8 @@ int RunFem(int argc, char** argv) {
       opt.moving_only = true;
     } else if (a == "--two-level-probe") {
       opt.two_level_probe = true;
+    } else if (a == "--continuity-probe") {
+      return RunContinuityProbe();
     } else if (a == "--grading") {
       opt.grading = std::stod(value());
     } else if (a == "--end-resolution") {
@@ -205,11 +207,13 @@ int RunFem(int argc, char** argv) {
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "microdex-bench fem [--json FILE] [--plot DIR] [--quick] [--max-level N] "
-          "[--grading G] [--end-resolution R] [--moving-only] [--two-level-probe]\n"
+          "[--grading G] [--end-resolution R] [--moving-only] [--two-level-probe] "
+          "[--continuity-probe]\n"
           "  the thesis §3.3 study: force along the bar, RMS error and CPU time by level,\n"
           "  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n"
           "  --moving-only: only the moving-tool rows of pcg_jacobi and pcg_ic\n"
-          "  --two-level-probe: PCG iterations of IC(0) against two-level preconditioners\n");
+          "  --two-level-probe: PCG iterations of IC(0) against two-level preconditioners\n"
+          "  --continuity-probe: step changes of the continuity motions, same / changed mesh\n");
       return 0;
     } else {
       throw std::invalid_argument("unknown option '" + a + "'");
