@@ -80,6 +80,7 @@ DdsDevice::DdsDevice(const net::DdsOptions& dds_options, const std::string& stat
   // The threads Fast DDS starts for this participant: those that appear while it and its
   // endpoints are created (before the publisher thread is started below).
   const std::vector<int> threads_before = rt::ThreadIds();
+  if (tuning.cpu_latency) cpu_latency_ = std::make_unique<CpuLatencyRequest>();
   dds_ = std::make_unique<net::DdsContext>(tuning.Apply(dds_options));
   auto* writer = dds_->CreateWriter<msg::DeviceForcePubSubType>(net::kDeviceForceTopic);
   auto* reader = dds_->CreateReader<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic);

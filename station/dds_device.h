@@ -67,6 +67,8 @@ class DdsDevice final : public Device {
   // The participant's Fast DDS threads made SCHED_FIFO kDdsThreadPriority (tuning rt), and
   // the participant profile it came from.
   int dds_threads_realtime() const { return dds_threads_realtime_; }
+  // Whether the PM QoS CPU latency request is held (DdsBridgeTuning::cpu_latency).
+  bool cpu_latency_held() const { return cpu_latency_ && cpu_latency_->held(); }
   const std::string& participant_profile() const { return dds_->participant_profile(); }
   // Just below the haptic thread (80): a sample reaches the tick as soon as it arrives.
   static constexpr int kDdsThreadPriority = 79;
@@ -113,6 +115,7 @@ class DdsDevice final : public Device {
   std::string station_id_;
   std::string session_id_;
   int dds_threads_realtime_ = 0;
+  std::unique_ptr<CpuLatencyRequest> cpu_latency_;  // DdsBridgeTuning::cpu_latency
   std::unique_ptr<net::DdsContext> dds_;
   std::unique_ptr<Listener> listener_;
   void* reader_ = nullptr;                 // dds::DataReader*

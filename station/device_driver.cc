@@ -8,6 +8,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -97,6 +98,8 @@ DriverStats RunDeviceDriver(const net::DdsOptions& dds_options, const DeviceDriv
   std::unique_ptr<PlaybackDevice> csv;
   if (!def.csv.empty()) csv = std::make_unique<PlaybackDevice>(def.csv);
   const std::vector<int> threads_before = rt::ThreadIds();
+  std::optional<CpuLatencyRequest> cpu_latency;
+  if (def.tuning.cpu_latency) cpu_latency.emplace();
   net::DdsContext ctx(def.tuning.Apply(dds_options));
   dds::DataWriter* writer = ctx.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceSampleTopic);
   dds::DataReader* reader = ctx.CreateReader<msg::DeviceForcePubSubType>(net::kDeviceForceTopic);

@@ -30,7 +30,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   std::string tuning = "all";
   app.add_option("--tuning", tuning,
                  "all (default), none, or a comma list of shm (shared-memory participant "
-                 "profile), rt (the participant's DDS threads SCHED_FIFO)");
+                 "profile), rt (the participant's DDS threads SCHED_FIFO), cpu (a 0 us PM QoS "
+                 "CPU latency request while running)");
   microdex::net::AddDdsOptions(app, dds);
   microdex::net::AddSecurityOption(app, dds);
   if (const std::optional<int> status =

@@ -64,7 +64,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   std::string bridge_tuning = "all";
   app.add_option("--device-bridge-tuning", bridge_tuning,
                  "--device dds: all (default), none, or a comma list of shm (shared-memory "
-                 "participant profile), rt (the bridge's DDS threads SCHED_FIFO)");
+                 "participant profile), rt (the bridge's DDS threads SCHED_FIFO), cpu (a 0 us "
+                 "PM QoS CPU latency request while running; --no-realtime: rt and cpu off)");
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,
                "step as fast as possible in simulated time (same results as paced)");
@@ -93,7 +94,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 2;
   }
   // Without real-time scheduling the bridge's threads stay at normal priority as well.
-  if (no_realtime) o.device_bridge_tuning.realtime_threads = false;
+  if (no_realtime) {
+    o.device_bridge_tuning.realtime_threads = false;
+    o.device_bridge_tuning.cpu_latency = false;
+  }
   if (!device_args.empty()) o.device = device_args[0];
   if (device_args.size() > 1) o.device_file = device_args[1];
   if (device_args.size() > 2) o.device_file2 = device_args[2];

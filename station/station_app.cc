@@ -244,9 +244,12 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
         DdsDeviceMapping(scene, o.device_map, 0, scene.CalcIdealToolPose(0).translation());
     auto bridge = std::make_unique<DdsDevice>(o.dds, o.station_id, session_id.substr(0, 64),
                                               mapping, DeviceGuardDef{}, o.device_bridge_tuning);
-    spdlog::info("device bridge: participant '{}', {} DDS threads SCHED_FIFO {} (tuning {})",
-                 bridge->participant_profile(), bridge->dds_threads_realtime(),
-                 DdsDevice::kDdsThreadPriority, o.device_bridge_tuning.Name());
+    spdlog::info(
+        "device bridge: participant '{}', {} DDS threads SCHED_FIFO {}, CPU latency request {} "
+        "(tuning {})",
+        bridge->participant_profile(), bridge->dds_threads_realtime(),
+        DdsDevice::kDdsThreadPriority, bridge->cpu_latency_held() ? "held" : "not held",
+        o.device_bridge_tuning.Name());
     bridges.push_back(bridge.get());
     device_owner = std::move(bridge);
   } else {

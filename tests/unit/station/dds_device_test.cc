@@ -10,6 +10,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -66,22 +69,46 @@ TEST(DdsDevice, HapticSideNeverAllocatesAndSamplesWakeTheWait) {
 }
 
 TEST(DdsBridgeTuning, ParsesListsAndNamesBadInput) {
-  DdsBridgeTuning t{false, false};
+  DdsBridgeTuning t{false, false, false};
   EXPECT_EQ(DdsBridgeTuning::Parse("all", &t), "");
-  EXPECT_TRUE(t.shared_memory && t.realtime_threads);
-  EXPECT_EQ(t.Name(), "shm,rt");
+  EXPECT_TRUE(t.shared_memory && t.realtime_threads && t.cpu_latency);
+  EXPECT_EQ(t.Name(), "shm,rt,cpu");
   EXPECT_EQ(DdsBridgeTuning::Parse("none", &t), "");
-  EXPECT_FALSE(t.shared_memory || t.realtime_threads);
+  EXPECT_FALSE(t.shared_memory || t.realtime_threads || t.cpu_latency);
   EXPECT_EQ(t.Name(), "none");
   EXPECT_EQ(DdsBridgeTuning::Parse("rt", &t), "");
-  EXPECT_TRUE(!t.shared_memory && t.realtime_threads);
+  EXPECT_TRUE(!t.shared_memory && t.realtime_threads && !t.cpu_latency);
+  EXPECT_EQ(DdsBridgeTuning::Parse("cpu", &t), "");
+  EXPECT_EQ(t.Name(), "cpu");
   EXPECT_EQ(DdsBridgeTuning::Parse("rt,shm", &t), "");
   EXPECT_EQ(t.Name(), "shm,rt");
   EXPECT_EQ(t.Apply({}).participant_profile, net::kDeviceBridgeParticipantProfile);
   const std::string why = DdsBridgeTuning::Parse("shm,fast", &t);
   EXPECT_NE(why.find("shm,fast"), std::string::npos) << why;
+  EXPECT_NE(why.find("cpu"), std::string::npos) << why;
   EXPECT_EQ(t.Name(), "shm,rt") << "unchanged by bad input";
   EXPECT_NE(DdsBridgeTuning::Parse("", &t), "");
+}
+
+// The kernel's PM QoS CPU latency target reads back 0 µs while a request is held and its
+// earlier value once it is dropped (root only: /dev/cpu_dma_latency is not readable otherwise).
+TEST(DdsBridgeTuning, TheCpuLatencyRequestHoldsTheKernelTargetAtZero) {
+  const auto target = []() -> std::optional<std::int32_t> {
+    std::FILE* f = std::fopen("/dev/cpu_dma_latency", "rb");
+    if (f == nullptr) return std::nullopt;
+    std::int32_t v = -1;
+    const bool ok = std::fread(&v, sizeof v, 1, f) == 1;
+    std::fclose(f);
+    return ok ? std::optional<std::int32_t>(v) : std::nullopt;
+  };
+  const std::optional<std::int32_t> before = target();
+  if (!before) GTEST_SKIP() << "/dev/cpu_dma_latency not readable (not root)";
+  {
+    CpuLatencyRequest request;
+    ASSERT_TRUE(request.held()) << request.why_not();
+    EXPECT_EQ(target(), 0);
+  }
+  EXPECT_EQ(target(), before) << "the request is dropped with the object";
 }
 
 TEST(RealTime, ThreadsStartedSinceFindsTheNewThreadAndRaisesIt) {
