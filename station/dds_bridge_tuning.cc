@@ -19,7 +19,7 @@ std::string DdsBridgeTuning::Parse(const std::string& text, DdsBridgeTuning* out
     return {};
   }
   DdsBridgeTuning t{false, false, false};
-  const std::string expected = "'" + text + "': expected all, none or a comma list of shm, rt, cpu";
+  std::string expected = "'" + text + "': expected all, none or a comma list of shm, rt, cpu";
   if (text != "none") {
     std::istringstream in(text);
     std::string part;
