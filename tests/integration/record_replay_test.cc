@@ -109,6 +109,22 @@ bool AlterDeviceInput(const std::string& file, const std::string& station, std::
   return ok;
 }
 
+// The re-simulation log's line for station `id`: its steps re-simulated, every one's hash
+// matched.
+void ExpectEveryStepHashMatched(const std::string& out, const char* id) {
+  const auto at = out.find(std::string("station ") + id + " ");
+  ASSERT_NE(at, std::string::npos) << id << "\n" << out;
+  const std::string line = out.substr(at, out.find('\n', at) - at);
+  unsigned long long steps = 0, hashes = 0;
+  const auto n = line.find("): ");
+  ASSERT_EQ(std::sscanf(line.c_str() + n + 3, "%llu steps re-simulated, %llu step hashes", &steps,
+                        &hashes),
+            2)
+      << line;
+  EXPECT_GE(steps, 3000u) << line;  // 4000 stepped; the last ones may leave with the station
+  EXPECT_EQ(hashes, steps) << line;
+}
+
 class RecordReplayTest : public ::testing::Test {
  protected:
   void TearDown() override { testing::KillAll(pids_); }
@@ -153,19 +169,7 @@ TEST_F(RecordReplayTest, EveryTrainingSceneReSimulatesAndAnAlteredSampleIsFound)
   const std::string log = dir_ + "/resim.log";
   ASSERT_EQ(RunReplay({file, "--resimulate"}, log), 0) << ReadFile(log);
   const std::string out = ReadFile(log);
-  for (const char* id : kTrainingScenes) {
-    const auto at = out.find(std::string("station ") + id + " ");
-    ASSERT_NE(at, std::string::npos) << id << "\n" << out;
-    const std::string line = out.substr(at, out.find('\n', at) - at);
-    unsigned long long steps = 0, hashes = 0;
-    const auto n = line.find("): ");
-    ASSERT_EQ(std::sscanf(line.c_str() + n + 3, "%llu steps re-simulated, %llu step hashes", &steps,
-                          &hashes),
-              2)
-        << line;
-    EXPECT_GE(steps, 3000u) << line;  // 4000 stepped; the last ones may leave with the station
-    EXPECT_EQ(hashes, steps) << line;
-  }
+  for (const char* id : kTrainingScenes) ExpectEveryStepHashMatched(out, id);
   // The cues were applied (and re-applied at their steps): every station acknowledged them
   // (the tremor cue switched off again among them).
   record::SessionReader reader(file);
@@ -266,19 +270,7 @@ TEST_F(RecordReplayTest, TheTissueAndBimanualScenesReSimulate) {
   const std::string log = dir_ + "/resim-heavy.log";
   ASSERT_EQ(RunReplay({file, "--resimulate"}, log), 0) << ReadFile(log);
   const std::string out = ReadFile(log);
-  for (const char* id : kHeavyScenes) {
-    const auto at = out.find(std::string("station ") + id + " ");
-    ASSERT_NE(at, std::string::npos) << id << "\n" << out;
-    const std::string line = out.substr(at, out.find('\n', at) - at);
-    unsigned long long steps = 0, hashes = 0;
-    const auto n = line.find("): ");
-    ASSERT_EQ(std::sscanf(line.c_str() + n + 3, "%llu steps re-simulated, %llu step hashes", &steps,
-                          &hashes),
-              2)
-        << line;
-    EXPECT_GE(steps, 3000u) << line;
-    EXPECT_EQ(hashes, steps) << line;
-  }
+  for (const char* id : kHeavyScenes) ExpectEveryStepHashMatched(out, id);
 }
 
 TEST_F(RecordReplayTest, AKilledRecorderLeavesAReadableFileUpToTheLast200Ms) {
