@@ -197,6 +197,33 @@ StitchKnotType Classify(const std::vector<StitchThrow>& throws, double total_twi
   return StitchKnotType::kUnknown;
 }
 
+// A knot tied by passing ends through loops: its closure names it; the twist runs tell only
+// whether it capsized into half hitches on one straight strand (a slip knot, a lone half
+// hitch), which the closure cannot see (capsizing keeps the ends where they are).
+StitchKnotType ClassifyTied(KnotType closure, const std::vector<StitchThrow>& throws,
+                            std::string* reason) {
+  const bool hitches_on_one_post =
+      !throws.empty() && std::all_of(throws.begin(), throws.end(), [&](const StitchThrow& t) {
+        return t.hitch && t.turns == 1 && t.post_strand == throws.front().post_strand;
+      });
+  switch (closure) {
+    case KnotType::kSquare:
+    case KnotType::kGranny:
+      if (hitches_on_one_post && throws.size() == 2) return StitchKnotType::kSlip;
+      return closure == KnotType::kSquare ? StitchKnotType::kSquare : StitchKnotType::kGranny;
+    case KnotType::kSurgeons:
+      return StitchKnotType::kSurgeons;
+    case KnotType::kOverhandLeft:
+    case KnotType::kOverhandRight:
+      if (hitches_on_one_post && throws.size() == 1) return StitchKnotType::kHalfHitch;
+      *reason = "a lone throw (the closure is a trefoil)";
+      return StitchKnotType::kUnknown;
+    default:
+      *reason = "the closure is " + std::string(KnotName(closure)) + ", not a surgical knot";
+      return StitchKnotType::kUnknown;
+  }
+}
+
 }  // namespace
 
 std::string_view StitchKnotName(StitchKnotType type) {
@@ -339,10 +366,8 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
   strand_b.push_back(out.p_puncture_last_W);
   for (int i = out.last_below + 1; i < n; ++i) strand_b.push_back(polyline[i]);
 
-  if (options.full_evidence) {
-    out.closure = RecognizeKnot(polyline);
-    out.gauss_linking = GaussLinkingIntegral(strand_a, strand_b);
-  }
+  out.closure = RecognizeKnot(polyline);
+  if (options.full_evidence) out.gauss_linking = GaussLinkingIntegral(strand_a, strand_b);
 
   for (int i = out.first_below; i <= out.last_below; ++i) {
     if (polyline[i].z() > kStitchGraze_diameters * diameter) {
@@ -455,7 +480,12 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
     t.p_center_W = c / (r.last - r.first + 1);
     out.throws.push_back(t);
   }
-  out.type = Classify(out.throws, out.total_twist_turns, &out.reason);
+  if (out.closure == KnotType::kNone) {
+    out.type = Classify(out.throws, out.total_twist_turns, &out.reason);
+  } else {
+    out.from_closure = true;
+    out.type = ClassifyTied(out.closure, out.throws, &out.reason);
+  }
   return out;
 }
 

@@ -4,13 +4,17 @@
 //
 // The tissue is the plane z = 0. The thread enters the tissue, runs under it (its nodes with
 // z < 0 are the stitch), comes out, and its two strands are tied above the surface; both ends
-// are free. Closed far outside, such a thread is the unknot for every knot made of throws
-// (each throw is a twist of the two strands about each other, and the closure undoes twists),
-// so the knot is read from the two strands instead: they are matched along their length and
-// the rotation of the vector joining them about their common axis (the twist of the ribbon
-// they span) is followed from the tissue outwards. Each run of twisting in one sense is a
-// throw, counted in full turns and signed by its hand; a run in which one strand stays
-// straight while the other winds around it is a half hitch on that strand (the post).
+// are free. Two readings (README.md, "Tied throws and twisted pairs"):
+// * A knot tied by passing ends through the loop closes, with the tails joined far outside,
+//   to the knot the same throws make in a free thread (a reef knot to the square knot
+//   3_1 # 3_1*): the closure names it, and the strands' twist only tells whether it capsized
+//   into half hitches on one straight strand (slip, half hitch).
+// * Strands only twisted about each other (a braid of two strands) close to the unknot; the
+//   class is then read from the strands: they are matched along their length and the rotation
+//   of the vector joining them about their common axis (the twist of the ribbon they span) is
+//   followed from the tissue outwards. Each run of twisting in one sense is a throw, counted in
+//   full turns and signed by its hand; a run in which one strand stays straight while the other
+//   winds around it is a half hitch on that strand (the post).
 //
 // Handedness: a throw is right-handed (+1) when the two strands, both followed away from the
 // tissue, twist about each other like a right-handed screw; every crossing between them in
@@ -111,9 +115,13 @@ struct StitchKnotAnalysis {
   // a projection-free double integral, close to total_twist_turns when the strands' common
   // axis is nearly straight (Calugareanu-White: Lk = Tw + Wr). Full evidence only.
   double gauss_linking = 0.0;
-  // Knot of the whole thread closed far outside (RecognizeKnot): none for every knot made of
-  // throws and hitches (README.md); kUnknown when not computed (full evidence only).
+  // Knot of the whole thread closed far outside (RecognizeKnot), always computed. A throw
+  // tied by passing an end through the loop closes to a trefoil and a reef knot to the square
+  // knot 3_1 # 3_1* (README.md, "Tied throws and twisted pairs"); strands only twisted about
+  // each other close to the unknot.
   KnotType closure = KnotType::kUnknown;
+  // The class was read from the closure (a tied knot), not from the twist of the strands.
+  bool from_closure = false;
 };
 
 // Whether `polyline` is a thread through the tissue: its two end nodes above the surface

@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "common/knot/stitch_knot_shapes.h"
+#include "tests/support/knot_shapes.h"
 #include "tests/support/stitch_knot_variants.h"
 
 namespace microdex::knot {
@@ -377,6 +378,85 @@ TEST(StitchKnotTest, BadInputNamesTheProblem) {
   def.tail_last_azimuth_rad = kPi;
   def.tail_last_elevation_rad = 0.0;
   EXPECT_THROW((void)MakeStitchKnot(def), std::invalid_argument);
+}
+
+// A knot tied in an open thread (tails along -x and +x), turned into a knot tied around a
+// stitch: the ends are joined under everything (the stitch, below z = 0) and the thread is
+// cut at its highest link instead, whose two nodes get vertical tails. Joining those tails far
+// above gives back the closed knot, so the closure is the tied knot's. Scaled to a thread of
+// about 1 mm per unit.
+Curve TiedAroundAStitch(const Curve& open) {
+  const Curve thread = shapes::ResampleOpen(open, 0.05);
+  double z_min = thread.front().z();
+  std::size_t top = 0;
+  for (std::size_t i = 0; i < thread.size(); ++i) {
+    z_min = std::min(z_min, thread[i].z());
+    if (thread[i].z() > thread[top].z()) top = i;
+  }
+  if (top + 1 == thread.size()) --top;
+  const double z_stitch = z_min - 1.0;
+  Curve closed(thread.begin(), thread.end());
+  const Eigen::Vector3d last = thread.back();
+  const Eigen::Vector3d first = thread.front();
+  const Curve bottom = shapes::ResampleOpen(
+      Curve{last, {last.x(), last.y(), z_stitch}, {first.x(), first.y(), z_stitch}, first}, 0.05);
+  closed.insert(closed.end(), bottom.begin() + 1, bottom.end() - 1);
+  // Cut between node `top` and `top + 1`: start at top + 1, go round, end at top.
+  Curve out;
+  const Eigen::Vector3d up(0.0, 0.0, 3.0);
+  out.push_back(thread[top + 1] + up);
+  const std::size_t n = closed.size();
+  for (std::size_t k = 0; k < n; ++k) out.push_back(closed[(top + 1 + k) % n]);
+  out.push_back(thread[top] + up);
+  const double shift = z_min - 0.5;  // the thread above z = 0.5, the stitch at -0.5
+  for (Eigen::Vector3d& p : out) p = (p - Eigen::Vector3d(0, 0, shift)) * 1e-3;
+  return out;
+}
+
+TEST(StitchKnotTest, TiedKnotsAreReadFromTheirClosure) {
+  // Throws tied by passing an end through a loop (shapes::OverhandAsTied, spliced) around a
+  // stitch: the closure names them, whatever the strands' twist says.
+  const Curve right = shapes::OverhandAsTied(1, true);
+  const Curve left = shapes::OverhandAsTied(1, false);
+  const Curve double_right = shapes::OverhandAsTied(2, true);
+  struct Case {
+    const char* name;
+    Curve thread;
+    StitchKnotType expected;
+  };
+  const Case cases[] = {
+      {"right then left", TiedAroundAStitch(shapes::Splice(right, left, 2.0)),
+       StitchKnotType::kSquare},
+      {"left then right", TiedAroundAStitch(shapes::Splice(left, right, 2.0)),
+       StitchKnotType::kSquare},
+      {"right then right", TiedAroundAStitch(shapes::Splice(right, right, 2.0)),
+       StitchKnotType::kGranny},
+      {"left then left", TiedAroundAStitch(shapes::Splice(left, left, 2.0)),
+       StitchKnotType::kGranny},
+      {"double right then left", TiedAroundAStitch(shapes::Splice(double_right, left, 2.0)),
+       StitchKnotType::kSurgeons},
+  };
+  StitchKnotOptions options;
+  options.thread_diameter_m = 3e-5;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    ASSERT_TRUE(IsStitchPolyline(c.thread));
+    const StitchKnotAnalysis a = AnalyzeStitchKnot(c.thread, options);
+    EXPECT_TRUE(a.from_closure);
+    EXPECT_EQ(a.type, c.expected) << StitchKnotName(a.type) << " (" << a.reason << "), closure "
+                                  << KnotName(a.closure);
+    EXPECT_EQ(RecogniseStitchKnot(c.thread, options), c.expected);
+  }
+  // A lone tied throw is a trefoil: not a surgical knot, and said so.
+  const StitchKnotAnalysis lone = AnalyzeStitchKnot(TiedAroundAStitch(right), options);
+  EXPECT_EQ(lone.closure, KnotType::kOverhandRight);
+  EXPECT_EQ(lone.type, StitchKnotType::kUnknown);
+  EXPECT_NE(lone.reason.find("lone throw"), std::string::npos) << lone.reason;
+  // Untied: a straight thread through the stitch closes to the unknot and has no throw.
+  const StitchKnotAnalysis untied =
+      AnalyzeStitchKnot(TiedAroundAStitch(Curve{{-4, 0, 0}, {4, 0, 0.1}}), options);
+  EXPECT_FALSE(untied.from_closure);
+  EXPECT_EQ(untied.type, StitchKnotType::kNone);
 }
 
 }  // namespace
