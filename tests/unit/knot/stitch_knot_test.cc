@@ -396,8 +396,8 @@ Curve TiedAroundAStitch(const Curve& open) {
   if (top + 1 == thread.size()) --top;
   const double z_stitch = z_min - 1.0;
   Curve closed(thread.begin(), thread.end());
-  const Eigen::Vector3d last = thread.back();
-  const Eigen::Vector3d first = thread.front();
+  const Eigen::Vector3d& last = thread.back();
+  const Eigen::Vector3d& first = thread.front();
   const Curve bottom = shapes::ResampleOpen(
       Curve{last, {last.x(), last.y(), z_stitch}, {first.x(), first.y(), z_stitch}, first}, 0.05);
   closed.insert(closed.end(), bottom.begin() + 1, bottom.end() - 1);
