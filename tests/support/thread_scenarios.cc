@@ -290,6 +290,9 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
   path_.push_back({at(a + 0.6e-3, y_s - 0.4e-3, 0.0), Phase::kExit});
   path_.push_back({at(a + 2.5e-3, y_s - 0.2e-3, 0.0), Phase::kExit});
   for (const Collider& c : colliders_) radii_.push_back(c.radius_m);
+  num_jig_ = colliders_.size();
+  colliders_.insert(colliders_.end(), options.fixed_colliders.begin(),
+                    options.fixed_colliders.end());
   for (size_t k = 1; k < path_.size(); ++k) {
     path_total_m_ += (path_[k].p_W - path_[k - 1].p_W).norm();
   }
@@ -313,9 +316,9 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadState& state) {
     // and the wraps close on the thread gradually.
     released_s_ += h;
     const double scale = std::max(0.0, 1.0 - released_s_ / kReleaseTime_s);
-    for (size_t k = 0; k < colliders_.size(); ++k) colliders_[k].radius_m = scale * radii_[k];
+    for (size_t k = 0; k < num_jig_; ++k) colliders_[k].radius_m = scale * radii_[k];
     if (released_s_ >= kReleaseTime_s) {
-      for (Collider& c : colliders_) c.enabled = false;
+      for (size_t k = 0; k < num_jig_; ++k) colliders_[k].enabled = false;
       phase_ = Phase::kPull;
     }
     StepThread(model, colliders_, ws_, state);
@@ -386,7 +389,6 @@ KnotHoldScript::KnotHoldScript(const ThreadModel& model, KnotTyingHands hands,
 bool KnotHoldScript::Step(const ThreadModel& model, ThreadState& state) {
   if (steps_left_ <= 0) return false;
   const double h = model.def.time_step_s;
-  const std::vector<Collider> none;
   for (const int slot : {hands_.standing_slot, hands_.driver_slot}) {
     const int other = slot == hands_.standing_slot ? hands_.driver_slot : hands_.standing_slot;
     Grasp& g = state.grasps[slot];
@@ -397,7 +399,7 @@ bool KnotHoldScript::Step(const ThreadModel& model, ThreadState& state) {
                                 -kMaxHandSpeed_m_per_s, kMaxHandSpeed_m_per_s);
     SetGraspTarget(state, slot, g.p_WT + (out * v * h) * Eigen::Vector3d::UnitX(), g.roll_rad);
   }
-  StepThread(model, none, ws_, state);
+  StepThread(model, options_.fixed_colliders, ws_, state);
   --steps_left_;
   return steps_left_ > 0;
 }
@@ -523,13 +525,88 @@ struct PhaseMeter {
 
 }  // namespace
 
+void KnotStitchDef::Validate() const {
+  auto positive = [](double v, const char* field) {
+    if (!(v > 0.0 && v < 1.0)) {
+      throw std::invalid_argument(std::string("KnotStitchDef.") + field +
+                                  ": expected a length in (0, 1) m");
+    }
+  };
+  positive(depth_m, "depth_m");
+  positive(guide_offset_m, "guide_offset_m");
+  positive(rod_radius_m, "rod_radius_m");
+  positive(guide_radius_m, "guide_radius_m");
+  if (!(std::isfinite(x_m) && std::isfinite(start_x_m) &&
+        start_x_m < x_m - guide_offset_m - guide_radius_m)) {
+    throw std::invalid_argument(
+        "KnotStitchDef.start_x_m: expected the standing end before the first guide");
+  }
+  if (!(depth_m > rod_radius_m + guide_radius_m && guide_offset_m > rod_radius_m)) {
+    throw std::invalid_argument(
+        "KnotStitchDef.depth_m: expected the bite rod below the guides and between them");
+  }
+}
+
+std::vector<Collider> KnotStitchDef::Colliders(double thread_radius_m) const {
+  Validate();
+  const double half = 4e-3;  // the rods' half length along z
+  auto rod = [&](double x, double y, double r) {
+    return Collider::Capsule(Eigen::Vector3d(x, y, -half), Eigen::Vector3d(x, y, half), r);
+  };
+  const double y_guide = -thread_radius_m - guide_radius_m - 2e-6;
+  return {rod(x_m - guide_offset_m, y_guide, guide_radius_m), rod(x_m, -depth_m, rod_radius_m),
+          rod(x_m + guide_offset_m, y_guide, guide_radius_m)};
+}
+
+ThreadState KnotStitchDef::Lay(const ThreadModel& model) const {
+  Validate();
+  const double r = model.radius_m;
+  const double y_bottom = -depth_m - rod_radius_m - r - 2e-6;
+  const double side = rod_radius_m + r + 3e-6;
+  const std::vector<Eigen::Vector3d> path = {
+      {start_x_m, 0.0, 0.0}, {x_m - guide_offset_m, 0.0, 0.0}, {x_m - side, -depth_m, 0.0},
+      {x_m, y_bottom, 0.0},  {x_m + side, -depth_m, 0.0},      {x_m + guide_offset_m, 0.0, 0.0},
+      {x_m + 1.0, 0.0, 0.0}};
+  Eigen::Matrix3Xd x(3, model.num_nodes);
+  std::size_t segment = 0;
+  Eigen::Vector3d at = path.front();
+  x.col(0) = at;
+  for (int i = 1; i < model.num_nodes; ++i) {
+    double left = model.rest_length_m[i - 1];
+    while (true) {
+      const Eigen::Vector3d d = path[segment + 1] - at;
+      const double len = d.norm();
+      if (len >= left) {
+        at += (left / len) * d;
+        break;
+      }
+      left -= len;
+      at = path[segment + 1];
+      ++segment;
+    }
+    x.col(i) = at;
+  }
+  return MakeThreadState(model, x);
+}
+
 TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
-                     const KnotHoldOptions& hold, void (*on_phase)(const TiePhaseReport&)) {
+                     KnotHoldOptions hold, void (*on_phase)(const TiePhaseReport&),
+                     const KnotStitchDef* stitch) {
   using Clock = std::chrono::steady_clock;
   const ThreadModel model = MakeThreadModel(def);
-  ThreadState state =
-      MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-  KnotTyingHands hands = SetUpKnotTying(model, state);
+  ThreadState state = stitch != nullptr ? stitch->Lay(model)
+                                        : MakeStraightThreadState(model, Eigen::Vector3d::Zero(),
+                                                                  Eigen::Vector3d::UnitX());
+  KnotTyingHands hands;
+  if (stitch != nullptr) {
+    hands.standing_slot = GraspNode(model, 0, state);
+    hands.driver_slot = GraspNode(model, model.num_nodes - 1, state);
+    const std::vector<Collider> rods = stitch->Colliders(model.radius_m);
+    for (KnotThrowOptions& t : throws) t.fixed_colliders = rods;
+    hold.fixed_colliders = rods;
+  } else {
+    hands = SetUpKnotTying(model, state);
+  }
   TieReport out;
   out.min_distance_over_d = std::numeric_limits<double>::infinity();
   out.pulled_tight = true;

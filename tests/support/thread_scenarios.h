@@ -84,6 +84,8 @@ struct KnotThrowOptions {
   double hold_tension_N = 2e-3;
   double pull_tension_N = 10e-3;
   double max_pull_m = 8e-3;
+  // Colliders present throughout and never withdrawn with the jig (a stitch).
+  std::vector<Collider> fixed_colliders;
   // Throws std::invalid_argument naming the bad field.
   void Validate() const;
 };
@@ -126,6 +128,7 @@ class KnotThrowScript {
   std::vector<double> radii_;  // of the colliders, before the release
   double sx_ = 1.0;            // +1: the driver's end lies towards +x of the knot, -1: towards -x
   Phase phase_ = Phase::kLoop;
+  std::size_t num_jig_ = 0;  // colliders_[0, num_jig_): pegs and jaws; then the fixed ones
 };
 
 // ---- Hold ------------------------------------------------------------------------------------
@@ -135,6 +138,7 @@ class KnotThrowScript {
 struct KnotHoldOptions {
   double tension_N = 20e-3;
   double duration_s = 2.0;
+  std::vector<Collider> fixed_colliders;  // e.g. the stitch
 };
 
 class KnotHoldScript {
@@ -156,6 +160,28 @@ class KnotHoldScript {
 // (granny), "2r,1l" (surgeon's): passes and r/l handedness per throw. Throws
 // std::invalid_argument naming the bad item.
 std::vector<KnotThrowOptions> ParseKnotThrows(const std::string& spec);
+
+// A stitch for the knot-tying jig (the thread module's picture of a bite through tissue, in the
+// jig's frame: the thread along +x at y = 0, y up): the thread runs flat from the standing end
+// at start_x_m to a guide rod under it (the first puncture), down under a deep rod (the bite),
+// up over a second guide rod (the second puncture) and flat again to its other end. All rods
+// are capsules along z, frictionless. The first throw's jig (at x = 4 mm) lies on the standing
+// part before the first guide, so the stitch is inside the throw's loop: the knot is tied
+// around it and slides onto the first puncture when pulled.
+struct KnotStitchDef {
+  double x_m = 9e-3;               // the bite's centre
+  double depth_m = 1e-3;           // the bite rod's centre below the thread's line
+  double guide_offset_m = 2.5e-3;  // guides at x_m -+ this
+  double rod_radius_m = 0.15e-3;
+  double guide_radius_m = 0.1e-3;
+  double start_x_m = -2e-3;  // the standing end
+  // The rods, for a thread of this radius (the guides' tops at y = 0 under its centreline).
+  std::vector<Collider> Colliders(double thread_radius_m) const;
+  // The thread laid along the stitch's path from start_x_m.
+  ThreadState Lay(const ThreadModel& model) const;
+  // Throws std::invalid_argument naming the bad field.
+  void Validate() const;
+};
 
 // Smallest centreline distance between non-adjacent links of the polyline x (3 x n), over the
 // pairs closer than limit_m (limit_m if none is): a brute force over all pairs, pruned only by
@@ -198,8 +224,10 @@ struct TieReport {
 // tensions, then holds (`hold`). Times every step; after every step the brute-force distance.
 // The knot is recognised at every phase change. on_phase, when given, is called after each
 // phase with its report (progress output).
+// With `stitch`, the thread is laid through it (KnotStitchDef) and its rods stay for every
+// throw and the hold.
 TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
-                     const KnotHoldOptions& hold,
-                     void (*on_phase)(const TiePhaseReport&) = nullptr);
+                     KnotHoldOptions hold, void (*on_phase)(const TiePhaseReport&) = nullptr,
+                     const KnotStitchDef* stitch = nullptr);
 
 }  // namespace microdex::thread

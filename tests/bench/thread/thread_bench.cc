@@ -5,8 +5,9 @@
 //   microdex-bench thread --stability --json FILE [--plot FILE.png]
 //   microdex-bench thread --accuracy --json FILE
 //   microdex-bench thread --adversarial [--steps 1000000] [--json FILE]
-//   microdex-bench thread --tie 2 | 1r,1l | 2r,1l [--nodes N] [--obj FILE] [--json FILE]
-//                         tie the throws, pull, hold 20 mN for 2 s; report per phase
+//   microdex-bench thread --tie 2 | 1r,1l | 2r,1l [--nodes N] [--stitch] [--obj FILE] [--json FILE]
+//                         tie the throws, pull, hold 20 mN for 2 s; report per phase;
+//                         --stitch: around a stitch (an 18 mm thread through three rods)
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
 //                         five knots x 129..513 nodes x mu 0.1..0.3 (README table)
 //   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
@@ -489,13 +490,18 @@ void PrintPhase(const TiePhaseReport& r) {
 
 // Ties the throws of `spec` (ParseKnotThrows: "2" double overhand, "1r,1l" square, "1r,1r"
 // granny, "2r,1l" surgeon's), pulls, holds 20 mN for 2 s, and reports per phase.
-int RunTie(const std::string& spec, int nodes, const std::string& obj, const std::string& json,
-           const ContactOverrides& contact) {
-  const ThreadDef def = contact.Apply(KnotTyingDef(nodes));
-  std::printf("tie %s, %d nodes: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
-              spec.c_str(), nodes, def.exact_contact_pairs, def.friction_coefficient,
-              def.object_friction_coefficient);
-  const TieReport r = RunKnotTie(def, ParseKnotThrows(spec), KnotHoldOptions{}, PrintPhase);
+// --stitch: around a stitch (KnotStitchDef), an 18 mm thread.
+int RunTie(const std::string& spec, int nodes, bool stitch, const std::string& obj,
+           const std::string& json, const ContactOverrides& contact) {
+  ThreadDef def = contact.Apply(KnotTyingDef(nodes));
+  const KnotStitchDef stitch_def;
+  if (stitch) def.length_m = 18e-3;
+  std::printf(
+      "tie %s, %d nodes%s: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
+      spec.c_str(), nodes, stitch ? ", around a stitch" : "", def.exact_contact_pairs,
+      def.friction_coefficient, def.object_friction_coefficient);
+  const TieReport r = RunKnotTie(def, ParseKnotThrows(spec), KnotHoldOptions{}, PrintPhase,
+                                 stitch ? &stitch_def : nullptr);
   std::printf(
       "knot %s (after the pull %s), min distance %.3f d, held %s (knot moved %.3g mm along the "
       "thread), %.0f steps/s (median), tick p99 %.0f us, rolled back %lld, max strain %.4f (hold "
@@ -673,7 +679,7 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
 }
 
 int Main(int argc, char** argv) {
-  bool stability = false, accuracy = false, quick = false, adversarial = false;
+  bool stability = false, accuracy = false, quick = false, adversarial = false, stitch = false;
   std::int64_t steps = 1000000;
   int nodes = 257;
   bool tie_matrix = false;
@@ -704,6 +710,8 @@ int Main(int argc, char** argv) {
       plot = value("--plot");
     } else if (arg == "--tie") {
       tie = value("--tie");
+    } else if (arg == "--stitch") {
+      stitch = true;
     } else if (arg == "--tie-matrix") {
       tie_matrix = true;
     } else if (arg == "--only") {
@@ -733,7 +741,8 @@ int Main(int argc, char** argv) {
       std::printf(
           "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --adversarial "
           "[--steps N] | --tie THROWS "
-          "[--nodes N] [--obj FILE] | --tie-matrix [--only SPEC;SPEC] [--markdown FILE]] "
+          "[--nodes N] [--stitch] [--obj FILE] | --tie-matrix [--only SPEC;SPEC] [--markdown "
+          "FILE]] "
           "[--friction MU] "
           "[--object-friction MU] [--exact-pairs N] "
           "[--json FILE] [--quick]\n");
@@ -742,7 +751,7 @@ int Main(int argc, char** argv) {
       throw std::invalid_argument("unknown option '" + arg + "'");
     }
   }
-  if (!tie.empty()) return RunTie(tie, nodes, obj, json, contact);
+  if (!tie.empty()) return RunTie(tie, nodes, stitch, obj, json, contact);
   if (tie_matrix) return RunTieMatrix(quick, only, json, markdown, contact);
   if (stability) return RunStability(quick, json, plot);
   if (adversarial) return RunAdversarial(quick ? 20000 : steps, json);
