@@ -330,7 +330,12 @@ TEST_F(SessionTest, TheCheckpointThreadKeepsTheWalShortAndLosesNothing) {
     fill([&](std::vector<RecordedMessage> batch) {
       for (RecordedMessage& m : batch) ASSERT_TRUE(rec.Push(std::move(m)));
       rec.Flush();
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));  // a checkpoint period or two
+      // Until a checkpoint after the commit has copied this batch (bounded: 2 s), however busy
+      // the machine: the WAL's size then depends on the mechanism, not on the scheduler.
+      const std::uint64_t before = rec.stats().checkpoints;
+      for (int k = 0; k < 400 && rec.stats().checkpoints == before; ++k) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
       wal_max = std::max(wal_max, wal_bytes(file));
     });
     const RecorderStats s = rec.stats();
