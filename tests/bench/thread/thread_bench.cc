@@ -7,7 +7,8 @@
 //   microdex-bench thread --adversarial [--steps 1000000] [--json FILE]
 //   microdex-bench thread --tie 2 | 1r,1l | 2r,1l [--nodes N] [--stitch] [--obj FILE] [--json FILE]
 //                         tie the throws, pull, hold 20 mN for 2 s; report per phase;
-//                         --stitch: around a stitch (an 18 mm thread through three rods)
+//                         --stitch: around a stitch (an 18 mm thread through three rods);
+//                         --stitch-geometry X,DEPTH,OFFSET,ROD_R,GUIDE_R,START,LENGTH (mm)
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
 //                         five knots x 129..513 nodes x mu 0.1..0.3 (README table)
 //   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
@@ -490,18 +491,16 @@ void PrintPhase(const TiePhaseReport& r) {
 
 // Ties the throws of `spec` (ParseKnotThrows: "2" double overhand, "1r,1l" square, "1r,1r"
 // granny, "2r,1l" surgeon's), pulls, holds 20 mN for 2 s, and reports per phase.
-// --stitch: around a stitch (KnotStitchDef), an 18 mm thread.
-int RunTie(const std::string& spec, int nodes, bool stitch, const std::string& obj,
-           const std::string& json, const ContactOverrides& contact) {
+// With `stitch`: around it (KnotStitchDef), a thread of stitch_length_m.
+int RunTie(const std::string& spec, int nodes, const KnotStitchDef* stitch, double stitch_length_m,
+           const std::string& obj, const std::string& json, const ContactOverrides& contact) {
   ThreadDef def = contact.Apply(KnotTyingDef(nodes));
-  const KnotStitchDef stitch_def;
-  if (stitch) def.length_m = 18e-3;
+  if (stitch != nullptr) def.length_m = stitch_length_m;
   std::printf(
       "tie %s, %d nodes%s: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
-      spec.c_str(), nodes, stitch ? ", around a stitch" : "", def.exact_contact_pairs,
+      spec.c_str(), nodes, stitch != nullptr ? ", around a stitch" : "", def.exact_contact_pairs,
       def.friction_coefficient, def.object_friction_coefficient);
-  const TieReport r = RunKnotTie(def, ParseKnotThrows(spec), KnotHoldOptions{}, PrintPhase,
-                                 stitch ? &stitch_def : nullptr);
+  const TieReport r = RunKnotTie(def, ParseKnotThrows(spec), KnotHoldOptions{}, PrintPhase, stitch);
   std::printf(
       "knot %s (after the pull %s), min distance %.3f d, held %s (knot moved %.3g mm along the "
       "thread), %.0f steps/s (median), tick p99 %.0f us, rolled back %lld, max strain %.4f (hold "
@@ -680,6 +679,8 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
 
 int Main(int argc, char** argv) {
   bool stability = false, accuracy = false, quick = false, adversarial = false, stitch = false;
+  KnotStitchDef stitch_def;
+  double stitch_length_m = 18e-3;
   std::int64_t steps = 1000000;
   int nodes = 257;
   bool tie_matrix = false;
@@ -711,6 +712,17 @@ int Main(int argc, char** argv) {
     } else if (arg == "--tie") {
       tie = value("--tie");
     } else if (arg == "--stitch") {
+      stitch = true;
+    } else if (arg == "--stitch-geometry") {
+      // x_m,depth_m,guide_offset_m,rod_radius_m,guide_radius_m,start_x_m,length_m (mm)
+      std::istringstream in(value("--stitch-geometry"));
+      std::vector<double> v;
+      for (std::string item; std::getline(in, item, ',');)
+        v.push_back(std::atof(item.c_str()) * 1e-3);
+      if (v.size() != 7) throw std::invalid_argument("--stitch-geometry: expected 7 numbers (mm)");
+      stitch_def = {v[0], v[1], v[2], v[3], v[4], v[5]};
+      stitch_def.Validate();
+      stitch_length_m = v[6];
       stitch = true;
     } else if (arg == "--tie-matrix") {
       tie_matrix = true;
@@ -751,7 +763,9 @@ int Main(int argc, char** argv) {
       throw std::invalid_argument("unknown option '" + arg + "'");
     }
   }
-  if (!tie.empty()) return RunTie(tie, nodes, stitch, obj, json, contact);
+  if (!tie.empty()) {
+    return RunTie(tie, nodes, stitch ? &stitch_def : nullptr, stitch_length_m, obj, json, contact);
+  }
   if (tie_matrix) return RunTieMatrix(quick, only, json, markdown, contact);
   if (stability) return RunStability(quick, json, plot);
   if (adversarial) return RunAdversarial(quick ? 20000 : steps, json);
