@@ -46,10 +46,12 @@ void AddContactForces(const ThreadModel& model, ThreadWorkspace& w, Eigen::Matri
 // of them): non-adjacent links at least guard_fraction * diameter apart (centrelines; the sign
 // taken along the normal at x0, so links that crossed since x0 are put back on their side),
 // link surfaces at least (guard_fraction - 1) * radius from objects, and, when
-// strain_limit > 0, link lengths within [1 - strain_limit, 1 + strain_limit] rest lengths.
+// strain_limit > 0, link lengths within [1 - strain_limit, 1 + strain_limit] rest lengths
+// (after each of the first 32 sweeps over the contacts, all links at once by a direct solve:
+// ProjectStrainBand; the later sweeps are contacts only).
 // Each contact correction carries Coulomb friction at position level: the contact points'
 // relative tangential displacement since x0 is removed up to mu times the normal correction.
-// Sweeps until no constraint is violated by more than 0.5 % of the diameter (at most 32).
+// Sweeps until no constraint is violated by more than 0.5 % of the diameter (at most 48).
 // Uses the candidate pairs and their closest points at x0 (FindThreadContacts or
 // FindPairStarts on x0). Moves state.x_W only; the caller sets the velocities.
 struct ContactProjection {

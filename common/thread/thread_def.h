@@ -70,8 +70,9 @@ struct ThreadDef {
   double guard_fraction = 0.97;
 
   // Strain limiting after each linearly implicit step (not in the thesis): link lengths are
-  // projected into [1 - strain_limit, 1 + strain_limit] times their rest length by a few
-  // mass-weighted Gauss-Seidel sweeps. One linearised step that rotates a stiff link far
+  // projected into [1 - strain_limit, 1 + strain_limit] times their rest length inside the
+  // contact projection, by a direct (tridiagonal) mass-weighted solve of all link lengths
+  // (strain_band.h). One linearised step that rotates a stiff link far
   // lengthens it (to second order in the rotation), which the stability study measured as
   // strain > 10 % at 1 ms; 0 disables it. The baseline (5.2) is left as the thesis has it.
   double strain_limit = 0.05;

@@ -89,6 +89,8 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.swept_pairs.assign(model.contact_capacity, LinkPair{});
   w.pair_start.assign(model.contact_capacity, PairStart{});
   w.object_candidates.assign(model.contact_capacity, LinkPair{});
+  w.inverse_mass = Eigen::VectorXd::Zero(n);
+  w.strain_band = MakeStrainBandScratch(model.num_links);
   w.self_contacts.assign(model.contact_capacity, SelfContact{});
   w.object_contacts.assign(model.contact_capacity, ObjectContact{});
   w.system = BandedSpd(3 * n, model.half_bandwidth);

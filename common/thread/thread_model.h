@@ -9,6 +9,7 @@
 
 #include "common/thread/banded_spd.h"
 #include "common/thread/sphere_bvh.h"
+#include "common/thread/strain_band.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::thread {
@@ -122,6 +123,10 @@ struct ThreadWorkspace {
   int projection_sweeps = 0;
   double projection_residual_m = 0.0;
   int projection_parts = 0;  // the step's motion was projected in this many parts
+  // The contact projection's link-length solve (strain band): inverse node masses (0 for
+  // grasped nodes) and the tridiagonal solve's scratch.
+  Eigen::VectorXd inverse_mass;
+  StrainBandScratch strain_band;
   std::vector<SelfContact> self_contacts;
   std::vector<ObjectContact> object_contacts;
   int num_self_contacts = 0;

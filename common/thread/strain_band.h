@@ -1,0 +1,49 @@
+#pragma once
+// Direct projection of the thread's link lengths into the strain band (Deul, Kugelstadt,
+// Weiler & Bender 2018, "Direct position-based solver for stiff rods", here for the length
+// constraints only). The length constraints C_j = |x_{j+1} - x_j| - l_j of a chain couple only
+// neighbouring links, so the linearised projection (J W J^T) lambda = -C, dx = W J^T lambda
+// (W the inverse node masses, 0 for grasped nodes) is a tridiagonal system in the links,
+// solved exactly in O(n) per Newton iteration. A Gauss-Seidel sweep moves a length error one
+// link per sweep; the direct solve spreads it over the whole chain at once, so thread is drawn
+// from the free parts of the chain where a knot or a rod needs it.
+
+#include <Eigen/Core>
+
+namespace microdex::thread {
+
+struct ThreadModel;
+
+// Pre-sized scratch of ProjectStrainBand (num_links entries each).
+struct StrainBandScratch {
+  Eigen::Matrix3Xd e;      // unit link directions
+  Eigen::VectorXd c;       // constraint value: l - band edge outside the band, else 0
+  Eigen::VectorXd diag;    // J W J^T, diagonal
+  Eigen::VectorXd off;     // J W J^T, (j, j + 1)
+  Eigen::VectorXd lambda;  // solution
+  Eigen::VectorXd work;    // Thomas algorithm
+  Eigen::VectorXi active;  // 0 free, +1 / -1 held (from above / below the band)
+  Eigen::Matrix3Xd dx;     // a Newton step's node moves (num_links + 1 columns)
+};
+StrainBandScratch MakeStrainBandScratch(int num_links);
+
+struct StrainBandResult {
+  double max_violation_m = 0.0;  // largest |l - band| before the projection
+  int iterations = 0;            // Newton iterations run (each one tridiagonal solve)
+  int corrected_links = 0;       // links outside the band (beyond the tolerance) before it
+};
+
+// Projects x's link lengths into [1 - limit, 1 + limit] rest lengths. Newton iterations of
+// the tridiagonal solve over an active set: links outside the band are pulled to its nearer
+// edge, links pulled in an earlier iteration are held at their current length (they need not
+// stay at the edge) unless their multiplier would push them further into the band, the other
+// links are free. Each step is at most half the shortest rest length per node and is halved
+// (up to 4 times) until the largest violation decreases; stops when every link is within 1e-4
+// of its rest length of the band, after max_iterations, or when no step helps. Nodes with
+// inverse_mass 0 (grasped) do not move; the moves are mass-weighted, so the centre of mass of
+// a free chain stays. No allocation.
+StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::VectorXd& inverse_mass,
+                                   double limit, int max_iterations, Eigen::Matrix3Xd& x,
+                                   StrainBandScratch& s);
+
+}  // namespace microdex::thread
