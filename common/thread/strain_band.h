@@ -5,8 +5,8 @@
 // neighbouring links, so the linearised projection (J W J^T) lambda = -C, dx = W J^T lambda
 // (W the inverse node masses, 0 for grasped nodes) is a tridiagonal system in the links,
 // solved exactly in O(n) per Newton iteration. A Gauss-Seidel sweep moves a length error one
-// link per sweep; the direct solve spreads it over the whole chain at once, so thread is drawn
-// from the free parts of the chain where a knot or a rod needs it.
+// link per sweep; the direct solve corrects all held links together (where a taut chain has no
+// slack, the held set still grows by one link per side and iteration).
 
 #include <Eigen/Core>
 
