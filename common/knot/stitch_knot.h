@@ -73,8 +73,8 @@ struct StitchKnotOptions {
   // it). In a throw both strands wind about their common axis.
   double post_straightness = 0.85;
   double hitch_length_ratio = 0.75;
-  // Also compute the evidence the class does not need: the Gauss linking integral and the
-  // knot type of the whole thread closed far outside (RecognizeKnot).
+  // Also compute the evidence the class does not need: the Gauss linking integral of the two
+  // strands (the closure's knot type is always computed: the class needs it).
   bool full_evidence = true;
   // Throws std::invalid_argument naming the bad field.
   void Validate() const;
