@@ -350,6 +350,7 @@ int RunSpeed(bool quick, const std::string& json, const ContactOverrides& contac
       tie.passes = 2;
       tie.speed_m_per_s = 0.01;  // a faster hand, to reach the knot within the timed steps
       KnotThrowScript script(model, state, hands, tie);
+      ThreadWorkspace script_ws = MakeThreadWorkspace(model);
       SphereBvhSpheres spheres = MakeSphereBvhSpheres(model.bvh);
       bvh_pairs.assign(4 * model.contact_capacity, LinkPair{});
       all_pairs.assign(4 * model.contact_capacity, LinkPair{});
@@ -357,7 +358,7 @@ int RunSpeed(bool quick, const std::string& json, const ContactOverrides& contac
       std::vector<double> step_s, bvh_s, all_s;
       for (int k = 0; k < max_steps && !script.done(); ++k) {
         const auto t0 = Clock::now();
-        script.Step(model, state);
+        script.Step(model, script_ws, state);
         step_s.push_back(Seconds(t0, Clock::now()));
         if (k % 10 == 0) {
           // The self-collision query on this frame: the hierarchy (refit + FindCollision)
