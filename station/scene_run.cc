@@ -46,6 +46,12 @@ SceneRunResult RunSceneWithTrainee(const scene::SceneModel& scene, const SimTrai
     for (std::size_t i = 0; i < sim.module_count(); ++i)
       times[i].push_back(sim.last_step_time_s(i));
   }
+  if (scene.knot_tying && state.thread) {
+    const Eigen::Matrix3Xd& x = state.thread->thread.x_W;
+    std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(x.cols()));
+    for (Eigen::Index i = 0; i < x.cols(); ++i) nodes[static_cast<std::size_t>(i)] = x.col(i);
+    state.score.tied_knot = static_cast<std::int32_t>(RecogniseTiedKnot(scene, nodes));
+  }
   SceneRunResult r;
   r.score = CalcScore(scene, state.score);
   r.score.is_final = true;

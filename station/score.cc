@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace microdex::station {
 namespace {
@@ -68,6 +69,13 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   if (metric == "spacing_error_rad") return t.spacing_error_rad;
   if (metric == "bite_error_m") return t.bite_error_m;
   if (metric == "shape_error_m") return t.shape_error_m;
+  // Knot tying: a square or surgeon's knot passes; any other (granny, slip, none) fails, as
+  // does a knot not yet recognised.
+  if (metric == "knot_wrong") {
+    const auto square = static_cast<std::int32_t>(knot::StitchKnotType::kSquare);
+    const auto surgeons = static_cast<std::int32_t>(knot::StitchKnotType::kSurgeons);
+    return t.tied_knot == square || t.tied_knot == surgeons ? 0.0 : 1.0;
+  }
   if (metric == "entry_error_m") return t.entry_error_m;
   if (metric == "exit_error_m") return t.exit_error_m;
   if (metric == "peak_strain") return t.peak_strain;
@@ -81,12 +89,32 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
     if (task.kind == scene::TaskKind::kTremorHold || task.kind == scene::TaskKind::kGrasp ||
         task.kind == scene::TaskKind::kLoopAlongWire ||
         task.kind == scene::TaskKind::kKnotTopology ||
-        task.kind == scene::TaskKind::kKnotPlacement) {
+        task.kind == scene::TaskKind::kKnotPlacement || task.kind == scene::TaskKind::kKnotTying) {
       return 1.0 - t.progress;
     }
     return 1.0 - (t.passes_done + t.progress) / task.passes;
   }
   return kNaN;
+}
+
+knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
+                                       std::span<const Eigen::Vector3d> x_W) {
+  if (!scene.knot_tying || !scene.thread) return knot::StitchKnotType::kUnknown;
+  // The scene's frame (y up, the tissue the plane y = surface_y_m) to the recogniser's (the
+  // tissue the plane z = 0, z out of it): a rotation about x and a shift.
+  const double surface_y = scene.knot_tying->surface_y_m;
+  std::vector<Eigen::Vector3d> p(x_W.size());
+  for (std::size_t i = 0; i < x_W.size(); ++i) {
+    p[i] = Eigen::Vector3d(x_W[i].x(), -x_W[i].z(), x_W[i].y() - surface_y);
+  }
+  if (!knot::IsStitchPolyline(p)) return knot::StitchKnotType::kUnknown;
+  knot::StitchKnotOptions options;
+  options.thread_diameter_m = scene.thread->def.diameter_m;
+  try {
+    return knot::RecogniseStitchKnot(p, options);
+  } catch (const std::invalid_argument&) {
+    return knot::StitchKnotType::kUnknown;  // a degenerate polyline
+  }
 }
 
 net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& t) {

@@ -35,12 +35,19 @@
 //   torn_m               ... the length the holes tore (common/puncture/README.md)
 //   off_circle_m         ... the needle's motion across its holes, summed
 //   extra_punctures      ... punctures beyond the two the task needs
+//   knot_wrong         knot tying: 0 when the knot recognised at the task's end is square or
+//                      surgeon's, else 1 (granny, slip, half hitch, none, unknown, or not yet
+//                      recognised: totals.tied_knot is set off the haptic thread by
+//                      RecogniseTiedKnot at the end)
 //
 // follow_path (the module demos) keeps its own formula:
 //   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean
 //                  clearance / tube radius, 0, 1)
 //   other modules: 100 (1 − c)
 
+#include <span>
+
+#include "common/knot/stitch_knot.h"
 #include "common/net/messages.h"
 #include "common/scene/scene.h"
 #include "common/state/station_state.h"
@@ -48,6 +55,12 @@
 namespace microdex::station {
 
 net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& totals);
+
+// Knot tying: the knot around the stitch in the thread's nodes x_W (the scene's frame), named
+// by the stitch-knot recogniser (kUnknown for a scene without knot_tying or a polyline that is
+// not through the tissue). Allocates and takes milliseconds: never in the haptic thread.
+knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
+                                       std::span<const Eigen::Vector3d> x_W);
 
 // The value of a named metric (the list above); NaN for an unknown name.
 double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& totals,

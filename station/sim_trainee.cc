@@ -34,6 +34,9 @@ void SimTraineeDef::Validate() const {
   if (!(correction_duration_s > 0 && correction_duration_s <= 2)) {
     throw std::invalid_argument("correction_duration_s: expected (0, 2] s");
   }
+  if (!(square_rule_skill >= 0 && square_rule_skill <= 1)) {
+    throw std::invalid_argument("square_rule_skill: expected 0..1");
+  }
   if (!(hand_stiffness_N_per_m > 0))
     throw std::invalid_argument("hand_stiffness_N_per_m: expected > 0");
   if (!(hand_time_constant_s > 0))
@@ -102,6 +105,21 @@ SimTrainee::SimTrainee(const scene::SceneModel& scene, const SimTraineeDef& def)
                                     std::sqrt(3.0) * angle_sd * uniform(-1.0, 1.0));
       stitch_z_m_.push_back(p.end_height_m - p.bite_m -
                             std::sqrt(3.0) * bite_sd * uniform(-1.0, 1.0));
+    }
+  }
+  if (scene.task.kind == scene::TaskKind::kKnotTying && scene.knot_tying && def.hand == 0) {
+    // Each throw chosen after a response time; the first throw's hand drawn from the seed, the
+    // next ones of the opposite hand (square) or, below square_rule_skill, of the same hand
+    // (the granny habit).
+    const double rt = Lerp(def.response_time_novice_s, def.response_time_expert_s, def.skill);
+    const bool first_right = uniform(0.0, 1.0) < 0.5;
+    const bool alternate = def.skill >= def.square_rule_skill;
+    double t = 0;
+    for (int k = 0; k < scene.knot_tying->throws; ++k) {
+      t += rt * uniform(0.8, 1.2);
+      press_s_.push_back(t);
+      const bool right = (k % 2 == 0 || !alternate) ? first_right : !first_right;
+      answer_.push_back(right ? 1u : 2u);
     }
   }
   if (scene.task.kind == scene::TaskKind::kKnotTopology && scene.knots) {

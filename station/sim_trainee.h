@@ -30,6 +30,13 @@
 //           0.1 s; of the N knots it names round((1 − p) N) wrongly (p = accuracy_novice …
 //           expert; which ones drawn from the seed), confusing square with granny, surgeon's
 //           with square, slip with half hitch;
+//   knot tying: (task kind knot_tying) holds the needle holder at its rest pose (the task's
+//           target; the forceps at the second hand's) and chooses each throw with a button
+//           (1 right, 2 left) after a response time (response_time_novice_s … expert, ±20 %,
+//           each choice timed from the last; the knot is tied once all are chosen): the first
+//           throw's hand drawn from the seed,
+//           each next throw of the other hand (a square knot), or, below square_rule_skill, of
+//           the same hand (the granny habit);
 //   placement: (task kind knot_placement) moves the tip around the vessel wall from stitch to
 //           stitch (minimum jerk in azimuth and height, placement.move_s / pace each), resting
 //           at each and pressing a button there; each stitch misplaced by a uniform error of
@@ -79,6 +86,7 @@ struct SimTraineeDef {
   double response_time_expert_s = 2.5;
   double accuracy_novice = 0.4;
   double accuracy_expert = 0.95;
+  double square_rule_skill = 0.35;
   double placement_angle_novice_rad = 0.25;
   double placement_angle_expert_rad = 0.03;
   double placement_bite_novice_m = 0.15e-3;

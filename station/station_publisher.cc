@@ -603,7 +603,14 @@ void StationPublisher::PublishTelemetry(std::int64_t now_ns) {
 }
 
 void StationPublisher::PublishScore(bool is_final) {
-  net::Score s = CalcScore(scene_, last_.score);
+  state::ScoreState totals = last_.score;
+  // Knot tying: the knot in the latest thread frame, once the throws are pulled (at the task's
+  // end the frame is the last one published).
+  if (scene_.knot_tying && w_->thread != nullptr && !w_->thread_plain.nodes.empty() &&
+      totals.throws_pulled >= scene_.knot_tying->throws) {
+    totals.tied_knot = static_cast<std::int32_t>(RecogniseTiedKnot(scene_, w_->thread_plain.nodes));
+  }
+  net::Score s = CalcScore(scene_, totals);
   s.header = MakeHeader(last_.step, SystemClock().RealtimeNs());
   s.is_final = is_final;
   net::ToMsg(s, w_->score_msg);

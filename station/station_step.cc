@@ -221,7 +221,10 @@ void UpdateScore(const scene::SceneModel& scene, double dt_s, state::StationStat
 // The device's distance from what the task asks: the hold target, or the ideal path.
 double CalcDeviation(const scene::SceneModel& scene, const cues::IdealPath& path,
                      const Eigen::Vector3d& p_W) {
-  if (scene.task.kind == scene::TaskKind::kTremorHold) return (p_W - scene.task.target_m).norm();
+  if (scene.task.kind == scene::TaskKind::kTremorHold ||
+      scene.task.kind == scene::TaskKind::kKnotTying) {
+    return (p_W - scene.task.target_m).norm();
+  }
   if (path.is_segment) return (p_W - cues::CalcNearestOnSegment(path.segment, p_W)).norm();
   Eigen::Vector3d q_W;
   if (!cues::CalcNearestOnCircle(path.circle, p_W, &q_W)) return path.circle.radius_m;
@@ -292,6 +295,13 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     t.response_time_sum_s = k.response_time_sum_s;
     t.progress = static_cast<double>(k.item) / items;
     if (k.item >= items) t.outcome = 1;
+  } else if (task.kind == scene::TaskKind::kKnotTying) {
+    // Each throw tied and pulled, then the hold; done when the hold is over.
+    const state::KnotTieState& k = s.thread->tie;
+    const scene::KnotTyingSceneDef& kt = *scene.knot_tying;
+    t.throws_pulled = k.pulled;
+    t.progress = k.done != 0 ? 1.0 : static_cast<double>(k.pulled) / (kt.throws + 1);
+    if (k.done != 0) t.outcome = 1;
   } else if (task.kind == scene::TaskKind::kLoopAlongWire) {
     // One pass along the course; the deviation is the offset from the wire's axis.
     const double length = scene.loop->wire.Length();

@@ -86,9 +86,21 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
   }
   model_ = thread::MakeThreadModel(d.def);
   ws_ = thread::MakeThreadWorkspace(model_);
-  initial_ = thread::MakeThreadState(
-      model_, CalcSlackThreadNodes(d.p_W_anchor, scene.CalcIdealToolPose(0).translation(),
-                                   d.slack_side_W, d.def.length_m, model_.num_nodes));
+  if (scene.knot_tying) {
+    // The thread laid through the stitch; the hands hold its ends where they lie.
+    tie_ = scene.knot_tying;
+    initial_ = tie_->stitch.Lay(model_);
+    stitch_ = tie_->stitch.Colliders(model_.radius_m);
+    hold_options_.tension_N = tie_->hold_tension_N;
+    hold_options_.duration_s = tie_->hold_s;
+    hold_options_.fixed_colliders = stitch_;
+    p_W_tool_rest_ = scene.CalcIdealToolPose(0).translation();
+    p_W_second_rest_ = scene.CalcIdealSecondToolPose(0).translation();
+  } else {
+    initial_ = thread::MakeThreadState(
+        model_, CalcSlackThreadNodes(d.p_W_anchor, scene.CalcIdealToolPose(0).translation(),
+                                     d.slack_side_W, d.def.length_m, model_.num_nodes));
+  }
   if (std::isfinite(d.floor_height_m)) {
     colliders_[0] =
         thread::Collider::Plane(Eigen::Vector3d(0, 0, d.floor_height_m), Eigen::Vector3d::UnitZ());
@@ -98,6 +110,13 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
   tool_node_ = model_.num_nodes - 1;
   tool_slot_ = thread::GraspNode(model_, tool_node_, initial_);
   MICRODEX_CHECK(anchor_slot_ >= 0 && tool_slot_ >= 0);  // max_grasps >= 2 (scene validation)
+  if (tie_) {
+    for (int k = 0; k < tie_->throws; ++k) {
+      state::KnotTieState probe;
+      ThrowOptions(probe, k).Validate();  // the scene's values, named if bad
+    }
+    hold_options_.Validate();
+  }
   if (scene.task.kind == scene::TaskKind::kNylonLoop) {
     thread::ThreadState t = initial_;
     const double dt_s = 1.0 / scene.haptic.rate_hz;
@@ -115,10 +134,126 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
 
 void ThreadModule::InitState(state::StationState& s) const {
   s.thread = state::ThreadModuleState{initial_};
+  if (tie_) {
+    s.thread->tie.hands.standing_slot = anchor_slot_;
+    s.thread->tie.hands.driver_slot = tool_slot_;
+  }
+}
+
+thread::KnotThrowOptions ThreadModule::ThrowOptions(const state::KnotTieState& tie, int k) const {
+  thread::KnotThrowOptions o;
+  o.passes = std::max<int>(tie.passes[static_cast<std::size_t>(k)], 1);
+  o.right = tie.right[static_cast<std::size_t>(k)] != 0;
+  o.knot_x_m = k == 0 ? tie_->first_jig_x_m : tie_->next_jig_x_m;
+  o.speed_m_per_s = tie_->speed_m_per_s;
+  o.hold_tension_N = tie_->throw_tension_N;
+  o.pull_tension_N = tie_->pull_tension_N;
+  return o;
+}
+
+void ThreadModule::StepKnotTying(const ToolInput& in, state::StationState& s) {
+  state::ThreadModuleState& t = *s.thread;
+  state::KnotTieState& k = t.tie;
+  thread::ThreadState& th = t.thread;
+  const double h = model_.def.time_step_s;
+  // A button pressed chooses the next throw: 1 single right, 2 single left, 3 double right,
+  // 4 double left (other values are ignored).
+  const std::uint32_t buttons = s.tool.buttons;
+  const bool pressed = buttons != 0 && k.prev_buttons == 0;
+  k.prev_buttons = buttons;
+  if (pressed && buttons <= 4 && k.chosen < tie_->throws && k.chosen < 3) {
+    k.passes[static_cast<std::size_t>(k.chosen)] = static_cast<std::int8_t>(buttons <= 2 ? 1 : 2);
+    k.right[static_cast<std::size_t>(k.chosen)] = static_cast<std::int8_t>(buttons % 2);
+    ++k.chosen;
+  }
+  // The hands' deviations from their rest poses, weighted by the coupling: full in the hold
+  // after the last throw, none while the throws are tied and pulled (a deviation there undoes
+  // throws: tremor and drift of 20-200 um at the ends loosen a throw as it is pulled, and the
+  // next throw's jig then misses it; see assets/scenes/README.md).
+  const bool guided = !k.holding;
+  constexpr double kCouplingRate_per_s = 4.0;
+  k.coupling = std::clamp(k.coupling + (guided ? -1.0 : 1.0) * kCouplingRate_per_s * h, 0.0, 1.0);
+  Eigen::Vector3d d_tool = in.X_WT.translation() - p_W_tool_rest_;
+  Eigen::Vector3d d_second =
+      in.second_tool != nullptr
+          ? Eigen::Vector3d(in.second_tool->X_WT.translation() - p_W_second_rest_)
+          : Eigen::Vector3d::Zero();
+  if (!d_tool.allFinite()) d_tool.setZero();
+  if (!d_second.allFinite()) d_second.setZero();
+  d_tool *= k.coupling;
+  d_second *= k.coupling;
+  // The knot is tied once all its throws are chosen, each throw as soon as the last one is
+  // pulled (a pause between throws lets the pulled throw settle off the next jig's path and
+  // the next throw can miss it). The hands' plans are their targets less the deviations
+  // applied.
+  if (k.script.done() && !k.holding && k.started < tie_->throws && k.chosen >= tie_->throws) {
+    thread::SetGraspTarget(th, tool_slot_, th.grasps[tool_slot_].p_WT - k.applied_tool_W,
+                           th.grasps[tool_slot_].roll_rad);
+    thread::SetGraspTarget(th, anchor_slot_, th.grasps[anchor_slot_].p_WT - k.applied_second_W,
+                           th.grasps[anchor_slot_].roll_rad);
+    thread::KnotThrowOptions o = ThrowOptions(k, k.started);
+    k.script = thread::KnotThrowScript(model_, th, k.hands, o, stitch_);
+    ++k.started;
+    k.applied_tool_W.setZero();
+    k.applied_second_W.setZero();
+  }
+  auto offsets = [&] {
+    thread::KnotHandOffsets o;
+    o.driver_W = k.hands.driver_slot == tool_slot_ ? d_tool : d_second;
+    o.standing_W = k.hands.driver_slot == tool_slot_ ? d_second : d_tool;
+    return o;
+  };
+  const Eigen::Vector3d applied_tool_before = k.applied_tool_W;
+  const Eigen::Vector3d applied_second_before = k.applied_second_W;
+  k.applied_tool_W = d_tool;
+  k.applied_second_W = d_second;
+  if (!k.script.done()) {
+    if (!k.script.Step(model_, ws_, th, offsets(), tie_->speed_m_per_s * h)) {
+      // Pulled: the next throw is tied with the other end.
+      ++k.pulled;
+      std::swap(k.hands.standing_slot, k.hands.driver_slot);
+      if (k.pulled >= tie_->throws) {
+        for (const auto& [slot, applied] :
+             {std::pair{tool_slot_, d_tool}, std::pair{anchor_slot_, d_second}}) {
+          thread::SetGraspTarget(th, slot, th.grasps[slot].p_WT - applied,
+                                 th.grasps[slot].roll_rad);
+        }
+        k.hold = thread::KnotHoldScript(model_, th, k.hands, hold_options_);
+        k.holding = 1;
+      }
+    }
+    return;
+  }
+  if (k.holding && !k.done) {
+    if (!k.hold.Step(model_, ws_, th, offsets())) k.done = 1;
+    return;
+  }
+  // Before the first throw is chosen the suture lies as laid through the stitch (the tie's
+  // script starts from that state).
+  if (k.started == 0) {
+    k.applied_tool_W.setZero();
+    k.applied_second_W.setZero();
+    k.coupling = 0;
+    return;
+  }
+  // Waiting (for a choice, or done): both ends follow the hands about where they were left.
+  for (const auto& [slot, before, now] :
+       {std::tuple{tool_slot_, applied_tool_before, d_tool},
+        std::tuple{anchor_slot_, applied_second_before, d_second}}) {
+    thread::SetGraspTarget(th, slot, th.grasps[slot].p_WT - before + now, th.grasps[slot].roll_rad);
+  }
+  thread::StepThread(model_, stitch_, ws_, th);
 }
 
 void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& f_T_W) {
   state::ThreadModuleState& t = *s.thread;
+  if (tie_) {
+    StepKnotTying(in, s);
+    t.f_T_W = thread::GraspForce(t.thread, tool_slot_, max_force_N_);
+    f_T_W += t.f_T_W;
+    t.f_T2_W = thread::GraspForce(t.thread, anchor_slot_, max_force_N_);
+    return;
+  }
   // The grasped node follows the tool tip; its torsion follows the tool's roll about x.
   const Eigen::Matrix3d& R = in.X_WT.linear();
   const double roll_rad = std::atan2(R(2, 1), R(2, 2));

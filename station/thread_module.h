@@ -12,10 +12,20 @@
 // rolled-back steps and contact overflows are the warnings. A strain above the scene's
 // max_strain is a fault (an overstretched suture). State: state::ThreadModuleState (the
 // thread's nodes, velocities, torsion, grasps, status, and the force on the tool).
+//
+// Knot tying (task kind knot_tying, scene::KnotTyingSceneDef): the thread is laid through the
+// stitch, node 0 in the forceps (second tool) and the last node in the needle holder (first
+// tool); the buttons choose the throws, and once all are chosen the module ties them with
+// thread::KnotThrowScript (a value in state::KnotTieState), swaps the ends' roles after each
+// pull, then holds with thread::KnotHoldScript, the hands' deviations from their rest poses
+// then moving the ends. Nothing here allocates: the scripts are fixed-size values.
 
 #include <array>
+#include <optional>
+#include <vector>
 
 #include "common/thread/colliders.h"
+#include "common/thread/knot_tie.h"
 #include "common/thread/thread_model.h"
 #include "station/module.h"
 
@@ -53,10 +63,22 @@ class ThreadModule final : public Module {
   int tool_slot() const { return tool_slot_; }
 
  private:
+  // Knot tying: the throws chosen with the buttons, the guided instrument tie, the pull and
+  // the hold (scene::KnotTyingSceneDef).
+  void StepKnotTying(const ToolInput& in, state::StationState& state);
+  // Knot tying: the options of throw k (0-based) as chosen in the state.
+  thread::KnotThrowOptions ThrowOptions(const state::KnotTieState& tie, int k) const;
+
   thread::ThreadModel model_;
   thread::ThreadState initial_;  // at the task's start, both ends grasped
   thread::ThreadWorkspace ws_;
   std::array<thread::Collider, 1> colliders_;
+  // Knot tying: the stitch's rods, the options' fixed parts, the hands' rest positions.
+  std::optional<scene::KnotTyingSceneDef> tie_;
+  std::vector<thread::Collider> stitch_;
+  thread::KnotHoldOptions hold_options_;
+  Eigen::Vector3d p_W_tool_rest_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p_W_second_rest_ = Eigen::Vector3d::Zero();
   int num_colliders_ = 0;
   int tool_slot_ = -1;
   int tool_node_ = -1;

@@ -75,7 +75,8 @@ constexpr const char* kScoreMetrics[] = {"time_s",
                                          "peak_strain",
                                          "torn_m",
                                          "off_circle_m",
-                                         "extra_punctures"};
+                                         "extra_punctures",
+                                         "knot_wrong"};
 
 grasp::ShapeKind ParseGraspShape(const std::string& text) {
   for (grasp::ShapeKind k :
@@ -140,8 +141,9 @@ void CheckMeshLoads(const YamlSection& visual, const std::string& path) {
 SceneModel ReadScene(const YamlReader& reader) {
   const YamlSection root = reader.Root();
   root.CheckNoUnknownKeys({"name", "modules", "vessel", "needle", "task", "haptic", "thread",
-                           "tissue", "puncture", "grasp", "loop", "knots", "placement", "scoring",
-                           "microscope", "visuals", "cues", "second_hand"});
+                           "tissue", "puncture", "grasp", "loop", "knots", "placement",
+                           "knot_tying", "scoring", "microscope", "visuals", "cues",
+                           "second_hand"});
   SceneModel s;
   s.path = reader.file();
   s.name = root.String("name", "");
@@ -336,6 +338,45 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.move_s = pl->FiniteDouble("move_s", d.move_s);
     s.placement = d;
   }
+  if (const std::optional<YamlSection> kt = root.OptionalMap("knot_tying")) {
+    kt->CheckNoUnknownKeys({"stitch", "throws", "speed_m_per_s", "pull_tension_N",
+                            "throw_tension_N", "hold_tension_N", "hold_s", "first_jig_x_m",
+                            "next_jig_x_m", "surface_y_m"});
+    KnotTyingSceneDef d;
+    if (const std::optional<YamlSection> st = kt->OptionalMap("stitch")) {
+      st->CheckNoUnknownKeys(
+          {"x_m", "depth_m", "guide_offset_m", "rod_radius_m", "guide_radius_m", "start_x_m"});
+      thread::KnotStitchDef& k = d.stitch;
+      k.x_m = st->FiniteDouble("x_m", k.x_m);
+      k.depth_m = st->FiniteDouble("depth_m", k.depth_m);
+      k.guide_offset_m = st->FiniteDouble("guide_offset_m", k.guide_offset_m);
+      k.rod_radius_m = st->FiniteDouble("rod_radius_m", k.rod_radius_m);
+      k.guide_radius_m = st->FiniteDouble("guide_radius_m", k.guide_radius_m);
+      k.start_x_m = st->FiniteDouble("start_x_m", k.start_x_m);
+      try {
+        k.Validate();
+      } catch (const std::invalid_argument& e) {
+        // "KnotStitchDef.FIELD: reason" -> the stitch's FIELD.
+        const std::string what = e.what();
+        const std::size_t dot = what.find('.');
+        const std::size_t colon = what.find(": ");
+        if (dot != std::string::npos && colon != std::string::npos && dot < colon) {
+          st->Fail(what.substr(dot + 1, colon - dot - 1), what.substr(colon + 2));
+        }
+        st->Fail("x_m", what);
+      }
+    }
+    d.throws = kt->Int("throws", d.throws);
+    d.speed_m_per_s = kt->FiniteDouble("speed_m_per_s", d.speed_m_per_s);
+    d.pull_tension_N = kt->FiniteDouble("pull_tension_N", d.pull_tension_N);
+    d.throw_tension_N = kt->FiniteDouble("throw_tension_N", d.throw_tension_N);
+    d.hold_tension_N = kt->FiniteDouble("hold_tension_N", d.hold_tension_N);
+    d.hold_s = kt->FiniteDouble("hold_s", d.hold_s);
+    d.first_jig_x_m = kt->FiniteDouble("first_jig_x_m", d.first_jig_x_m);
+    d.next_jig_x_m = kt->FiniteDouble("next_jig_x_m", d.next_jig_x_m);
+    d.surface_y_m = kt->FiniteDouble("surface_y_m", d.surface_y_m);
+    s.knot_tying = d;
+  }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
     std::vector<std::string_view> known(std::begin(kScoreMetrics), std::end(kScoreMetrics));
     for (const char* metric : kScoreMetrics) {
@@ -439,6 +480,8 @@ const char* TaskKindName(TaskKind kind) {
       return "nylon_loop";
     case TaskKind::kNeedleThroughTissue:
       return "needle_through_tissue";
+    case TaskKind::kKnotTying:
+      return "knot_tying";
   }
   return "unknown";
 }
@@ -447,12 +490,12 @@ TaskKind ParseTaskKind(const std::string& text) {
   for (TaskKind k :
        {TaskKind::kFollowPath, TaskKind::kTremorHold, TaskKind::kNeedleAlongTube, TaskKind::kGrasp,
         TaskKind::kLoopAlongWire, TaskKind::kKnotTopology, TaskKind::kKnotPlacement,
-        TaskKind::kNylonLoop, TaskKind::kNeedleThroughTissue}) {
+        TaskKind::kNylonLoop, TaskKind::kNeedleThroughTissue, TaskKind::kKnotTying}) {
     if (text == TaskKindName(k)) return k;
   }
   throw std::invalid_argument(
       "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, "
-      "knot_topology, knot_placement, nylon_loop or needle_through_tissue");
+      "knot_topology, knot_placement, nylon_loop, needle_through_tissue or knot_tying");
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {
@@ -519,7 +562,7 @@ Eigen::Isometry3d SceneModel::CalcIdealToolPose(double t_s) const {
   if (task.kind == TaskKind::kLoopAlongWire && loop) {
     return CalcWireCoursePose(loop->wire, CalcIdealPathFraction(t_s));
   }
-  if (task.kind == TaskKind::kTremorHold) {
+  if (task.kind == TaskKind::kTremorHold || task.kind == TaskKind::kKnotTying) {
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
     X.linear() = task.R_WT_line;
     X.translation() = task.target_m;
@@ -706,6 +749,30 @@ void ValidateScene(const SceneModel& s) {
   }
   if (t.kind == TaskKind::kNylonLoop && !(s.HasModule("thread") && t.path == PathKind::kCircle)) {
     Invalid("task.kind", "nylon_loop needs the thread module and path: circle");
+  }
+  if ((t.kind == TaskKind::kKnotTying) != s.knot_tying.has_value()) {
+    Invalid(s.knot_tying ? "knot_tying" : "task.kind",
+            s.knot_tying ? "section given but task.kind is not knot_tying"
+                         : "knot_tying needs the knot_tying section");
+  }
+  if (s.knot_tying) {
+    const KnotTyingSceneDef& k = *s.knot_tying;
+    if (!s.HasModule("thread") || !s.second_hand) {
+      Invalid("task.kind", "knot_tying needs the thread module and a second_hand");
+    }
+    if (!(k.throws >= 1 && k.throws <= 3)) Invalid("knot_tying.throws", "expected 1..3");
+    if (!(k.speed_m_per_s > 0 && k.speed_m_per_s <= 0.02)) {
+      Invalid("knot_tying.speed_m_per_s", "expected (0, 0.02] m/s");
+    }
+    for (const auto& [tension, field] :
+         {std::pair{k.pull_tension_N, "knot_tying.pull_tension_N"},
+          std::pair{k.throw_tension_N, "knot_tying.throw_tension_N"},
+          std::pair{k.hold_tension_N, "knot_tying.hold_tension_N"}}) {
+      if (!(tension > 0 && tension < 1)) Invalid(field, "expected a tension in (0, 1) N");
+    }
+    if (!(k.hold_s >= 0 && k.hold_s < t.time_limit_s)) {
+      Invalid("knot_tying.hold_s", "expected 0 <= hold_s < task.time_limit_s");
+    }
   }
   if (t.kind == TaskKind::kKnotPlacement && !s.HasModule("placement")) {
     Invalid("task.kind", "knot_placement needs the placement module");

@@ -27,6 +27,7 @@
 #include "common/grasp/grasp_def.h"
 #include "common/knot/stitch_knot.h"
 #include "common/puncture/puncture.h"
+#include "common/thread/knot_tie.h"
 #include "common/thread/thread_def.h"
 
 namespace microdex::scene {
@@ -67,9 +68,10 @@ enum class TaskKind {
   kKnotPlacement,    // place stitches evenly around the vessel's cut end, a bite from the edge
   kNylonLoop,        // lay the grasped nylon in a loop matching the target shape
   kNeedleThroughTissue,  // drive the needle through the tissue along its circle, in and out
+  kKnotTying,            // tie a knot around the stitch with the needle holder and forceps
 };
 // follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, knot_topology,
-// knot_placement, nylon_loop, needle_through_tissue
+// knot_placement, nylon_loop, needle_through_tissue, knot_tying
 const char* TaskKindName(TaskKind kind);
 TaskKind ParseTaskKind(const std::string& text);  // throws std::invalid_argument
 
@@ -186,6 +188,31 @@ struct PlacementSceneDef {
   double move_s = 1.5;              // the scripted time from one stitch to the next
 };
 
+// Knot tying (task kind knot_tying, with the thread module and a second hand): the thread is
+// laid through a stitch (thread::KnotStitchDef, in the scene's frame: the thread along +x,
+// y up, the tissue surface the plane y = surface_y_m) and held at node 0 by the forceps (the
+// second tool) and at its last node by the needle holder (the first tool). The trainee ties
+// `throws` throws, choosing each with the device's buttons (1 a single right-handed throw,
+// 2 single left, 3 double right, 4 double left); once all are chosen the throws are tied one
+// after the other: the instrument tie of each (loop, wraps, exit) is guided along the jig's path at
+// speed_m_per_s (thread::KnotThrowScript), the release and the pull to pull_tension_N follow. After
+// the last throw both hands hold hold_tension_N for hold_s, and the two hands' deviations from
+// their rest poses move the thread's ends. The jig of throw 1 sits at first_jig_x_m on the standing
+// part, that of the next throws at next_jig_x_m (3 mm beyond the first knot, which the pull lays
+// between the first puncture and the bite).
+struct KnotTyingSceneDef {
+  thread::KnotStitchDef stitch;
+  int throws = 2;
+  double speed_m_per_s = 4e-3;
+  double pull_tension_N = 10e-3;
+  double throw_tension_N = 2e-3;  // the standing hand's tension while a throw is wrapped
+  double hold_tension_N = 20e-3;
+  double hold_s = 2.0;
+  double first_jig_x_m = 4e-3;
+  double next_jig_x_m = 4.66e-3;
+  double surface_y_m = -0.35e-3;
+};
+
 // Haptic rendering limits.
 struct HapticDef {
   double rate_hz = 1000;
@@ -245,14 +272,15 @@ struct SceneModel {
                           Eigen::Isometry3d::Identity()};
   TaskDef task;
   HapticDef haptic;
-  std::optional<ThreadSceneDef> thread;        // present exactly when modules has "thread"
-  std::optional<TissueSceneDef> tissue;        // present exactly when modules has "tissue"
-  std::optional<PunctureSceneDef> puncture;    // present exactly when tissue.tool is needle
-  std::optional<GraspSceneDef> grasp;          // present exactly when modules has "grasp"
-  std::optional<LoopSceneDef> loop;            // present exactly when modules has "loop"
-  std::optional<KnotQuizSceneDef> knots;       // present exactly when modules has "knots"
-  std::optional<PlacementSceneDef> placement;  // present exactly when modules has "placement"
-  std::vector<ScoreTermDef> scoring;           // empty for kFollowPath (its own formula)
+  std::optional<ThreadSceneDef> thread;         // present exactly when modules has "thread"
+  std::optional<TissueSceneDef> tissue;         // present exactly when modules has "tissue"
+  std::optional<PunctureSceneDef> puncture;     // present exactly when tissue.tool is needle
+  std::optional<GraspSceneDef> grasp;           // present exactly when modules has "grasp"
+  std::optional<LoopSceneDef> loop;             // present exactly when modules has "loop"
+  std::optional<KnotQuizSceneDef> knots;        // present exactly when modules has "knots"
+  std::optional<PlacementSceneDef> placement;   // present exactly when modules has "placement"
+  std::optional<KnotTyingSceneDef> knot_tying;  // present exactly when task.kind is knot_tying
+  std::vector<ScoreTermDef> scoring;            // empty for kFollowPath (its own formula)
   MicroscopeDef microscope;
   std::vector<VisualDef> visuals;
   CueSetDef cues;

@@ -26,6 +26,7 @@
 #include "common/geometry/loop_wire.h"
 #include "common/grasp/grasp_model.h"
 #include "common/puncture/puncture.h"
+#include "common/thread/knot_tie.h"
 #include "common/thread/thread_model.h"
 
 namespace microdex::state {
@@ -149,6 +150,10 @@ struct ScoreState {
   double spacing_error_rad = 0;
   double bite_error_m = 0;
   double shape_error_m = 0;  // nylon control (ThreadModuleState)
+  // Knot tying: throws tied and pulled, and the knot the stitch-knot recogniser names in the
+  // thread at the task's end (knot::StitchKnotType; -1 until recognised, off the haptic thread).
+  std::int32_t throws_pulled = 0;
+  std::int32_t tied_knot = -1;
   // The needle through tissue (common/puncture), copied for the score; 1 m while the entry
   // (exit) has not been made.
   double entry_error_m = 1;
@@ -179,6 +184,28 @@ struct TremorState {
   double mean_square_m2 = 0;
 };
 
+// Knot tying with the thread module: the throws chosen with the buttons, the throw under way
+// (its script, a plain value) or the hold, and how much of each hand's deviation from its rest
+// pose reaches the thread's ends (1 while they pull and hold, 0 while the instrument tie is
+// guided; it ramps between the two).
+struct KnotTieState {
+  thread::KnotThrowScript script;  // the throw under way (done when none)
+  thread::KnotHoldScript hold;     // the hold after the last throw
+  thread::KnotTyingHands hands;    // grasp slots: who holds the standing and the working end
+  std::int32_t chosen = 0;         // throws chosen so far
+  std::int32_t started = 0;        // throws started
+  std::int32_t pulled = 0;         // throws tied and pulled
+  std::array<std::int8_t, 3> passes{};
+  std::array<std::int8_t, 3> right{};
+  std::uint32_t prev_buttons = 0;
+  std::uint8_t holding = 0;
+  std::uint8_t done = 0;  // the hold is over: the task's end
+  double coupling = 1;    // of the hands' deviations, 0..1
+  // The deviations applied at the last step, per grasp slot of the two ends (tool, second).
+  Eigen::Vector3d applied_tool_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d applied_second_W = Eigen::Vector3d::Zero();
+};
+
 // The suture-thread module.
 struct ThreadModuleState {
   thread::ThreadState thread;
@@ -187,6 +214,8 @@ struct ThreadModuleState {
   Eigen::Vector3d f_T2_W = Eigen::Vector3d::Zero();
   // Nylon control: the RMS distance of the nodes from the target shape after rigid alignment.
   double shape_error_m = 0;
+  // Knot tying (task kind knot_tying; scene::KnotTyingSceneDef).
+  KnotTieState tie;
 };
 
 // The tissue module.

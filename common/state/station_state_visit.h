@@ -154,6 +154,8 @@ void Score(S& s, V& v) {
   v("score.spacing_error_rad", &s.spacing_error_rad, 1);
   v("score.bite_error_m", &s.bite_error_m, 1);
   v("score.shape_error_m", &s.shape_error_m, 1);
+  v("score.throws_pulled", &s.throws_pulled, 1);
+  v("score.tied_knot", &s.tied_knot, 1);
   v("score.entry_error_m", &s.entry_error_m, 1);
   v("score.exit_error_m", &s.exit_error_m, 1);
   v("score.peak_strain", &s.peak_strain, 1);
@@ -218,6 +220,30 @@ void Thread(S& m, V& v) {
   Matrix("thread.f_T_W", m.f_T_W, v);
   Matrix("thread.f_T2_W", m.f_T2_W, v);
   v("thread.shape_error_m", &m.shape_error_m, 1);
+  auto& k = m.tie;
+  auto prefixed = [&](const char* prefix) {
+    return [&v, prefix](const char* name, auto* p, std::size_t n) {
+      (void)name;
+      v(prefix, p, n);
+    };
+  };
+  auto script = prefixed("thread.tie.script");
+  std::remove_cvref_t<decltype(k.script)>::VisitFields(k.script, script);
+  auto hold = prefixed("thread.tie.hold");
+  std::remove_cvref_t<decltype(k.hold)>::VisitFields(k.hold, hold);
+  v("thread.tie.hands", &k.hands.standing_slot, 1);
+  v("thread.tie.hands", &k.hands.driver_slot, 1);
+  v("thread.tie.chosen", &k.chosen, 1);
+  v("thread.tie.started", &k.started, 1);
+  v("thread.tie.pulled", &k.pulled, 1);
+  v("thread.tie.passes", k.passes.data(), k.passes.size());
+  v("thread.tie.right", k.right.data(), k.right.size());
+  v("thread.tie.prev_buttons", &k.prev_buttons, 1);
+  v("thread.tie.holding", &k.holding, 1);
+  v("thread.tie.done", &k.done, 1);
+  v("thread.tie.coupling", &k.coupling, 1);
+  Matrix("thread.tie.applied_tool_W", k.applied_tool_W, v);
+  Matrix("thread.tie.applied_second_W", k.applied_second_W, v);
 }
 
 template <typename S, typename V>

@@ -69,7 +69,8 @@ void KnotThrowScript::Add(const Eigen::Vector3d& p_W, Phase phase) {
 }
 
 KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& state,
-                                 KnotTyingHands hands, const KnotThrowOptions& options)
+                                 KnotTyingHands hands, const KnotThrowOptions& options,
+                                 std::span<const Collider> more_fixed)
     : hands_(hands),
       speed_m_per_s_(options.speed_m_per_s),
       pull_speed_m_per_s_(options.pull_speed_m_per_s),
@@ -78,6 +79,7 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
       max_pull_m_(options.max_pull_m),
       phase_(Phase::kLoop) {
   options.Validate();
+  CheckFixed(options.fixed_colliders.size() + more_fixed.size(), "KnotThrowOptions");
   MICRODEX_CHECK(hands.standing_slot >= 0 && hands.driver_slot >= 0);
   const int driver_node = state.grasps[hands.driver_slot].node;
   MICRODEX_CHECK(driver_node >= 0 && state.grasps[hands.standing_slot].node >= 0);
@@ -156,6 +158,7 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
   num_jig_ = num_colliders_;
   for (int k = 0; k < num_jig_; ++k) radii_[k] = colliders_[k].radius_m;
   for (const Collider& c : options.fixed_colliders) colliders_[num_colliders_++] = c;
+  for (const Collider& c : more_fixed) colliders_[num_colliders_++] = c;
   for (int k = 1; k < num_path_; ++k) {
     path_total_m_ += (path_[k].p_W - path_[k - 1].p_W).norm();
   }

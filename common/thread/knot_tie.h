@@ -8,9 +8,11 @@
 // next throw in the haptic thread. The thread's workspace is passed to Step (a cache).
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/thread/colliders.h"
@@ -30,6 +32,24 @@ inline constexpr int kMaxKnotFixedColliders = 4;
 inline constexpr int kMaxKnotTieColliders = 4 + kMaxKnotFixedColliders;
 inline constexpr int kMaxKnotThrowPasses = 3;
 inline constexpr int kMaxKnotThrowWaypoints = 4 + (36 * kMaxKnotThrowPasses + 18 + 1) + 2;
+
+// Field visitors of the scripts (VisitFields).
+template <typename E, typename V>
+void VisitEnum(const char* name, E& e, V& v) {
+  using U = std::underlying_type_t<std::remove_const_t<E>>;
+  using P = std::conditional_t<std::is_const_v<E>, const U, U>;
+  v(name, reinterpret_cast<P*>(&e), 1);
+}
+template <typename C, typename V>
+void VisitCollider(C& c, V& v) {
+  VisitEnum("colliders[].kind", c.kind, v);
+  v("colliders[].a_W", c.a_W.data(), 3);
+  v("colliders[].b_W", c.b_W.data(), 3);
+  v("colliders[].radius_m", &c.radius_m, 1);
+  v("colliders[].enabled", &c.enabled, 1);
+  v("colliders[].ignore_node", &c.ignore_node, 1);
+  v("colliders[].ignore_links", &c.ignore_links, 1);
+}
 
 // One throw, tied as by hand on a jig (thesis §5.5, Fig. 5.7): the driver carries the working
 // end under a first peg, over it and a second peg (the loop), back across the standing part
@@ -73,10 +93,11 @@ class KnotThrowScript {
 
   KnotThrowScript() = default;  // no throw: done
   // The jig is placed on the standing part as it lies in `state` (it need not be straight
-  // after an earlier throw). Precomputes the driver's path. Throws std::invalid_argument for
-  // bad options (Validate, or more fixed colliders than the bound).
+  // after an earlier throw). Precomputes the driver's path. The fixed colliders are the
+  // options' followed by more_fixed. Throws std::invalid_argument for bad options (Validate,
+  // or more fixed colliders than kMaxKnotFixedColliders).
   KnotThrowScript(const ThreadModel& model, const ThreadState& state, KnotTyingHands hands,
-                  const KnotThrowOptions& options);
+                  const KnotThrowOptions& options, std::span<const Collider> more_fixed = {});
 
   // Moves the hands by one time step of model.def.time_step_s and steps the thread. Returns
   // false when the throw is over. The driver advances along its path by advance_m this step
@@ -96,6 +117,41 @@ class KnotThrowScript {
   double path_done_m() const { return path_s_m_; }
   double path_total_m() const { return path_total_m_; }
   double path_left_m() const { return path_total_m_ - path_s_m_; }
+
+  // Calls v(name, p, n) for each field (p: n consecutive scalars; enums and bools through
+  // their integer; the waypoints and colliders up to their counts): the station state's
+  // visitor (common/state/station_state_visit.h). Self is KnotThrowScript or its const.
+  template <typename Self, typename V>
+  static void VisitFields(Self& s, V& v) {
+    v("slots", &s.hands_.standing_slot, 1);
+    v("slots", &s.hands_.driver_slot, 1);
+    v("speeds", &s.speed_m_per_s_, 1);
+    v("speeds", &s.pull_speed_m_per_s_, 1);
+    v("tensions", &s.hold_tension_N_, 1);
+    v("tensions", &s.pull_tension_N_, 1);
+    v("max_pull_m", &s.max_pull_m_, 1);
+    v("num_colliders", &s.num_colliders_, 1);
+    v("num_jig", &s.num_jig_, 1);
+    for (int k = 0; k < std::clamp(s.num_colliders_, 0, kMaxKnotTieColliders); ++k) {
+      VisitCollider(s.colliders_[k], v);
+      v("radii", &s.radii_[k], 1);
+    }
+    v("num_path", &s.num_path_, 1);
+    for (int k = 0; k < std::clamp(s.num_path_, 0, kMaxKnotThrowWaypoints); ++k) {
+      v("path[].p_W", s.path_[k].p_W.data(), 3);
+      VisitEnum("path[].phase", s.path_[k].phase, v);
+    }
+    v("segment", &s.segment_, 1);
+    v("path_s_m", &s.path_s_m_, 1);
+    v("path_total_m", &s.path_total_m_, 1);
+    v("segment_s_m", &s.segment_s_m_, 1);
+    v("pulled_m", &s.pulled_m_, 1);
+    v("released_s", &s.released_s_, 1);
+    v("sx", &s.sx_, 1);
+    v("plan_standing_W", s.plan_standing_W_.data(), 3);
+    v("plan_driver_W", s.plan_driver_W_.data(), 3);
+    VisitEnum("phase", s.phase_, v);
+  }
 
  private:
   struct Waypoint {
@@ -153,6 +209,21 @@ class KnotHoldScript {
   bool Step(const ThreadModel& model, ThreadWorkspace& ws, ThreadState& state,
             const KnotHandOffsets& offsets = {});
   int steps_left() const { return steps_left_; }
+
+  // As KnotThrowScript::VisitFields.
+  template <typename Self, typename V>
+  static void VisitFields(Self& s, V& v) {
+    v("slots", &s.hands_.standing_slot, 1);
+    v("slots", &s.hands_.driver_slot, 1);
+    v("tension_N", &s.tension_N_, 1);
+    v("num_colliders", &s.num_colliders_, 1);
+    for (int k = 0; k < std::clamp(s.num_colliders_, 0, kMaxKnotFixedColliders); ++k) {
+      VisitCollider(s.colliders_[k], v);
+    }
+    v("steps_left", &s.steps_left_, 1);
+    v("plan_standing_W", s.plan_standing_W_.data(), 3);
+    v("plan_driver_W", s.plan_driver_W_.data(), 3);
+  }
 
  private:
   KnotTyingHands hands_;

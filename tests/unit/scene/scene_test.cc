@@ -294,8 +294,8 @@ TEST(Scene, BadTrainingFieldsNameFileLineAndField) {
   kind.replace(kind.find("task: {"), 7, "task: {kind: juggling, ");
   EXPECT_EQ(ErrorOf(kind),
             "test.yaml:6: task.kind: expected follow_path, tremor_hold, needle_along_tube, "
-            "grasp, loop_along_wire, knot_topology, knot_placement, nylon_loop or "
-            "needle_through_tissue");
+            "grasp, loop_along_wire, knot_topology, knot_placement, nylon_loop, "
+            "needle_through_tissue or knot_tying");
   kind = kGood;
   kind.replace(kind.find("task: {"), 7, "task: {kind: tremor_hold, ");
   EXPECT_EQ(ErrorOf(kind), "test.yaml:2: scoring: required by task kind tremor_hold");

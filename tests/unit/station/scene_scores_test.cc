@@ -52,7 +52,7 @@ TEST_P(SceneScores, RiseWithSkill) {
 INSTANTIATE_TEST_SUITE_P(TrainingScenes, SceneScores,
                          ::testing::Values("tremor_hold", "loop_along_wire", "needle_along_tube",
                                            "grasp", "nylon_loop", "knot_topology", "knot_placement",
-                                           "needle_through_tissue"),
+                                           "needle_through_tissue", "knot_tying"),
                          [](const auto& p) { return std::string(p.param); });
 
 }  // namespace

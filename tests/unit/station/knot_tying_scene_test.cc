@@ -1,0 +1,89 @@
+// The knot-tying scene (assets/scenes/knot_tying.yaml) driven by the simulated trainee: an
+// expert alternates the throws and the thread module ties a square knot around the stitch,
+// which the stitch-knot recogniser names at the end (knot_wrong 0); a novice repeats the
+// hand and ties a granny (knot_wrong 1). Both runs end by themselves within the time limit.
+// Buttons that choose no throw are ignored, and a scene section out of range is named.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "common/knot/stitch_knot.h"
+#include "common/scene/scene.h"
+#include "station/scene_run.h"
+
+namespace microdex::station {
+namespace {
+
+std::string ScenePath() {
+  const char* root = std::getenv("MICRODEX_SOURCE_DIR");
+  return std::string(root != nullptr ? root : ".") + "/assets/scenes/knot_tying.yaml";
+}
+
+double Term(const net::Score& s, const std::string& metric) {
+  for (const net::ScoreTerm& t : s.terms) {
+    if (t.metric == metric) return t.value;
+  }
+  ADD_FAILURE() << "no term " << metric;
+  return -1;
+}
+
+TEST(KnotTyingScene, TheTraineeTiesASquareOrAGrannyAndTheRecogniserNamesIt) {
+  const scene::SceneModel scene = scene::LoadScene(ScenePath());
+  struct Case {
+    double skill;
+    double knot_wrong;
+  };
+  for (const Case c : {Case{0.9, 0.0}, Case{0.2, 1.0}}) {
+    SimTraineeDef def;
+    def.skill = c.skill;
+    def.seed = 3;
+    const SceneRunResult r = RunSceneWithTrainee(scene, def, 3);
+    for (const net::ScoreTerm& t : r.score.terms) {
+      std::printf("skill %.1f %-16s %.4g (%.2f points)\n", c.skill, t.metric.c_str(), t.value,
+                  t.points);
+    }
+    std::printf("skill %.1f score %.1f, %.2f s\n", c.skill, r.score.score, r.score.duration_s);
+    EXPECT_EQ(r.score.outcome, 1) << "skill " << c.skill;
+    EXPECT_EQ(Term(r.score, "knot_wrong"), c.knot_wrong) << "skill " << c.skill;
+    EXPECT_LT(r.score.duration_s, scene.task.time_limit_s);
+  }
+}
+
+// A bad value in the knot_tying section is named with the file, its line and the field.
+TEST(KnotTyingScene, BadFieldsAreNamed) {
+  std::ifstream in(ScenePath());
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  struct Case {
+    const char* from;
+    const char* to;
+    const char* field;
+  };
+  for (const Case c : {Case{"  throws: 2", "  throws: 7", "knot_tying.throws: expected 1..3"},
+                       Case{"  pull_tension_N: 10.0e-3", "  pull_tension_N: -1",
+                            "knot_tying.pull_tension_N: expected a tension in (0, 1) N"},
+                       Case{"    depth_m: 1.0e-3", "    depth_m: 0.1e-3",
+                            "knot_tying.stitch.depth_m: expected the bite rod"},
+                       Case{"  hold_s: 2.0", "  hold_s: 60", "knot_tying.hold_s"},
+                       Case{"  kind: knot_tying", "  kind: tremor_hold", "knot_tying: section"}}) {
+    std::string bad = text;
+    const std::size_t at = bad.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    bad.replace(at, std::string(c.from).size(), c.to);
+    try {
+      (void)scene::ParseScene(bad, ScenePath());
+      ADD_FAILURE() << c.to << ": accepted";
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(ScenePath() + ":"), std::string::npos) << what;
+      EXPECT_NE(what.find(c.field), std::string::npos) << what;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace microdex::station
