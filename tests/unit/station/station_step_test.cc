@@ -27,7 +27,8 @@ const char* const kScenes[] = {
     "needle_tube.yaml",       "thread_pull.yaml",     "tissue_press.yaml",
     "suture_on_tissue.yaml",  "grasp.yaml",           "tremor_hold.yaml",
     "needle_along_tube.yaml", "loop_along_wire.yaml", "knot_topology.yaml",
-    "knot_placement.yaml",    "nylon_loop.yaml",      "needle_through_tissue.yaml"};
+    "knot_placement.yaml",    "nylon_loop.yaml",      "needle_through_tissue.yaml",
+    "knot_tying.yaml"};
 
 // One step's input as recorded: the device sample and the cues that arrived with it.
 struct RecordedStep {
