@@ -56,7 +56,7 @@ std::string WirePolyline(const geometry::WireDef& wire) {
 
 // The ideal tool path (the task's), sampled: drawn faintly as the course to follow.
 std::string IdealPath(const scene::SceneModel& s) {
-  if (s.task.kind == scene::TaskKind::kTremorHold ||
+  if (s.task.kind == scene::TaskKind::kTremorHold || s.task.kind == scene::TaskKind::kKnotTying ||
       s.task.kind == scene::TaskKind::kKnotTopology ||
       s.task.kind == scene::TaskKind::kKnotPlacement || s.task.kind == scene::TaskKind::kGrasp) {
     return "[]";
@@ -174,6 +174,17 @@ std::string SceneViewJson(const scene::SceneModel& s) {
       << ",\"end_height\":" << Num(s.placement->end_height_m)
       << ",\"stitches\":" << s.placement->stitches << ",\"bite\":" << Num(s.placement->bite_m)
       << "}";
+  }
+  if (s.knot_tying && s.thread) {
+    // The stitch's rods (a, b, radius each) and the tissue surface (the plane y = surface_y).
+    j << ",\"stitch\":{\"rods\":[";
+    const std::vector<thread::Collider> rods =
+        s.knot_tying->stitch.Colliders(s.thread->def.diameter_m / 2);
+    for (std::size_t i = 0; i < rods.size(); ++i) {
+      j << (i ? "," : "") << "{\"a\":" << Vec(rods[i].a_W) << ",\"b\":" << Vec(rods[i].b_W)
+        << ",\"radius\":" << Num(rods[i].radius_m) << "}";
+    }
+    j << "],\"surface_y\":" << Num(s.knot_tying->surface_y_m) << "}";
   }
   if (s.knots) {
     j << ",\"knots\":{\"radius\":" << Num(s.knots->thread_diameter_m / 2)

@@ -36,6 +36,9 @@ export interface SceneJson {
   placement?: { vessel_radius: number; end_height: number; stitches: number; bite: number };
   // The knot-topology quiz: each item's thread, x y z per point (m, the tissue at z = 0).
   knots?: { radius: number; items: number[][] };
+  // Knot tying: the stitch's rods (the bite and the two punctures) and the tissue surface, the
+  // plane y = surface_y (that scene's frame has y up).
+  stitch?: { rods: { a: V3; b: V3; radius: number }[]; surface_y: number };
 }
 
 // Colours the tests look for (tests/web): the needle is drawn unlit in NEEDLE_COLOR, red in
@@ -298,6 +301,25 @@ export class SceneView {
           material(0xd8b040, { metal: true }));
       this.root.add(wire);
     }
+    if (scene.stitch) {
+      // The rods the suture passes over and under, and the tissue as a translucent slab
+      // below the surface, so the bite under it shows through.
+      for (const r of scene.stitch.rods) {
+        this.root.add(new THREE.Mesh(
+            new THREE.TubeGeometry(polylineCurve([r.a, r.b]), 4, r.radius, d.radial),
+            material(0xd88080)));
+      }
+      const xs = scene.stitch.rods.flatMap((r) => [r.a[0], r.b[0]]);
+      const x0 = Math.min(...xs) - 12e-3;
+      const x1 = Math.max(...xs) + 10e-3;
+      const depth = 2e-3;
+      const slab = new THREE.Mesh(new THREE.BoxGeometry(x1 - x0, depth, 8e-3),
+                                  new THREE.MeshStandardMaterial({
+                                    color: 0xe0a0a0, transparent: true, opacity: 0.35,
+                                    depthWrite: false }));
+      slab.position.set((x0 + x1) / 2, scene.stitch.surface_y - depth / 2, 0);
+      this.root.add(slab);
+    }
     if (scene.grasp) {
       const g = scene.grasp;
       let geom: THREE.BufferGeometry;
@@ -397,6 +419,25 @@ export class SceneView {
           new THREE.TorusGeometry(scene.loop.radius, scene.loop.wire_radius, d.radial / 2, d.along),
           material(0xe0e0e8, { metal: true }));
       this.tool.add(loop);
+    }
+    if (scene.stitch) {
+      // The rods the suture passes over and under, and the tissue as a translucent slab
+      // below the surface, so the bite under it shows through.
+      for (const r of scene.stitch.rods) {
+        this.root.add(new THREE.Mesh(
+            new THREE.TubeGeometry(polylineCurve([r.a, r.b]), 4, r.radius, d.radial),
+            material(0xd88080)));
+      }
+      const xs = scene.stitch.rods.flatMap((r) => [r.a[0], r.b[0]]);
+      const x0 = Math.min(...xs) - 12e-3;
+      const x1 = Math.max(...xs) + 10e-3;
+      const depth = 2e-3;
+      const slab = new THREE.Mesh(new THREE.BoxGeometry(x1 - x0, depth, 8e-3),
+                                  new THREE.MeshStandardMaterial({
+                                    color: 0xe0a0a0, transparent: true, opacity: 0.35,
+                                    depthWrite: false }));
+      slab.position.set((x0 + x1) / 2, scene.stitch.surface_y - depth / 2, 0);
+      this.root.add(slab);
     }
     if (scene.grasp) {
       const g = scene.grasp;
