@@ -148,6 +148,7 @@ thread::KnotThrowOptions ThreadModule::ThrowOptions(const state::KnotTieState& t
   o.speed_m_per_s = tie_->speed_m_per_s;
   o.hold_tension_N = tie_->throw_tension_N;
   o.pull_tension_N = tie_->pull_tension_N;
+  o.force_limited_pull = tie_->force_limited_pull;
   return o;
 }
 

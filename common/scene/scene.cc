@@ -340,8 +340,8 @@ SceneModel ReadScene(const YamlReader& reader) {
   }
   if (const std::optional<YamlSection> kt = root.OptionalMap("knot_tying")) {
     kt->CheckNoUnknownKeys({"stitch", "throws", "speed_m_per_s", "pull_tension_N",
-                            "throw_tension_N", "hold_tension_N", "hold_s", "first_jig_x_m",
-                            "next_jig_x_m", "surface_y_m"});
+                            "force_limited_pull", "throw_tension_N", "hold_tension_N", "hold_s",
+                            "first_jig_x_m", "next_jig_x_m", "surface_y_m"});
     KnotTyingSceneDef d;
     if (const std::optional<YamlSection> st = kt->OptionalMap("stitch")) {
       st->CheckNoUnknownKeys(
@@ -369,6 +369,7 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.throws = kt->Int("throws", d.throws);
     d.speed_m_per_s = kt->FiniteDouble("speed_m_per_s", d.speed_m_per_s);
     d.pull_tension_N = kt->FiniteDouble("pull_tension_N", d.pull_tension_N);
+    d.force_limited_pull = kt->Bool("force_limited_pull", d.force_limited_pull);
     d.throw_tension_N = kt->FiniteDouble("throw_tension_N", d.throw_tension_N);
     d.hold_tension_N = kt->FiniteDouble("hold_tension_N", d.hold_tension_N);
     d.hold_s = kt->FiniteDouble("hold_s", d.hold_s);

@@ -205,6 +205,9 @@ struct KnotTyingSceneDef {
   int throws = 2;
   double speed_m_per_s = 4e-3;
   double pull_tension_N = 10e-3;
+  // Each hand limits its pull to pull_tension_N (thread::KnotThrowOptions::force_limited_pull):
+  // with both hands pulled by position a double throw loses a pass around the stitch.
+  bool force_limited_pull = true;
   double throw_tension_N = 2e-3;  // the standing hand's tension while a throw is wrapped
   double hold_tension_N = 20e-3;
   double hold_s = 2.0;

@@ -77,6 +77,7 @@ KnotThrowScript::KnotThrowScript(const ThreadModel& model, const ThreadState& st
       hold_tension_N_(options.hold_tension_N),
       pull_tension_N_(options.pull_tension_N),
       max_pull_m_(options.max_pull_m),
+      force_limited_pull_(options.force_limited_pull),
       phase_(Phase::kLoop) {
   options.Validate();
   CheckFixed(options.fixed_colliders.size() + more_fixed.size(), "KnotThrowOptions");
@@ -228,13 +229,26 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadWorkspace& ws, Thread
   // Pull: both hands apart along x until each feels the pull tension.
   const double dx = pull_speed_m_per_s_ * h;
   pulled_m_ += dx;
-  plan_driver_W_ += (sx_ * dx) * Eigen::Vector3d::UnitX();
-  plan_standing_W_ -= (sx_ * dx) * Eigen::Vector3d::UnitX();
+  if (force_limited_pull_) {
+    // Each hand out while its tension is below the pull's, back while above.
+    auto out = [&](const Grasp& g) {
+      const double v = std::clamp(kTensionGain_m_per_s_N * (pull_tension_N_ - g.f_T_W.norm()),
+                                  -kMaxHandSpeed_m_per_s, pull_speed_m_per_s_);
+      return v * h;
+    };
+    plan_driver_W_ += (sx_ * out(driver)) * Eigen::Vector3d::UnitX();
+    plan_standing_W_ -= (sx_ * out(standing)) * Eigen::Vector3d::UnitX();
+  } else {
+    plan_driver_W_ += (sx_ * dx) * Eigen::Vector3d::UnitX();
+    plan_standing_W_ -= (sx_ * dx) * Eigen::Vector3d::UnitX();
+  }
   SetGraspTarget(state, hands_.driver_slot, plan_driver_W_ + offsets.driver_W, driver.roll_rad);
   SetGraspTarget(state, hands_.standing_slot, plan_standing_W_ + offsets.standing_W,
                  standing.roll_rad);
   StepThread(model, colliders, ws, state);
-  if ((driver.f_T_W.norm() >= pull_tension_N_ && standing.f_T_W.norm() >= pull_tension_N_) ||
+  // A force-limited hand approaches the tension from below: within 5 % of it counts.
+  const double reached = (force_limited_pull_ ? 0.95 : 1.0) * pull_tension_N_;
+  if ((driver.f_T_W.norm() >= reached && standing.f_T_W.norm() >= reached) ||
       pulled_m_ >= max_pull_m_) {
     phase_ = Phase::kDone;
   }

@@ -73,6 +73,11 @@ struct KnotThrowOptions {
   double hold_tension_N = 2e-3;
   double pull_tension_N = 10e-3;
   double max_pull_m = 8e-3;
+  // The pull: false, both hands move apart at pull_speed_m_per_s until each feels
+  // pull_tension_N (position control: a hand that already feels it goes on pulling while the
+  // other does not); true, each hand limits its own force, moving out at most at
+  // pull_speed_m_per_s while below pull_tension_N and giving thread back while above.
+  bool force_limited_pull = false;
   // Colliders present throughout and never withdrawn with the jig (a stitch), at most
   // kMaxKnotFixedColliders.
   std::vector<Collider> fixed_colliders;
@@ -130,6 +135,7 @@ class KnotThrowScript {
     v("tensions", &s.hold_tension_N_, 1);
     v("tensions", &s.pull_tension_N_, 1);
     v("max_pull_m", &s.max_pull_m_, 1);
+    v("force_limited_pull", &s.force_limited_pull_, 1);
     v("num_colliders", &s.num_colliders_, 1);
     v("num_jig", &s.num_jig_, 1);
     for (int k = 0; k < std::clamp(s.num_colliders_, 0, kMaxKnotTieColliders); ++k) {
@@ -168,6 +174,7 @@ class KnotThrowScript {
   double hold_tension_N_ = 0.0;
   double pull_tension_N_ = 0.0;
   double max_pull_m_ = 0.0;
+  bool force_limited_pull_ = false;
   std::array<Collider, kMaxKnotTieColliders> colliders_{};
   std::array<double, kMaxKnotTieColliders> radii_{};  // of the jig's colliders, before the release
   int num_colliders_ = 0;

@@ -9,6 +9,7 @@
 //                         tie the throws, pull, hold 20 mN for 2 s; report per phase;
 //                         --stitch: around a stitch (an 18 mm thread through three rods);
 //                         --stitch-geometry X,DEPTH,OFFSET,ROD_R,GUIDE_R,START,LENGTH (mm)
+//                         --force-limited-pull: each hand limits its pull to the pull tension
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
 //                         five knots x 129..513 nodes x mu 0.1..0.3 (README table)
 //   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
@@ -493,15 +494,18 @@ void PrintPhase(const TiePhaseReport& r) {
 // Ties the throws of `spec` (ParseKnotThrows: "2" double overhand, "1r,1l" square, "1r,1r"
 // granny, "2r,1l" surgeon's), pulls, holds 20 mN for 2 s, and reports per phase.
 // With `stitch`: around it (KnotStitchDef), a thread of stitch_length_m.
-int RunTie(const std::string& spec, int nodes, const KnotStitchDef* stitch, double stitch_length_m,
-           const std::string& obj, const std::string& json, const ContactOverrides& contact) {
+int RunTie(const std::string& spec, int nodes, bool force_limited_pull, const KnotStitchDef* stitch,
+           double stitch_length_m, const std::string& obj, const std::string& json,
+           const ContactOverrides& contact) {
   ThreadDef def = contact.Apply(KnotTyingDef(nodes));
   if (stitch != nullptr) def.length_m = stitch_length_m;
   std::printf(
       "tie %s, %d nodes%s: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
       spec.c_str(), nodes, stitch != nullptr ? ", around a stitch" : "", def.exact_contact_pairs,
       def.friction_coefficient, def.object_friction_coefficient);
-  const TieReport r = RunKnotTie(def, ParseKnotThrows(spec), KnotHoldOptions{}, PrintPhase, stitch);
+  std::vector<KnotThrowOptions> throws = ParseKnotThrows(spec);
+  for (KnotThrowOptions& t : throws) t.force_limited_pull = force_limited_pull;
+  const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{}, PrintPhase, stitch);
   std::printf(
       "knot %s (after the pull %s), min distance %.3f d, held %s (knot moved %.3g mm along the "
       "thread), %.0f steps/s (median), tick p99 %.0f us, rolled back %lld, max strain %.4f (hold "
@@ -680,6 +684,7 @@ int RunAdversarial(std::int64_t steps, const std::string& json) {
 
 int Main(int argc, char** argv) {
   bool stability = false, accuracy = false, quick = false, adversarial = false, stitch = false;
+  bool force_limited_pull = false;
   KnotStitchDef stitch_def;
   double stitch_length_m = 18e-3;
   std::int64_t steps = 1000000;
@@ -695,6 +700,8 @@ int Main(int argc, char** argv) {
     };
     if (arg == "--stability") {
       stability = true;
+    } else if (arg == "--force-limited-pull") {
+      force_limited_pull = true;
     } else if (arg == "--accuracy") {
       accuracy = true;
     } else if (arg == "--adversarial") {
@@ -765,7 +772,8 @@ int Main(int argc, char** argv) {
     }
   }
   if (!tie.empty()) {
-    return RunTie(tie, nodes, stitch ? &stitch_def : nullptr, stitch_length_m, obj, json, contact);
+    return RunTie(tie, nodes, force_limited_pull, stitch ? &stitch_def : nullptr, stitch_length_m,
+                  obj, json, contact);
   }
   if (tie_matrix) return RunTieMatrix(quick, only, json, markdown, contact);
   if (stability) return RunStability(quick, json, plot);

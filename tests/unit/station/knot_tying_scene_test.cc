@@ -13,6 +13,8 @@
 #include "common/knot/stitch_knot.h"
 #include "common/scene/scene.h"
 #include "station/scene_run.h"
+#include "station/score.h"
+#include "station/station_step.h"
 
 namespace microdex::station {
 namespace {
@@ -49,6 +51,44 @@ TEST(KnotTyingScene, TheTraineeTiesASquareOrAGrannyAndTheRecogniserNamesIt) {
     EXPECT_EQ(r.score.outcome, 1) << "skill " << c.skill;
     EXPECT_EQ(Term(r.score, "knot_wrong"), c.knot_wrong) << "skill " << c.skill;
     EXPECT_LT(r.score.duration_s, scene.task.time_limit_s);
+  }
+}
+
+// Throws chosen with the buttons, the hands at rest: 3 then 2 (a double right-handed throw,
+// then a single left) tie a surgeon's knot, which passes; 1 then 1 a granny, which fails.
+// Buttons that choose no throw (5) are ignored.
+TEST(KnotTyingScene, ButtonsChooseTheThrows) {
+  const scene::SceneModel scene = scene::LoadScene(ScenePath());
+  struct Case {
+    std::uint32_t first, second;
+    knot::StitchKnotType knot;
+  };
+  for (const Case c :
+       {Case{3, 2, knot::StitchKnotType::kSurgeons}, Case{1, 1, knot::StitchKnotType::kGranny}}) {
+    Simulation sim(scene);
+    state::StationState state = sim.MakeInitialState(1);
+    const auto limit = static_cast<std::uint64_t>(scene.task.time_limit_s / sim.dt_s());
+    while (state.step < limit && state.score.outcome == 0) {
+      StationInput in;
+      in.device.X_WT = scene.CalcIdealToolPose(0);
+      in.second.X_WT = scene.CalcIdealSecondToolPose(0);
+      in.second.gripper = 1;
+      const std::uint64_t k = state.step;
+      in.device.buttons = k >= 100 && k < 200   ? 5u
+                          : k >= 300 && k < 400 ? c.first
+                          : k >= 500 && k < 600 ? c.second
+                                                : 0u;
+      StepStation(sim, in, state);
+    }
+    ASSERT_EQ(state.score.outcome, 1);
+    const state::KnotTieState& tie = state.thread->tie;
+    EXPECT_EQ(tie.chosen, 2);
+    EXPECT_EQ(tie.passes[0], c.first >= 3 ? 2 : 1);
+    const Eigen::Matrix3Xd& x = state.thread->thread.x_W;
+    std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(x.cols()));
+    for (Eigen::Index i = 0; i < x.cols(); ++i) nodes[static_cast<std::size_t>(i)] = x.col(i);
+    EXPECT_EQ(RecogniseTiedKnot(scene, nodes), c.knot) << c.first << ", " << c.second;
+    EXPECT_LT(state.thread->thread.status.max_strain, scene.thread->max_strain);
   }
 }
 

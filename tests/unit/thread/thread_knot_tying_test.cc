@@ -87,30 +87,35 @@ INSTANTIATE_TEST_SUITE_P(
 // throw's loop): the knot is tied around the stitch and slides onto the first guide. The
 // recogniser of the whole thread and the stitch recogniser (the rods' region below the guides'
 // tops as the tissue) name the same knot, read from the closure. Square and granny knots at
-// 193 nodes; the surgeon's knot's double throw loses a pass around the stitch (a square
-// knot), and other node counts do not all tie (common/thread/README.md, "Knots tied around a
-// stitch").
+// 193 nodes with either pull; the surgeon's knot with the force-limited pull only (with both
+// hands pulled by position its double throw loses a pass: a square knot, 86 % strain); other
+// node counts do not all tie (common/thread/README.md, "Knots tied around a stitch").
 TEST(KnotTyingAroundAStitch, TiesHoldsAndIsNamedByBothRecognisers) {
   struct Case {
     const char* throws;
+    bool force_limited_pull;
     const char* expected;
     knot::StitchKnotType stitch_expected;
   };
   const KnotStitchDef stitch;
-  for (const Case& c : {Case{"1r,1l", "square", knot::StitchKnotType::kSquare},
-                        Case{"1r,1r", "granny", knot::StitchKnotType::kGranny}}) {
-    SCOPED_TRACE(c.throws);
+  for (const Case& c : {Case{"1r,1l", false, "square", knot::StitchKnotType::kSquare},
+                        Case{"1r,1r", false, "granny", knot::StitchKnotType::kGranny},
+                        Case{"1r,1l", true, "square", knot::StitchKnotType::kSquare},
+                        Case{"2r,1l", true, "surgeons", knot::StitchKnotType::kSurgeons}}) {
+    SCOPED_TRACE(std::string(c.throws) + (c.force_limited_pull ? " force-limited" : ""));
     ThreadDef def = KnotTyingDef(193);
     def.length_m = 18e-3;
-    const TieReport r =
-        RunKnotTie(def, ParseKnotThrows(c.throws), KnotHoldOptions{}, nullptr, &stitch);
+    std::vector<KnotThrowOptions> throws = ParseKnotThrows(c.throws);
+    for (KnotThrowOptions& t : throws) t.force_limited_pull = c.force_limited_pull;
+    const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{}, nullptr, &stitch);
     EXPECT_EQ(r.knot_after_pull, c.expected);
     EXPECT_EQ(r.knot, c.expected);
     EXPECT_TRUE(r.pulled_tight);
     EXPECT_TRUE(r.held) << "knot moved " << r.hold_shift_m * 1e3 << " mm along the thread";
     EXPECT_GE(r.min_distance_over_d, 0.95);
     EXPECT_EQ(r.rollbacks, 0);
-    EXPECT_LT(r.max_strain, 0.1);
+    // The surgeon's double throw strains the nylon up to 12 % while it is wrapped.
+    EXPECT_LT(r.max_strain, c.force_limited_pull ? 0.15 : 0.1);
     EXPECT_LT(r.max_strain_hold, 0.1);
     // The jig's frame (y up) to the stitch recogniser's (tissue z = 0): the surface 0.35 mm
     // below the thread's line, under the knot on the first guide and the hands (which end the
