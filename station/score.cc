@@ -107,6 +107,22 @@ knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
   for (std::size_t i = 0; i < x_W.size(); ++i) {
     p[i] = Eigen::Vector3d(x_W[i].x(), -x_W[i].z(), x_W[i].y() - surface_y);
   }
+  // The tissue is where the stitch is: the run of nodes below the surface around the deepest
+  // one (the bite). A tail that a hand's deviation took below the surface elsewhere lies on
+  // the tissue, not through it: it is read as just above the surface.
+  constexpr double kAbove_m = 1e-6;
+  if (!p.empty()) {
+    std::size_t deepest = 0;
+    for (std::size_t i = 1; i < p.size(); ++i) {
+      if (p[i].z() < p[deepest].z()) deepest = i;
+    }
+    std::size_t first = deepest, last = deepest;
+    while (first > 0 && p[first - 1].z() < 0) --first;
+    while (last + 1 < p.size() && p[last + 1].z() < 0) ++last;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if ((i < first || i > last) && p[i].z() < kAbove_m) p[i].z() = kAbove_m;
+    }
+  }
   if (!knot::IsStitchPolyline(p)) return knot::StitchKnotType::kUnknown;
   knot::StitchKnotOptions options;
   options.thread_diameter_m = scene.thread->def.diameter_m;

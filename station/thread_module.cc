@@ -105,6 +105,7 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
     colliders_[0] =
         thread::Collider::Plane(Eigen::Vector3d(0, 0, d.floor_height_m), Eigen::Vector3d::UnitZ());
     num_colliders_ = 1;
+    floor_z_m_ = d.floor_height_m;
   }
   anchor_slot_ = thread::GraspNode(model_, 0, initial_);
   tool_node_ = model_.num_nodes - 1;
@@ -258,12 +259,17 @@ void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
   // The grasped node follows the tool tip; its torsion follows the tool's roll about x.
   const Eigen::Matrix3d& R = in.X_WT.linear();
   const double roll_rad = std::atan2(R(2, 1), R(2, 2));
-  thread::SetGraspTarget(t.thread, tool_slot_, in.X_WT.translation(), roll_rad);
+  // The tool's tip rests on the table: it does not drag the node it holds through the floor
+  // (the floor's contact would then hold the node against the grasp at the force limit).
+  Eigen::Vector3d p_WT = in.X_WT.translation();
+  if (num_colliders_ > 0) p_WT.z() = std::max(p_WT.z(), floor_z_m_ + model_.radius_m);
+  thread::SetGraspTarget(t.thread, tool_slot_, p_WT, roll_rad);
   if (second_hand_ && in.second_tool != nullptr) {
     const Eigen::Isometry3d& X_WT2 = in.second_tool->X_WT;
     const Eigen::Matrix3d& R2 = X_WT2.linear();
-    thread::SetGraspTarget(t.thread, anchor_slot_, X_WT2.translation(),
-                           std::atan2(R2(2, 1), R2(2, 2)));
+    Eigen::Vector3d p_WT2 = X_WT2.translation();
+    if (num_colliders_ > 0) p_WT2.z() = std::max(p_WT2.z(), floor_z_m_ + model_.radius_m);
+    thread::SetGraspTarget(t.thread, anchor_slot_, p_WT2, std::atan2(R2(2, 1), R2(2, 2)));
   }
   thread::StepThread(model_, std::span<const thread::Collider>(colliders_.data(), num_colliders_),
                      ws_, t.thread);

@@ -80,6 +80,7 @@ class ThreadModule final : public Module {
   Eigen::Vector3d p_W_tool_rest_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d p_W_second_rest_ = Eigen::Vector3d::Zero();
   int num_colliders_ = 0;
+  double floor_z_m_ = 0;  // with a floor (num_colliders_ 1): its height
   int tool_slot_ = -1;
   int tool_node_ = -1;
   int anchor_slot_ = -1;

@@ -230,10 +230,12 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadWorkspace& ws, Thread
   const double dx = pull_speed_m_per_s_ * h;
   pulled_m_ += dx;
   if (force_limited_pull_) {
-    // Each hand out while its tension is below the pull's, back while above.
+    // Each hand out while its tension is below the pull's (aiming 5 % above it, so that both
+    // reach it), back while above.
     auto out = [&](const Grasp& g) {
-      const double v = std::clamp(kTensionGain_m_per_s_N * (pull_tension_N_ - g.f_T_W.norm()),
-                                  -kMaxHandSpeed_m_per_s, pull_speed_m_per_s_);
+      const double v =
+          std::clamp(kTensionGain_m_per_s_N * (1.05 * pull_tension_N_ - g.f_T_W.norm()),
+                     -kMaxHandSpeed_m_per_s, pull_speed_m_per_s_);
       return v * h;
     };
     plan_driver_W_ += (sx_ * out(driver)) * Eigen::Vector3d::UnitX();
@@ -246,9 +248,7 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadWorkspace& ws, Thread
   SetGraspTarget(state, hands_.standing_slot, plan_standing_W_ + offsets.standing_W,
                  standing.roll_rad);
   StepThread(model, colliders, ws, state);
-  // A force-limited hand approaches the tension from below: within 5 % of it counts.
-  const double reached = (force_limited_pull_ ? 0.95 : 1.0) * pull_tension_N_;
-  if ((driver.f_T_W.norm() >= reached && standing.f_T_W.norm() >= reached) ||
+  if ((driver.f_T_W.norm() >= pull_tension_N_ && standing.f_T_W.norm() >= pull_tension_N_) ||
       pulled_m_ >= max_pull_m_) {
     phase_ = Phase::kDone;
   }

@@ -76,7 +76,7 @@ struct KnotThrowOptions {
   // The pull: false, both hands move apart at pull_speed_m_per_s until each feels
   // pull_tension_N (position control: a hand that already feels it goes on pulling while the
   // other does not); true, each hand limits its own force, moving out at most at
-  // pull_speed_m_per_s while below pull_tension_N and giving thread back while above.
+  // pull_speed_m_per_s while below 1.05 pull_tension_N and giving thread back while above.
   bool force_limited_pull = false;
   // Colliders present throughout and never withdrawn with the jig (a stitch), at most
   // kMaxKnotFixedColliders.

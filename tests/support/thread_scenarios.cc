@@ -328,10 +328,9 @@ TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
       if (!more) break;
     }
     finish_phase();
-    out.pulled_tight = out.pulled_tight &&
-                       std::min(state.grasps[hands.standing_slot].f_T_W.norm(),
-                                state.grasps[hands.driver_slot].f_T_W.norm()) >=
-                           (throws[t].force_limited_pull ? 0.95 : 1.0) * throws[t].pull_tension_N;
+    out.pulled_tight = out.pulled_tight && std::min(state.grasps[hands.standing_slot].f_T_W.norm(),
+                                                    state.grasps[hands.driver_slot].f_T_W.norm()) >=
+                                               throws[t].pull_tension_N;
     // The next throw is tied by the other hand, 3 mm beyond this knot on its side.
     const knot::KnotAnalysis a = AnalyzeThread(model, state, true);
     std::swap(hands.standing_slot, hands.driver_slot);

@@ -81,9 +81,7 @@ struct TieReport {
   std::string knot_after_pull;  // at the end of the last throw's pull
   std::string knot;             // at the end (after the hold)
   double min_distance_over_d = 0.0;
-  // Every throw's pull ended with both hands at pull_tension_N (within 5 % of it for a
-  // force-limited pull, which approaches it from below).
-  bool pulled_tight = false;
+  bool pulled_tight = false;  // every throw's pull ended with both hands at pull_tension_N
   bool held = false;          // class unchanged by the hold and knot moved < 1 mm along it
   double hold_shift_m = 0.0;  // knot core's shift along the thread during the hold
   double steps_per_s = 0.0;   // 1 / median step time over the whole run
