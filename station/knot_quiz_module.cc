@@ -9,8 +9,7 @@ namespace microdex::station {
 
 KnotQuizModule::KnotQuizModule(const scene::SceneModel& scene) : items_(scene.knots->items) {
   for (std::size_t i = 0; i < items_.size(); ++i) {
-    shapes_.push_back(
-        knot::MakeStitchKnot(knot::QuizItemShapeDef(items_[i], i, scene.knots->thread_diameter_m)));
+    shapes_.push_back(scene.knots->ItemShape(i));
     const knot::StitchKnotType seen = knot::RecogniseStitchKnot(shapes_.back());
     if (seen != items_[i]) {
       throw std::runtime_error(scene.path + ": knots.items[" + std::to_string(i) + "]: the " +

@@ -312,4 +312,31 @@ StitchKnotShapeDef QuizItemShapeDef(StitchKnotType kind, std::size_t index,
   return def;
 }
 
+std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> polyline,
+                                             double radius_m) {
+  const auto n = static_cast<std::ptrdiff_t>(polyline.size());
+  std::ptrdiff_t first = -1, last = -1;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    if (polyline[static_cast<std::size_t>(i)].z() < 0) {
+      if (first < 0) first = i;
+      last = i;
+    }
+  }
+  if (first < 0) return {polyline.begin(), polyline.end()};
+  const Eigen::Vector3d a = polyline[static_cast<std::size_t>(first)];
+  const Eigen::Vector3d b = polyline[static_cast<std::size_t>(last)];
+  auto near = [&](std::ptrdiff_t i) {
+    const Eigen::Vector3d& p = polyline[static_cast<std::size_t>(i)];
+    return std::min((p - a).norm(), (p - b).norm()) <= radius_m;
+  };
+  std::ptrdiff_t begin = first;
+  while (begin > 0 && near(begin - 1)) --begin;
+  std::ptrdiff_t end = last;
+  while (end + 1 < n && near(end + 1)) ++end;
+  // Keep the first node beyond the radius on each side (the tails reach out of the knot).
+  begin = std::max<std::ptrdiff_t>(begin - 1, 0);
+  end = std::min<std::ptrdiff_t>(end + 1, n - 1);
+  return {polyline.begin() + begin, polyline.begin() + end + 1};
+}
+
 }  // namespace microdex::knot

@@ -69,6 +69,14 @@ std::vector<Eigen::Vector3d> MakeStitchKnot(const StitchKnotShapeDef& def);
 StitchKnotShapeDef QuizItemShapeDef(StitchKnotType kind, std::size_t index,
                                     double thread_diameter_m);
 
+// The part of a thread through the tissue (a stitch polyline: both ends above z = 0, nodes
+// below it) that a knot tied on the stitch occupies: from the first node below the tissue
+// back towards node 0, and from the last one on towards the other end, each tail kept up to
+// its first node farther than radius_m from the stitch's nearer puncture. Returns the polyline
+// unchanged when it has no node below the tissue.
+std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> polyline,
+                                             double radius_m);
+
 // `segments` equal arc-length pieces of an open polyline (segments + 1 points, both ends kept);
 // at least two points in, segments >= 1.
 std::vector<Eigen::Vector3d> ResampleByArcLength(std::span<const Eigen::Vector3d> open,

@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "common/base/yaml_reader.h"
+#include "common/knot/obj.h"
+#include "common/knot/stitch_knot_shapes.h"
 #include "common/mesh/mesh_io.h"
 
 namespace microdex::scene {
@@ -314,7 +316,7 @@ SceneModel ReadScene(const YamlReader& reader) {
     s.loop = d;
   }
   if (const std::optional<YamlSection> k = root.OptionalMap("knots")) {
-    k->CheckNoUnknownKeys({"items", "thread_diameter_m"});
+    k->CheckNoUnknownKeys({"items", "thread_diameter_m", "tied"});
     KnotQuizSceneDef d;
     k->Required("items");
     for (const std::string& name : k->StringList("items")) {
@@ -326,6 +328,38 @@ SceneModel ReadScene(const YamlReader& reader) {
       d.items.push_back(*type);
     }
     d.thread_diameter_m = k->FiniteDouble("thread_diameter_m", d.thread_diameter_m);
+    if (const std::optional<YamlSection> tied = k->OptionalMap("tied")) {
+      // The tails are shown up to this far from the stitch (the knot and the stitch, not the
+      // whole suture), centred over the origin in x and y and drawn this many times their size
+      // (the throws pulled on the jig lie up to 5 mm apart, their wraps a tenth of a
+      // millimetre across). Moving and scaling keep the topology: the recogniser checks each
+      // one below.
+      constexpr double kTiedRadius_m = 5e-3;
+      constexpr double kTiedScale = 2.5;
+      tied->CheckNoUnknownKeys({"square", "granny", "surgeons", "slip", "half-hitch"});
+      for (const char* name : {"square", "granny", "surgeons", "slip", "half-hitch"}) {
+        if (!tied->Has(name)) continue;
+        const std::string file = ResolveBeside(s.path, tied->String(name, ""));
+        try {
+          std::vector<Eigen::Vector3d> shape =
+              knot::CropStitchTails(knot::ReadObjPolyline(file), kTiedRadius_m);
+          Eigen::Vector3d lo = shape.front(), hi = shape.front();
+          for (const Eigen::Vector3d& p : shape) {
+            lo = lo.cwiseMin(p);
+            hi = hi.cwiseMax(p);
+          }
+          const Eigen::Vector3d centre(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.0);
+          for (Eigen::Vector3d& p : shape) p = kTiedScale * (p - centre);
+          d.tied.emplace_back(*knot::StitchKnotTypeFromName(name), std::move(shape));
+        } catch (const std::exception& e) {
+          tied->Fail(name, e.what());
+        }
+        const knot::StitchKnotType seen = knot::RecogniseStitchKnot(d.tied.back().second);
+        if (seen != d.tied.back().first) {
+          tied->Fail(name, file + ": recognised as " + std::string(knot::StitchKnotName(seen)));
+        }
+      }
+    }
     s.knots = d;
   }
   if (const std::optional<YamlSection> pl = root.OptionalMap("placement")) {
@@ -497,6 +531,21 @@ TaskKind ParseTaskKind(const std::string& text) {
   throw std::invalid_argument(
       "expected follow_path, tremor_hold, needle_along_tube, grasp, loop_along_wire, "
       "knot_topology, knot_placement, nylon_loop, needle_through_tissue or knot_tying");
+}
+
+std::vector<Eigen::Vector3d> KnotQuizSceneDef::ItemShape(std::size_t i) const {
+  const knot::StitchKnotType type = items.at(i);
+  for (const auto& [kind, shape] : tied) {
+    if (kind != type) continue;
+    const auto before =
+        std::count(items.begin(), items.begin() + static_cast<std::ptrdiff_t>(i), type);
+    std::vector<Eigen::Vector3d> out = shape;
+    if (before % 2 == 1) {
+      for (Eigen::Vector3d& p : out) p.x() = -p.x();
+    }
+    return out;
+  }
+  return knot::MakeStitchKnot(knot::QuizItemShapeDef(type, i, thread_diameter_m));
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {

@@ -173,6 +173,13 @@ struct LoopSceneDef {
 struct KnotQuizSceneDef {
   std::vector<knot::StitchKnotType> items;  // shown in this order
   double thread_diameter_m = 30e-6;         // 10-0 nylon
+  // Knots tied by the thread module around a stitch (`knots.tied`: class -> OBJ polyline in
+  // the tissue's frame, written by microdex-bench thread --tie ... --stitch --obj), read at
+  // load. A class without one is drawn parametrically (knot::QuizItemShapeDef).
+  std::vector<std::pair<knot::StitchKnotType, std::vector<Eigen::Vector3d>>> tied;
+  // The thread shown as item i: the tied knot of its class (its mirror image, x -> -x, for
+  // every second item of that class), or the parametric shape.
+  std::vector<Eigen::Vector3d> ItemShape(std::size_t i) const;
 };
 
 // Knot placement (station "placement" module, thesis §2.2: "microsurgeons place knots evenly

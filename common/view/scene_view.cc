@@ -72,14 +72,13 @@ std::string IdealPath(const scene::SceneModel& s) {
   return out + "]";
 }
 
-// The knot-topology quiz's knots (the station's shapes, knot::QuizItemShapeDef), each
+// The knot-topology quiz's knots (the station's shapes, KnotQuizSceneDef::ItemShape), each
 // resampled to at most kKnotPoints points: [[x, y, z, x, y, z, ...], ...].
 std::string KnotItems(const scene::KnotQuizSceneDef& k) {
   constexpr int kKnotPoints = 240;
   std::string out = "[";
   for (std::size_t i = 0; i < k.items.size(); ++i) {
-    std::vector<Eigen::Vector3d> p =
-        knot::MakeStitchKnot(knot::QuizItemShapeDef(k.items[i], i, k.thread_diameter_m));
+    std::vector<Eigen::Vector3d> p = k.ItemShape(i);
     if (p.size() > kKnotPoints) p = knot::ResampleByArcLength(p, kKnotPoints - 1);
     out += i ? ",[" : "[";
     for (std::size_t j = 0; j < p.size(); ++j) {

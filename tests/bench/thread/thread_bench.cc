@@ -9,7 +9,8 @@
 //                         tie the throws, pull, hold 20 mN for 2 s; report per phase;
 //                         --stitch: around a stitch (an 18 mm thread through three rods);
 //                         --stitch-geometry X,DEPTH,OFFSET,ROD_R,GUIDE_R,START,LENGTH (mm)
-//                         --force-limited-pull: each hand limits its pull to the pull tension
+//                         --force-limited-pull: each hand limits its pull to the pull tension;
+//                         --obj with --stitch: in the tissue's frame (the knot quiz's shapes)
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
 //                         five knots x 129..513 nodes x mu 0.1..0.3 (README table)
 //   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
@@ -30,6 +31,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/knot/obj.h"
 #include "common/thread/grasp.h"
 #include "common/thread/sphere_bvh.h"
 #include "common/thread/thread_contacts.h"
@@ -514,7 +516,23 @@ int RunTie(const std::string& spec, int nodes, bool force_limited_pull, const Kn
       r.hold_shift_m * 1e3, r.steps_per_s, r.tick_p99_us, r.rollbacks, r.max_strain,
       r.max_strain_hold);
   if (!json.empty()) WriteFile(json, TieJson(spec, nodes, def.friction_coefficient, r) + "\n");
-  if (!obj.empty()) {
+  if (!obj.empty() && stitch != nullptr) {
+    // Around a stitch: in the tissue's frame, as the stitch-knot recogniser and the knot quiz
+    // read it (the surface z = 0 at 0.35 mm under the thread's line, z out of the tissue, the
+    // first puncture at x = 0).
+    constexpr double kSurfaceY_m = -0.35e-3;
+    const double x0 = stitch->x_m - stitch->guide_offset_m;
+    std::vector<Eigen::Vector3d> tissue_frame;
+    for (int i = 0; i < r.x_final_W.cols(); ++i) {
+      const Eigen::Vector3d p = r.x_final_W.col(i);
+      tissue_frame.emplace_back(p.x() - x0, -p.z(), p.y() - kSurfaceY_m);
+    }
+    knot::WriteObjPolyline(
+        obj, tissue_frame,
+        {"microdex-bench thread --tie " + spec + " --nodes " + std::to_string(nodes) + " --stitch" +
+             (force_limited_pull ? " --force-limited-pull" : "") + ": " + r.knot,
+         "the tissue's frame: surface z = 0, the first puncture at x = 0, metres"});
+  } else if (!obj.empty()) {
     std::ostringstream out;
     out << "o thread\n";
     for (int i = 0; i < r.x_final_W.cols(); ++i) {

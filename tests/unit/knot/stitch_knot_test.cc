@@ -94,6 +94,26 @@ std::vector<int> FoundHands(const StitchKnotAnalysis& a) {
   return hands;
 }
 
+// CropStitchTails keeps the stitch and each tail up to its first node beyond the radius from
+// the nearer puncture, and leaves a thread with no stitch as it is.
+TEST(StitchKnotTest, CropStitchTailsKeepsTheStitchAndNearTails) {
+  std::vector<Eigen::Vector3d> thread;
+  for (int i = 0; i <= 40; ++i) {
+    const double x = -10e-3 + 0.5e-3 * i;  // -10 .. +10 mm
+    thread.emplace_back(x, 0.0, i >= 19 && i <= 21 ? -0.5e-3 : 0.3e-3);
+  }
+  const std::vector<Eigen::Vector3d> cropped = CropStitchTails(thread, 2e-3);
+  // Below: x = -0.5, 0, 0.5 mm (nodes 19..21), the punctures' nodes 0.8 mm under the tails;
+  // tail nodes within 2 mm of them: x = -2 .. 2 mm (at -2 mm: hypot(1.5, 0.8) = 1.7 mm; at
+  // -2.5: 2.15 mm), and one node beyond on each side: -2.5 .. 2.5 mm, 11 nodes.
+  ASSERT_EQ(cropped.size(), 11u);
+  EXPECT_NEAR(cropped.front().x(), -2.5e-3, 1e-12);
+  EXPECT_NEAR(cropped.back().x(), 2.5e-3, 1e-12);
+  EXPECT_TRUE(IsStitchPolyline(cropped));
+  for (Eigen::Vector3d& p : thread) p.z() = 0.3e-3;
+  EXPECT_EQ(CropStitchTails(thread, 2e-3).size(), thread.size());
+}
+
 TEST(StitchKnotTest, NamesAreTheCommandLineWords) {
   const std::vector<std::pair<StitchKnotType, const char*>> words = {
       {StitchKnotType::kNone, "none"},      {StitchKnotType::kSquare, "square"},
