@@ -162,6 +162,34 @@ TEST(AppCli, StationStopsAtTaskEndWithTheSceneRunsScore) {
   EXPECT_EQ(r.steps, 10000u);  // hold_s = 10 at 1 kHz
 }
 
+// Knot tying through the station: its publisher names the knot in the last thread frame it
+// published, the scene run in its final state; the same knot (square for an expert, granny for
+// a novice) and the same final score.
+TEST(AppCli, KnotTyingStationNamesTheKnotAsTheSceneRunDoes) {
+  const std::string scene_path = testing::SourceDir() + "/assets/scenes/knot_tying.yaml";
+  const scene::SceneModel scene = scene::LoadScene(scene_path);
+  for (const double skill : {0.9, 0.2}) {
+    const std::string out = ::testing::TempDir() + "/knot_tying.json";
+    const Outcome o = RunApp(
+        "microdex-station", {"--scene", scene_path, "--skill", std::to_string(skill), "--seed", "3",
+                             "--unpaced", "--no-realtime", "--score-out", out});
+    ASSERT_EQ(o.status, 0) << o.output;
+    const std::string json = testing::ReadFile(out);
+    const std::string key = "\"metric\": \"knot_wrong\", \"value\": ";
+    const size_t at = json.find(key);
+    ASSERT_NE(at, std::string::npos) << json;
+    const double knot_wrong = std::stod(json.substr(at + key.size()));
+    EXPECT_EQ(knot_wrong, skill > 0.5 ? 0.0 : 1.0) << "skill " << skill;
+    station::SimTraineeDef def;
+    def.skill = skill;
+    def.seed = 3;
+    const station::SceneRunResult r = station::RunSceneWithTrainee(scene, def, 3);
+    const size_t s = json.find("\"score\": ");
+    ASSERT_NE(s, std::string::npos);
+    EXPECT_NEAR(std::stod(json.substr(s + 9)), r.score.score, 1e-6) << "skill " << skill;
+  }
+}
+
 TEST(AppCli, InstructorRefusesBadInput) {
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:vortex:3"}, "vortex");
   ExpectBadInput("microdex-instructor", {"--headless", "--cue", "st-1:tremor"}, "STATION:KIND");
