@@ -390,14 +390,7 @@ SceneModel ReadScene(const YamlReader& reader) {
       try {
         k.Validate();
       } catch (const std::invalid_argument& e) {
-        // "KnotStitchDef.FIELD: reason" -> the stitch's FIELD.
-        const std::string what = e.what();
-        const std::size_t dot = what.find('.');
-        const std::size_t colon = what.find(": ");
-        if (dot != std::string::npos && colon != std::string::npos && dot < colon) {
-          st->Fail(what.substr(dot + 1, colon - dot - 1), what.substr(colon + 2));
-        }
-        st->Fail("x_m", what);
+        st->FailInvalid(e);
       }
     }
     d.throws = kt->Int("throws", d.throws);

@@ -329,8 +329,7 @@ std::vector<KnotThrowOptions> ParseKnotThrows(const std::string& spec) {
 void KnotStitchDef::Validate() const {
   auto positive = [](double v, const char* field) {
     if (!(v > 0.0 && v < 1.0)) {
-      throw std::invalid_argument(std::string("KnotStitchDef.") + field +
-                                  ": expected a length in (0, 1) m");
+      throw std::invalid_argument(std::string(field) + ": expected a length in (0, 1) m");
     }
   };
   positive(depth_m, "depth_m");
@@ -339,12 +338,10 @@ void KnotStitchDef::Validate() const {
   positive(guide_radius_m, "guide_radius_m");
   if (!(std::isfinite(x_m) && std::isfinite(start_x_m) &&
         start_x_m < x_m - guide_offset_m - guide_radius_m)) {
-    throw std::invalid_argument(
-        "KnotStitchDef.start_x_m: expected the standing end before the first guide");
+    throw std::invalid_argument("start_x_m: expected the standing end before the first guide");
   }
   if (!(depth_m > rod_radius_m + guide_radius_m && guide_offset_m > rod_radius_m)) {
-    throw std::invalid_argument(
-        "KnotStitchDef.depth_m: expected the bite rod below the guides and between them");
+    throw std::invalid_argument("depth_m: expected the bite rod below the guides and between them");
   }
 }
 

@@ -265,7 +265,7 @@ struct KnotStitchDef {
   std::vector<Collider> Colliders(double thread_radius_m) const;
   // The thread laid along the stitch's path from start_x_m.
   ThreadState Lay(const ThreadModel& model) const;
-  // Throws std::invalid_argument naming the bad field.
+  // Throws std::invalid_argument("field: reason").
   void Validate() const;
 };
 

@@ -420,25 +420,6 @@ export class SceneView {
           material(0xe0e0e8, { metal: true }));
       this.tool.add(loop);
     }
-    if (scene.stitch) {
-      // The rods the suture passes over and under, and the tissue as a translucent slab
-      // below the surface, so the bite under it shows through.
-      for (const r of scene.stitch.rods) {
-        this.root.add(new THREE.Mesh(
-            new THREE.TubeGeometry(polylineCurve([r.a, r.b]), 4, r.radius, d.radial),
-            material(0xd88080)));
-      }
-      const xs = scene.stitch.rods.flatMap((r) => [r.a[0], r.b[0]]);
-      const x0 = Math.min(...xs) - 12e-3;
-      const x1 = Math.max(...xs) + 10e-3;
-      const depth = 2e-3;
-      const slab = new THREE.Mesh(new THREE.BoxGeometry(x1 - x0, depth, 8e-3),
-                                  new THREE.MeshStandardMaterial({
-                                    color: 0xe0a0a0, transparent: true, opacity: 0.35,
-                                    depthWrite: false }));
-      slab.position.set((x0 + x1) / 2, scene.stitch.surface_y - depth / 2, 0);
-      this.root.add(slab);
-    }
     if (scene.grasp) {
       const g = scene.grasp;
       for (const side of [1, -1]) {
