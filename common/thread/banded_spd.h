@@ -36,13 +36,12 @@ class BandedSpd {
   // entry (a sparse right-hand side): the forward substitution starts there.
   void Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row = 0) const;
   // The same for the first `cols` columns of b at once (row-major: each row's columns are
-  // contiguous, so the substitutions run across them).
+  // contiguous, so the substitutions run across them, vectorised), for sparse columns: column j
+  // is zero above row first_rows[j] on entry, first_rows ascending. The forward substitution of row
+  // i runs only over the columns that start at or above it, and only the rows from first_rows[0]
+  // down are solved (the rows above it are left unsolved: L^T's back substitution never needs them
+  // for the rows below).
   using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  void SolveColumns(RowMajorMatrix& b, int cols) const;
-  // The same for sparse columns: column j is zero above row first_rows[j] on entry, first_rows
-  // ascending. The forward substitution of row i runs only over the columns that start at or
-  // above it, and only the rows from first_rows[0] down are solved (the rows above it are left
-  // unsolved: L^T's back substitution never needs them for the rows below).
   void SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const;
 
  private:

@@ -88,4 +88,19 @@ LinkColliderGap CalcLinkColliderGap(const Collider& collider, const Eigen::Vecto
   return out;
 }
 
+double LinkColliderGapLowerBound(const Collider& collider, const Eigen::Vector3d& x0,
+                                 const Eigen::Vector3d& x1, double thread_radius_m) {
+  if (collider.kind == ColliderKind::kPlane) {
+    const double h0 = collider.b_W.dot(x0 - collider.a_W);
+    const double h1 = collider.b_W.dot(x1 - collider.a_W);
+    return std::min(h0, h1) - thread_radius_m;
+  }
+  // The collider's axis: a point (sphere) or a segment (capsule).
+  const Eigen::Vector3d& c0 = collider.a_W;
+  const Eigen::Vector3d& c1 = collider.kind == ColliderKind::kCapsule ? collider.b_W : collider.a_W;
+  const Eigen::Array3d gap =
+      (c0.cwiseMin(c1) - x0.cwiseMax(x1)).array().max((x0.cwiseMin(x1) - c0.cwiseMax(c1)).array());
+  return gap.max(0.0).matrix().norm() - collider.radius_m - thread_radius_m;
+}
+
 }  // namespace microdex::thread

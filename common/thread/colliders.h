@@ -36,6 +36,12 @@ struct LinkColliderGap {
 LinkColliderGap CalcLinkColliderGap(const Collider& collider, const Eigen::Vector3d& x0,
                                     const Eigen::Vector3d& x1, double thread_radius_m);
 
+// A lower bound of CalcLinkColliderGap's gap_m, from the distance between the link's and the
+// collider's axis-aligned boxes (the exact gap for planes): a handful of comparisons, for
+// skipping links far from a collider before the closest-point computation.
+double LinkColliderGapLowerBound(const Collider& collider, const Eigen::Vector3d& x0,
+                                 const Eigen::Vector3d& x1, double thread_radius_m);
+
 // True when the link with end nodes (node, node + 1) is excluded from the collider.
 bool ColliderIgnoresLink(const Collider& collider, int link);
 

@@ -40,9 +40,12 @@ StrainBandScratch MakeStrainBandScratch(int num_links) {
 double WorstViolation(const ThreadModel& model, double limit, const Eigen::Matrix3Xd& x) {
   double worst = 0.0;
   for (int j = 0; j < model.num_links; ++j) {
-    const double l = (x.col(j + 1) - x.col(j)).norm();
+    const double l2 = (x.col(j + 1) - x.col(j)).squaredNorm();
     const double r = model.rest_length_m[j];
-    worst = std::max(worst, std::max(l - (1.0 + limit) * r, (1.0 - limit) * r - l) / r);
+    const double lo = (1.0 - limit) * r, hi = (1.0 + limit) * r;
+    if (l2 >= lo * lo && l2 <= hi * hi) continue;  // inside the band: no square root
+    const double l = std::sqrt(l2);
+    worst = std::max(worst, std::max(l - hi, lo - l) / r);
   }
   return worst;
 }
@@ -64,15 +67,21 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
     worst = 0.0;
     for (int j = 0; j < nl; ++j) {
       const Eigen::Vector3d d = x.col(j + 1) - x.col(j);
-      const double l = d.norm();
+      const double l2 = d.squaredNorm();
       const double r = model.rest_length_m[j];
       const double lo = (1.0 - limit) * r, hi = (1.0 + limit) * r;
+      s.c[j] = 0.0;
+      // Inside the band (most links, most calls): no square root unless the link is held.
+      if (l2 >= lo * lo && l2 <= hi * hi) {
+        if (s.active[j] != 0) s.e.col(j) = d / std::sqrt(l2);
+        continue;
+      }
+      const double l = std::sqrt(l2);
       if (l > 0.0) s.e.col(j) = d / l;
       const double violation = std::max({l - hi, lo - l, 0.0});
       if (violation > kTolerance * r && it == 0) ++result.corrected_links;
       worst = std::max(worst, violation / r);
       if (it == 0) result.max_violation_m = std::max(result.max_violation_m, violation);
-      s.c[j] = 0.0;
       if (!(l > 0.0) || w[j] + w[j + 1] == 0.0) {
         s.active[j] = 0;
       } else if (l > hi) {
@@ -84,28 +93,35 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
       }
     }
     if (worst <= kTolerance || it == max_iterations) break;
-    // (J W J^T + damping) lambda = -C over the active links; inactive links are identity rows.
-    for (int j = 0; j < nl; ++j) {
+    // (J W J^T + damping) lambda = -C over the active links; inactive links are identity rows
+    // (lambda 0), so the tridiagonal system falls apart into the runs of consecutive active
+    // links, each solved by the Thomas algorithm (symmetric, diagonally dominant: no pivoting
+    // needed). Most calls hold a few short runs: the solve skips the rest of the chain.
+    for (int j = 0; j < nl;) {
       if (s.active[j] == 0) {
-        s.diag[j] = 1.0;
-        s.off[j] = 0.0;
+        s.lambda[j] = 0.0;
+        ++j;
         continue;
       }
-      s.diag[j] = (w[j] + w[j + 1]) * (1.0 + kDamping);
-      s.off[j] =
-          j + 1 < nl && s.active[j + 1] != 0 ? -w[j + 1] * s.e.col(j).dot(s.e.col(j + 1)) : 0.0;
+      const int start = j;
+      int end = j;
+      while (end < nl && s.active[end] != 0) ++end;
+      for (int k = start; k < end; ++k) {
+        s.diag[k] = (w[k] + w[k + 1]) * (1.0 + kDamping);
+        s.off[k] = k + 1 < end ? -w[k + 1] * s.e.col(k).dot(s.e.col(k + 1)) : 0.0;
+      }
+      double pivot = s.diag[start];
+      s.lambda[start] = -s.c[start] / pivot;
+      s.work[start] = s.off[start] / pivot;
+      for (int k = start + 1; k < end; ++k) {
+        pivot = s.diag[k] - s.off[k - 1] * s.work[k - 1];
+        if (!(pivot > 0.0)) return result;
+        s.work[k] = s.off[k] / pivot;
+        s.lambda[k] = (-s.c[k] - s.off[k - 1] * s.lambda[k - 1]) / pivot;
+      }
+      for (int k = end - 2; k >= start; --k) s.lambda[k] -= s.work[k] * s.lambda[k + 1];
+      j = end;
     }
-    // Thomas algorithm (symmetric, diagonally dominant: no pivoting needed).
-    double pivot = s.diag[0];
-    s.lambda[0] = -s.c[0] / pivot;
-    s.work[0] = s.off[0] / pivot;
-    for (int j = 1; j < nl; ++j) {
-      pivot = s.diag[j] - s.off[j - 1] * s.work[j - 1];
-      if (!(pivot > 0.0)) return result;
-      s.work[j] = s.off[j] / pivot;
-      s.lambda[j] = (-s.c[j] - s.off[j - 1] * s.lambda[j - 1]) / pivot;
-    }
-    for (int j = nl - 2; j >= 0; --j) s.lambda[j] -= s.work[j] * s.lambda[j + 1];
     // A link held inside the band whose multiplier would stretch it beyond its length at the
     // upper edge's side (or shorten it at the lower edge's) is let go from now on.
     for (int j = 0; j < nl; ++j) {
@@ -116,14 +132,15 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
     }
     // The move dx = W J^T lambda, at most max_move per node; then halved until the largest
     // violation decreases (a Newton step on strongly bent chains can overshoot).
-    double largest = 0.0;
+    double largest2 = 0.0;
     for (int i = 0; i <= nl; ++i) {
       Eigen::Vector3d dx = Eigen::Vector3d::Zero();
       if (i > 0) dx += s.lambda[i - 1] * s.e.col(i - 1);
       if (i < nl) dx -= s.lambda[i] * s.e.col(i);
       s.dx.col(i) = w[i] * dx;
-      largest = std::max(largest, s.dx.col(i).norm());
+      largest2 = std::max(largest2, s.dx.col(i).squaredNorm());
     }
+    const double largest = std::sqrt(largest2);
     double step = largest > max_move ? max_move / largest : 1.0;
     bool improved = false;
     for (int half = 0; half < kLineSearchSteps && !improved; ++half, step *= 0.5) {

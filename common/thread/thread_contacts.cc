@@ -119,6 +119,9 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
     if (!col.enabled) continue;
     for (int j = 0; j < model.num_links; ++j) {
       if (ColliderIgnoresLink(col, j)) continue;
+      if (LinkColliderGapLowerBound(col, x.col(j), x.col(j + 1), model.radius_m) >= cutoff) {
+        continue;
+      }
       const LinkColliderGap g = CalcLinkColliderGap(col, x.col(j), x.col(j + 1), model.radius_m);
       if (g.gap_m >= cutoff) continue;
       if (n_obj >= capacity) {
@@ -204,6 +207,11 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
   const double tolerance = kProjectionTolerance * def.diameter_m;
   const double mu_self = def.friction_coefficient;
   const double mu_object = def.object_friction_coefficient;
+  // A pair found satisfied after the last move of each of its nodes is satisfied still: it is
+  // not tested again (the projection's result is the same, bit for bit, with or without the
+  // skip). `clock` counts the tests; every move stamps its nodes with it.
+  int clock = 0;
+  w.node_moved_at.setZero();
   // Moves the nodes so that sum_k g_k dx_k . dir = amount, each in proportion to g_k / m_k
   // (the smallest mass-weighted move); grasped nodes do not move.
   auto move = [&](const int* nodes, const double* g, int count, const Eigen::Vector3d& dir,
@@ -214,6 +222,7 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     const double lambda = amount / denom;
     for (int k = 0; k < count; ++k) {
       x.col(nodes[k]) += (lambda * g[k] * InverseMass(model, w, nodes[k])) * dir;
+      w.node_moved_at[nodes[k]] = clock;
     }
     return true;
   };
@@ -243,6 +252,13 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     if (fraction > 0.0) {
       for (int k = 0; k < num_pairs; ++k) {
         const LinkPair& pair = w.pairs[k];
+        if (sweep > 0 && w.pair_checked_at[k] >
+                             std::max({w.node_moved_at[pair.a], w.node_moved_at[pair.a + 1],
+                                       w.node_moved_at[pair.b], w.node_moved_at[pair.b + 1]})) {
+          continue;
+        }
+        ++clock;
+        w.pair_checked_at[k] = clock;  // satisfied, unless a move below stamps its nodes
         const PairStart& before = w.pair_start[k];
         const geometry::SegmentClosest now = geometry::ClosestSegmentSegment(
             x.col(pair.a), x.col(pair.a + 1), x.col(pair.b), x.col(pair.b + 1));
@@ -276,6 +292,11 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
       // links within a diameter of their constraint (or all, if more than the capacity); the
       // later sweeps visit only those.
       auto object = [&](int ci, int j) {
+        // Far from the collider: neither a candidate nor violated (the bound is below the gap).
+        if (sweep == 0 && LinkColliderGapLowerBound(colliders[ci], x.col(j), x.col(j + 1),
+                                                    model.radius_m) >= min_gap + def.diameter_m) {
+          return;
+        }
         const LinkColliderGap gap =
             CalcLinkColliderGap(colliders[ci], x.col(j), x.col(j + 1), model.radius_m);
         if (sweep == 0 && gap.gap_m < min_gap + def.diameter_m) {
@@ -309,8 +330,13 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     }
     if (strain_limit > 0.0 && sweep < kStrainSweeps) {
       // Link lengths into [1 - limit, 1 + limit] rest lengths, all links at once.
+      w.x_sweep_W = x;
       const StrainBandResult band = ProjectStrainBand(model, w.inverse_mass, strain_limit,
                                                       kStrainIterations, x, w.strain_band);
+      ++clock;
+      for (int i = 0; i < model.num_nodes; ++i) {
+        if ((x.col(i).array() != w.x_sweep_W.col(i).array()).any()) w.node_moved_at[i] = clock;
+      }
       result.strain_corrections += band.corrected_links;
       residual = std::max(residual, band.max_violation_m);
     }

@@ -123,6 +123,13 @@ struct ThreadWorkspace {
   int projection_sweeps = 0;
   double projection_residual_m = 0.0;
   int projection_parts = 0;  // the step's motion was projected in this many parts
+  // The contact projection's bookkeeping of what changed: per node the moment (a count of the
+  // projection's pair tests) it last moved, per candidate pair the moment it was last found
+  // satisfied; a pair satisfied after its nodes' last moves is not tested again. The nodes at
+  // the start of the strain-band solve, to see which it moved.
+  Eigen::VectorXi node_moved_at;
+  Eigen::VectorXi pair_checked_at;
+  Eigen::Matrix3Xd x_sweep_W;
   // The contact projection's link-length solve (strain band): inverse node masses (0 for
   // grasped nodes) and the tridiagonal solve's scratch.
   Eigen::VectorXd inverse_mass;
