@@ -16,14 +16,18 @@ struct ThreadModel;
 
 // Pre-sized scratch of ProjectStrainBand (num_links entries each).
 struct StrainBandScratch {
-  Eigen::Matrix3Xd e;      // unit link directions
-  Eigen::VectorXd c;       // constraint value: l - band edge outside the band, else 0
-  Eigen::VectorXd diag;    // J W J^T, diagonal
-  Eigen::VectorXd off;     // J W J^T, (j, j + 1)
-  Eigen::VectorXd lambda;  // solution
-  Eigen::VectorXd work;    // Thomas algorithm
-  Eigen::VectorXi active;  // 0 free, +1 / -1 held (from above / below the band)
-  Eigen::Matrix3Xd dx;     // a Newton step's node moves (num_links + 1 columns)
+  Eigen::Matrix3Xd e;         // unit link directions
+  Eigen::VectorXd c;          // constraint value: l - band edge outside the band, else 0
+  Eigen::VectorXd diag;       // J W J^T, diagonal
+  Eigen::VectorXd off;        // J W J^T, (j, j + 1)
+  Eigen::VectorXd lambda;     // solution
+  Eigen::VectorXd work;       // Thomas algorithm
+  Eigen::VectorXi active;     // 0 free, +1 / -1 held (from above / below the band)
+  Eigen::Matrix3Xd dx;        // a Newton step's node moves (num_links + 1 columns)
+  Eigen::VectorXd violation;  // per link: violation of the band / rest length (0 inside)
+  Eigen::VectorXi nodes;      // the nodes a Newton step moves (num_links + 1)
+  Eigen::VectorXi window;     // the links touching them
+  Eigen::VectorXi in_window;  // per link: 1 while listed in window (cleared after use)
 };
 StrainBandScratch MakeStrainBandScratch(int num_links);
 

@@ -323,8 +323,17 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
           }
         }
       } else {
+        // As for the pairs: a candidate found satisfied after its nodes' last moves is
+        // satisfied still (the colliders do not move during the projection).
         for (int k = 0; k < num_candidates; ++k) {
-          object(w.object_candidates[k].b, w.object_candidates[k].a);
+          const LinkPair& c = w.object_candidates[k];
+          if (sweep > 1 &&
+              w.object_checked_at[k] > std::max(w.node_moved_at[c.a], w.node_moved_at[c.a + 1])) {
+            continue;
+          }
+          ++clock;
+          w.object_checked_at[k] = clock;
+          object(c.b, c.a);
         }
       }
     }

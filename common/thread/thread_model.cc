@@ -92,6 +92,7 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.inverse_mass = Eigen::VectorXd::Zero(n);
   w.node_moved_at = Eigen::VectorXi::Zero(n);
   w.pair_checked_at = Eigen::VectorXi::Zero(model.contact_capacity);
+  w.object_checked_at = Eigen::VectorXi::Zero(model.contact_capacity);
   w.x_sweep_W = Eigen::Matrix3Xd::Zero(3, n);
   w.strain_band = MakeStrainBandScratch(model.num_links);
   w.self_contacts.assign(model.contact_capacity, SelfContact{});

@@ -129,6 +129,7 @@ struct ThreadWorkspace {
   // the start of the strain-band solve, to see which it moved.
   Eigen::VectorXi node_moved_at;
   Eigen::VectorXi pair_checked_at;
+  Eigen::VectorXi object_checked_at;  // the same per (link, collider) candidate
   Eigen::Matrix3Xd x_sweep_W;
   // The contact projection's link-length solve (strain band): inverse node masses (0 for
   // grasped nodes) and the tridiagonal solve's scratch.
