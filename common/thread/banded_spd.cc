@@ -5,6 +5,7 @@
 #include <span>
 
 #include "common/base/check.h"
+#include "common/thread/vector_clones.h"
 
 namespace microdex::thread {
 
@@ -79,18 +80,8 @@ void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
 
 namespace {
 
-// The multi-column substitutions' inner loop, row[0..count) -= l * other[0..count), over the
-// contiguous columns of a row-major block. Built for AVX-512 and AVX2 besides the baseline and
-// chosen at load by the CPU: each element is one multiply and one subtract in every build
-// (the project compiles with -ffp-contract=off, so no build fuses them), so every machine
-// computes the same bits; only the vector width differs.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
-    !defined(__SANITIZE_ADDRESS__)
-#define MICRODEX_VECTOR_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define MICRODEX_VECTOR_CLONES
-#endif
-
+// The multi-column substitutions run over the contiguous columns of a row-major block, vectorised
+// (vector_clones.h: the same bits on every machine).
 // Rows top..size-1 of L Y = B (forward) or L^T X = Y (backward) in place on the row-major b
 // (stride doubles per row): the forward pass runs each row over the columns that start at or
 // above it (first_rows ascending), the backward pass over all `cols`.
