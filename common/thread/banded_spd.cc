@@ -80,11 +80,10 @@ void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
 
 namespace {
 
-// The multi-column substitutions run over the contiguous columns of a row-major block, vectorised
-// (vector_clones.h: the same bits on every machine).
 // Rows top..size-1 of L Y = B (forward) or L^T X = Y (backward) in place on the row-major b
-// (stride doubles per row): the forward pass runs each row over the columns that start at or
-// above it (first_rows ascending), the backward pass over all `cols`.
+// (stride doubles per row), each row's update vectorised over its contiguous columns
+// (vector_clones.h: the same bits on every machine): the forward pass runs each row over the
+// columns that start at or above it (first_rows ascending), the backward pass over all `cols`.
 MICRODEX_VECTOR_CLONES
 void SubstituteRows(const double* band, int band_rows, const double* inv_diag, int size, int p,
                     bool forward, int top, double* b, int stride, const int* first_rows, int cols) {
