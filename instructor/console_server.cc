@@ -305,16 +305,13 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
   out += j.str();
 }
 
-// Deltas only: under the registry's lock, a frame for each station whose tool state is new
-// since its last frame (the others cost a comparison), the station list at kStatusRate_hz or
-// when the stations change; nothing of the registry is copied. The frames go out after the
-// lock is released.
+// Deltas only: under the registry's lock, a frame for each station whose newest tool state
+// FrameForwarder says is due (the others cost a comparison), the station list at
+// kStatusRate_hz or when the stations change; nothing of the registry is copied. The frames
+// go out after the lock is released. Called every poll period (2 ms).
 void ConsoleServer::Poll() {
   const std::int64_t now = MonotonicNowNs();
-  const bool frames_due = now >= next_frames_ns_;
   bool status_due = now >= next_status_ns_;
-  if (!frames_due && !status_due) return;
-  if (frames_due) next_frames_ns_ = now + static_cast<std::int64_t>(1e9 / kFrameRate_hz);
   std::vector<std::string> ids;
   if (auth_ && status_due) {
     // An open page keeps its session in use; a session that ended (logout, its lifetime)
@@ -328,10 +325,9 @@ void ConsoleServer::Poll() {
     const std::size_t i = ids.size();
     ids.push_back(v.info.header.station_id);
     if (status_due) AppendStationJson(v, i, now, status);
-    if (!frames_due || !v.tool.latest) return;
-    std::uint64_t& sent = frames_sent_[v.info.header.station_id];
-    if (v.tool.count == sent) return;
-    sent = v.tool.count;
+    if (!v.tool.latest) return;
+    auto forwarder = forwarders_.try_emplace(v.info.header.station_id, kFrameRate_hz).first;
+    if (!forwarder->second.Due(v.tool.count, v.tool.received_ns, now)) return;
     if (frames_.size() <= i) frames_.resize(i + 1);
     if (!frames_[i]) frames_[i] = std::make_unique<view::FrameBytes>();
     view::FrameSource src;

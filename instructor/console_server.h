@@ -1,10 +1,10 @@
 #pragma once
 // The instructor's live console (`microdex-instructor --http PORT`): serves the console page
 // (instructor/page, with the shared front-end of common/view) and, over its WebSocket, one
-// binary state frame per station whenever its mirrored tool state is new (at most
-// kFrameRate_hz per station), and a JSON station list at kStatusRate_hz: the cue kinds with
-// their parameter limits, and per station trainee, scene, presence, loop health, live score,
-// and the cues this console sent with the station's acknowledgement (applied at step N, or
+// binary state frame per station as soon as its mirrored tool state arrives (at most about
+// kFrameRate_hz per station: FrameForwarder), and a JSON station list at kStatusRate_hz: the cue
+// kinds with their parameter limits, and per station trainee, scene, presence, loop health, live
+// score, and the cues this console sent with the station's acknowledgement (applied at step N, or
 // rejected and why). The page sends "cue STATION KIND PARAM|off" (every kind of
 // common/cues/cue_kind.h). The scene of a station (/scene/ID.json) comes from the files it
 // sent on the SceneDescription topic, checked against the hash in its StationInfo, written
@@ -31,6 +31,39 @@
 #include "instructor/instructor.h"
 
 namespace microdex::instructor {
+
+// When a station's state goes to the console page: as soon as it arrives (the server polls
+// every view::ViewServerConfig::poll_period), at most about rate_hz per station. A state that
+// arrives sooner than min_interval after the last one sent is skipped, not held: holding it
+// for the slot would show it late by up to the mirror period; the next arrival is sent
+// fresh. A skipped state that stays the newest for a whole period (the station went quiet)
+// is sent then, so the page ends on the station's last state. A station mirroring at 60 Hz
+// is forwarded at 30 Hz, each state within a poll period of its arrival. Pure: tested alone.
+class FrameForwarder {
+ public:
+  explicit FrameForwarder(double rate_hz)
+      : min_interval_ns_(static_cast<std::int64_t>(0.8e9 / rate_hz)),
+        settle_ns_(static_cast<std::int64_t>(1e9 / rate_hz)) {}
+  // count: the station's tool-state count (0: none yet); received_ns: when the newest one
+  // arrived; now_ns: the same clock. True: send the newest state now.
+  bool Due(std::uint64_t count, std::int64_t received_ns, std::int64_t now_ns) {
+    if (count == 0 || count == sent_count_) return false;
+    const bool fresh = count != seen_count_;
+    seen_count_ = count;
+    const bool send = fresh ? sent_count_ == 0 || now_ns - sent_ns_ >= min_interval_ns_
+                            : now_ns - received_ns >= settle_ns_;
+    if (send) {
+      sent_count_ = count;
+      sent_ns_ = now_ns;
+    }
+    return send;
+  }
+
+ private:
+  std::int64_t min_interval_ns_, settle_ns_;
+  std::uint64_t seen_count_ = 0, sent_count_ = 0;
+  std::int64_t sent_ns_ = 0;
+};
 
 // HTTPS and login (all empty: plain HTTP, no login, as for the demo on one machine).
 struct ConsoleSecurity {
@@ -79,13 +112,13 @@ class ConsoleServer {
 
   Instructor& instructor_;
   std::map<std::string, std::vector<SentCue>> sent_;  // by station
-  std::map<std::string, std::uint64_t> frames_sent_;  // tool-state count at the last frame
+  std::map<std::string, FrameForwarder> forwarders_;  // by station
   std::map<std::uint64_t, std::string> scene_json_;   // by the scene files' hash
   std::map<std::string, std::string> scene_logged_;   // station → the last scene error logged
   std::string scene_dir_;                             // where received scenes are written
   std::vector<std::string> ids_;                      // slot → station id, as last listed
   std::vector<std::unique_ptr<view::FrameBytes>> frames_;  // per slot, reused
-  std::int64_t next_frames_ns_ = 0, next_status_ns_ = 0;
+  std::int64_t next_status_ns_ = 0;
   std::size_t first_slot_ = 0;
   std::unique_ptr<ConsoleAuth> auth_;  // login on when set
   bool https_ = false;

@@ -1,11 +1,16 @@
 // The instructor's live console: one tile per mirrored station (up to 8 drawn; click to
 // enlarge), drawn with the shared scene objects (common/view/src) at the tiles' level of
-// detail by one renderer into scissored viewports; a cue panel per station with the
-// station's acknowledgements; a score table.
+// detail, each into a canvas of its own; a cue panel per station with the station's
+// acknowledgements; a score table.
 //
-// Update budget: the canvas keeps its pixels between frames (preserveDrawingBuffer), so a
-// tile is drawn again only when it has a new state (or the layout moved); the enlarged tile
-// whenever it has one, the others oldest first, at most `budget` of them per animation frame.
+// A canvas per tile, not one canvas under the whole page: with software compositing (no GPU)
+// the browser reads every WebGL canvas it presents back from the renderer, and recomposites
+// what changed, so a page-wide canvas cost a full-page read-back and composite per animation
+// frame however few tiles were drawn; a tile's canvas costs only when that tile is drawn.
+//
+// Update budget: a canvas shows its last picture until it is drawn again, so a tile is drawn
+// only when it has a new state (or its size changed); the enlarged tile whenever it has one,
+// the others oldest first, at most `budget` of them per animation frame.
 // The budget adapts to the frame time (more tiles while frames take under 1/25 s, fewer
 // above 1/18 s; `?budget=N` fixes it). A frame is applied to its tile only when the tile is
 // drawn (newer frames replace a waiting one), and its latency is taken then.
@@ -44,11 +49,12 @@ interface RejectedJson { total: number; by_topic: Record<string, number>; latest
 class Tile {
   readonly el: HTMLDivElement;
   readonly viewport: HTMLDivElement;
+  readonly canvas: HTMLCanvasElement;
+  renderer: THREE.WebGLRenderer | null = null; // made with the scene
+  size = ''; // the canvas's size in pixels, as last set
   readonly label: HTMLDivElement; // the caption bar above the picture
   readonly note: HTMLDivElement; // why there is no scene, over the empty picture
-  rectKey = '';
-  rect: DOMRect | null = null;
-  drawn = false; // its picture is on the canvas at its current place
+  drawn = false; // its canvas shows its picture at the canvas's current size
   drawnAt = 0; // performance.now() of its last drawing
   framedVersion = -1; // the thread extent the camera was last fitted to
   private acksHtml = '';
@@ -72,6 +78,8 @@ class Tile {
     this.el.appendChild(this.label);
     this.viewport = document.createElement('div');
     this.viewport.className = 'viewport';
+    this.canvas = document.createElement('canvas');
+    this.viewport.appendChild(this.canvas);
     this.note = document.createElement('div');
     this.note.className = 'note';
     this.viewport.appendChild(this.note);
@@ -141,6 +149,10 @@ class Tile {
     this.world.add(this.view.root);
     this.world.background = new THREE.Color(0x101418);
     this.camera = microscopeCamera(s, 16 / 9);
+    if (!this.renderer) {
+      this.renderer = new THREE.WebGLRenderer({ canvas: this.canvas, antialias: false });
+      this.renderer.setPixelRatio(1);
+    }
     this.drawn = false;
   }
 
@@ -186,6 +198,14 @@ class Tile {
     }
   }
 
+  // Off the page, its WebGL context given back (a page has a limited number of them).
+  dispose(): void {
+    this.el.remove();
+    this.renderer?.dispose();
+    this.renderer?.forceContextLoss();
+    this.renderer = null;
+  }
+
   applyPending(): void {
     if (!this.pending || !this.view) return;
     this.view.apply(this.pending);
@@ -193,6 +213,7 @@ class Tile {
     const mask = this.pending.scalars[S.activeCues];
     for (const [bit, el] of this.inForce) {
       const on = (mask & (1 << bit)) !== 0;
+      if (el.classList.contains('on') === on) continue; // a DOM change costs a style pass
       el.classList.toggle('on', on);
       // Until the instructor touches a kind, its switch shows the station's own state (a
       // scene may start with cues on).
@@ -213,13 +234,6 @@ function esc(s: string): string {
 }
 
 function main(): void {
-  const canvas = document.getElementById('canvas') as HTMLCanvasElement;
-  // The canvas keeps its pixels between frames: a tile without news is not drawn again.
-  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
-  renderer.autoClear = true;
-  renderer.setPixelRatio(1);
-  renderer.setSize(window.innerWidth, window.innerHeight, false);
-  renderer.setScissorTest(true);
   const grid = document.getElementById('grid')!;
   const tbody = document.querySelector('#scores tbody')!;
   const tiles = new Map<string, Tile>();
@@ -228,7 +242,10 @@ function main(): void {
   const probe = {
     stations: [] as StationJson[], framesReceived: 0, badFrames: 0, fps: 0, tilesDrawn: 0,
     framesBySlot: [] as number[], errors: [] as string[], latencyMs: [] as number[],
-    receivedMs: [] as number[], budget: 0, tileDrawsPerSecond: 0, tileDrawsTotal: 0,
+    receivedMs: [] as number[],
+    encodedMs: [] as number[], // tick stamp → the frame encoded by the instructor
+    waitedMs: [] as number[], // of which the state waited at the instructor
+    budget: 0, tileDrawsPerSecond: 0, tileDrawsTotal: 0,
     sceneNames: {} as Record<string, string>, // station → the name of the scene its tile draws
     rejected: { total: 0, by_topic: {}, latest: '' } as RejectedJson,
   };
@@ -252,7 +269,7 @@ function main(): void {
           probe.sceneNames[s.id] = tile.view?.scene.name ?? '';
         }
         for (const [id, tile] of tiles) {
-          if (!slots.includes(id)) { tile.el.remove(); tiles.delete(id); }
+          if (!slots.includes(id)) { tile.dispose(); tiles.delete(id); }
         }
         document.getElementById('count')!.textContent = `${list.length} station(s)`;
         const rej = m.rejected as RejectedJson | undefined;
@@ -296,7 +313,11 @@ function main(): void {
         continue;
       }
       ++probe.framesReceived;
-      if (probe.receivedMs.length < 100000) probe.receivedMs.push(t.receivedMs - f.scalars[S.stampMs]);
+      if (probe.receivedMs.length < 100000) {
+        probe.receivedMs.push(t.receivedMs - f.scalars[S.stampMs]);
+        probe.encodedMs.push(f.scalars[S.sentMs] - f.scalars[S.stampMs]);
+        probe.waitedMs.push(f.scalars[S.toolAgeMs]);
+      }
       probe.framesBySlot[f.slot] = (probe.framesBySlot[f.slot] ?? 0) + 1;
       const tile = tiles.get(slots[f.slot]);
       if (tile) {
@@ -306,7 +327,6 @@ function main(): void {
     }
   };
 
-  window.addEventListener('resize', () => renderer.setSize(window.innerWidth, window.innerHeight, false));
   const params = new URLSearchParams(location.search);
   const fixedBudget = params.has('budget') ? Math.max(1, Number(params.get('budget'))) : 0;
   let budget = fixedBudget || 2;
@@ -315,32 +335,20 @@ function main(): void {
   let lastFrameAt = performance.now();
   let frameMsAvg = 0;
   let tileDraws = 0;
-  let lastW = 0;
-  let lastH = 0;
-  const clear = new THREE.Color(0x15191d);
-  const drawTile = (tile: Tile, h: number) => {
+  const drawTile = (tile: Tile) => {
     const f = tile.pending;
     tile.applyPending();
     if (f && probe.latencyMs.length < 100000) {
       probe.latencyMs.push(performance.timeOrigin + performance.now() - f.scalars[S.stampMs]);
     }
-    const r = tile.rect!;
-    const aspect = r.width / r.height;
-    if (Math.abs(tile.camera!.aspect - aspect) > 1e-3) {
-      tile.camera!.aspect = aspect;
-      tile.camera!.updateProjectionMatrix();
-      tile.framedVersion = -1;
-      tile.frameThread();
-    }
-    renderer.setViewport(r.left, h - r.bottom, r.width, r.height);
-    renderer.setScissor(r.left, h - r.bottom, r.width, r.height);
-    renderer.render(tile.world, tile.camera!);
+    tile.renderer!.render(tile.world, tile.camera!);
     tile.drawn = true;
     tile.drawnAt = performance.now();
     ++tileDraws;
     ++probe.tileDrawsTotal;
   };
-  renderer.setAnimationLoop(() => {
+  const loop = () => {
+    requestAnimationFrame(loop);
     const now = performance.now();
     frameMsAvg = frameMsAvg === 0 ? now - lastFrameAt : 0.9 * frameMsAvg + 0.1 * (now - lastFrameAt);
     lastFrameAt = now;
@@ -348,32 +356,27 @@ function main(): void {
       if (frameMsAvg > 1000 / 18 && budget > 1) budget -= 1;
       else if (frameMsAvg < 1000 / 25 && budget < MAX_TILES) budget += 1;
     }
-    const w = window.innerWidth;
     const h = window.innerHeight;
     takeFrames();
-    // Where each tile is; a moved layout clears the canvas and every tile is drawn again.
-    let moved = w !== lastW || h !== lastH;
-    lastW = w;
-    lastH = h;
+    // Where each tile is; a canvas whose size changed is cleared, and its tile drawn again.
     const visible: Tile[] = [];
     for (const tile of tiles.values()) {
-      if (!tile.view || !tile.camera) continue;
+      if (!tile.view || !tile.camera || !tile.renderer) continue;
       const r = tile.viewport.getBoundingClientRect();
-      const key = `${r.left},${r.top},${r.width},${r.height}`;
-      if (key !== tile.rectKey) {
-        tile.rectKey = key;
-        moved = true;
+      const w = Math.round(r.width);
+      const ht = Math.round(r.height);
+      if (r.bottom < 0 || r.top > h || w < 2 || ht < 2) continue;
+      const size = `${w}x${ht}`;
+      if (size !== tile.size) {
+        tile.size = size;
+        tile.renderer.setSize(w, ht, false);
+        tile.camera.aspect = w / ht;
+        tile.camera.updateProjectionMatrix();
+        tile.framedVersion = -1;
+        tile.frameThread();
+        tile.drawn = false;
       }
-      tile.rect = r;
-      if (r.bottom < 0 || r.top > h || r.width < 2 || r.height < 2) continue;
       visible.push(tile);
-    }
-    if (moved) {
-      renderer.setScissor(0, 0, w, h);
-      renderer.setViewport(0, 0, w, h);
-      renderer.setClearColor(clear);
-      renderer.clear();
-      for (const tile of tiles.values()) tile.drawn = false;
     }
     // The enlarged tile and any tile not on the canvas yet, then the others with a new state,
     // oldest picture first, within the budget.
@@ -385,7 +388,7 @@ function main(): void {
         if (small >= budget) continue;
         ++small;
       }
-      drawTile(tile, h);
+      drawTile(tile);
     }
     probe.tilesDrawn = visible.filter((t) => t.drawn).length;
     probe.budget = budget;
@@ -399,7 +402,8 @@ function main(): void {
       tileDraws = 0;
       fpsStart = t;
     }
-  });
+  };
+  requestAnimationFrame(loop);
   void activeCueNames;
 }
 

@@ -4,6 +4,8 @@
 // CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
 // node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N] [--limit S]
 //   [--only station|console] [--replay 0|1] [--instructor_args "ARGS"] (e.g. "--inputs")
+//   [--trace FILE] (a Chrome trace of the live console's measured window, for chrome://tracing
+//   or Perfetto)
 // Bounded: every wait has its own time-out and the whole run stops after --limit seconds
 // (default 300), writing what it measured so far; each step is reported on stderr with the
 // time since the start.
@@ -22,7 +24,7 @@ const here = dirname(fileURLToPath(import.meta.url));
 const a = args({ web: join(sourceDir, 'build/web'), bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
                  seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0',
                  width: '1280', height: '720', only: '', query: '', limit: '300', replay: '1',
-                 console_query: '', instructor_args: '' });
+                 console_query: '', instructor_args: '', trace: '' });
 const seconds = Number(a.seconds);
 const t0 = Date.now();
 const progress = (what) => process.stderr.write(`[${((Date.now() - t0) / 1000).toFixed(0).padStart(4)} s] ${what}\n`);
@@ -53,6 +55,7 @@ async function measurePage(page, probeName) {
     v.latencyMs.length = 0;
     v.receivedMs.length = 0;
     if (v.encodedMs) v.encodedMs.length = 0;
+    if (v.waitedMs) v.waitedMs.length = 0;
     window.__frames = 0;
     window.__tileDraws0 = v.tileDrawsTotal ?? 0;
     const count = () => { ++window.__frames; requestAnimationFrame(count); };
@@ -64,6 +67,7 @@ async function measurePage(page, probeName) {
     const v = window[p];
     return { fps: window.__frames / ((performance.now() - t0) / 1000), latency: [...v.latencyMs],
              received: [...v.receivedMs], encoded: [...(v.encodedMs ?? [])],
+             waited: [...(v.waitedMs ?? [])],
              tileDrawsPerSecond: ((v.tileDrawsTotal ?? 0) - window.__tileDraws0) / ((performance.now() - t0) / 1000),
              budget: v.budget };
   }, [probeName, start]);
@@ -130,11 +134,35 @@ try {
   await waitFor(() => cpage.evaluate((k) => window.microdexConsole?.tilesDrawn === k, n),
                 `${n} tiles drawn`, 60000);
   const cpu0 = [cpuSeconds(instructor.child.pid), stations.reduce((s, st) => s + cpuSeconds(st.child.pid), 0)];
+  let cdp = null;
+  if (a.trace) {
+    cdp = await context.newCDPSession(cpage);
+    await cdp.send('Tracing.start', {
+      transferMode: 'ReturnAsStream',
+      traceConfig: { includedCategories: ['devtools.timeline', 'disabled-by-default-devtools.timeline',
+                                          'toplevel', 'gpu', 'viz', 'cc', 'blink', 'v8', 'disabled-by-default-devtools.timeline.frame'] },
+    });
+  }
   const c = await measurePage(cpage, 'microdexConsole');
+  if (cdp) {
+    const done = new Promise((resolve) => cdp.once('Tracing.tracingComplete', resolve));
+    await cdp.send('Tracing.end');
+    const { stream } = await done;
+    const parts = [];
+    for (;;) {
+      const r = await cdp.send('IO.read', { handle: stream, size: 1 << 20 });
+      parts.push(r.base64Encoded ? Buffer.from(r.data, 'base64').toString('utf8') : r.data);
+      if (r.eof) break;
+    }
+    await cdp.send('IO.close', { handle: stream });
+    writeFileSync(a.trace, parts.join(''));
+    progress(`console: trace written to ${a.trace}`);
+  }
   const cpu1 = [cpuSeconds(instructor.child.pid), stations.reduce((s, st) => s + cpuSeconds(st.child.pid), 0)];
   const window_s = seconds + 2;
   report.console = { stations: n, width: W, height: H, fps: c.fps, latency: summary(c.latency),
-                    received: summary(c.received), tile_draws_per_s: c.tileDrawsPerSecond,
+                    received: summary(c.received), encoded: summary(c.encoded),
+                    waited_at_instructor: summary(c.waited), tile_draws_per_s: c.tileDrawsPerSecond,
                     budget: c.budget, load_during: loadavg(),
                     instructor_cpu_share: (cpu1[0] - cpu0[0]) / window_s,
                     stations_cpu_share: (cpu1[1] - cpu0[1]) / window_s };
@@ -186,5 +214,9 @@ for (const [name, r, goal] of [[`station, ${a.scene}, ${W}x${H}`, report.station
 }
 if (report.station) {
   console.log(`station: tick stamp → frame encoded by the publisher thread p50 / p99 ${f(report.station.encoded.p50_ms)} / ${f(report.station.encoded.p99_ms)} ms`);
+}
+if (report.console) {
+  console.log(`console: tick stamp → frame encoded by the instructor p50 / p99 ${f(report.console.encoded.p50_ms)} / ${f(report.console.encoded.p99_ms)} ms, ` +
+              `of which the state waited there ${f(report.console.waited_at_instructor.p50_ms)} / ${f(report.console.waited_at_instructor.p99_ms)} ms`);
 }
 console.log(`load average before ${report.machine_load.map((x) => x.toFixed(1)).join(' ')}, after ${report.machine_load_after.map((x) => x.toFixed(1)).join(' ')}`);
