@@ -21,9 +21,10 @@ scene::SceneModel QuizScene() {
                           "/assets/scenes/knot_topology.yaml");
 }
 
-// The square, granny and surgeon's knots shown are the ones tied by the thread module around a
-// stitch (assets/knots, 193 nodes), read from the closure: tied, not twisted pairs; the second
-// item of a class is the mirror image of the first. A tied knot's file that is missing is named
+// The square, granny and surgeon's knots and the half hitches shown are the ones tied by the
+// thread module around a stitch (assets/knots, 193 nodes), read from the closure: tied, not
+// twisted pairs (a half hitch's closure is a trefoil); the second item of a class is the mirror
+// image of the first. A tied knot's file that is missing is named
 // with the scene's file, line and field.
 TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
   const scene::SceneModel scene = QuizScene();
@@ -31,7 +32,8 @@ TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
   int tied = 0;
   for (std::size_t i = 0; i < items.size(); ++i) {
     if (items[i] != knot::StitchKnotType::kSquare && items[i] != knot::StitchKnotType::kGranny &&
-        items[i] != knot::StitchKnotType::kSurgeons) {
+        items[i] != knot::StitchKnotType::kSurgeons &&
+        items[i] != knot::StitchKnotType::kHalfHitch) {
       continue;
     }
     const std::vector<Eigen::Vector3d> shape = scene.knots->ItemShape(i);
@@ -40,7 +42,7 @@ TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
     EXPECT_EQ(a.type, items[i]) << i;
     ++tied;
   }
-  EXPECT_EQ(tied, 6);
+  EXPECT_EQ(tied, 8);
   const std::vector<Eigen::Vector3d> first = scene.knots->ItemShape(0);   // square
   const std::vector<Eigen::Vector3d> second = scene.knots->ItemShape(6);  // square again
   ASSERT_EQ(first.size(), second.size());
