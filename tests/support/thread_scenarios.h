@@ -92,6 +92,14 @@ struct TieReport {
   Eigen::Matrix3Xd x_final_W;    // node positions at the end
 };
 
+// The tension each throw of the tie matrix is pulled to (`microdex-bench thread --tie-matrix`,
+// `--tie`, and the matrix's cases in thread_knot_tying_test) before the 20 mN hold: the same
+// for every knot, node count and friction. At 10 mN (the scripts' default) a double overhand's
+// core was still loose after the pull at 385 nodes, μ 0.3, and drew together in the hold
+// (its centre moved 1.05 mm); at 20 mN a surgeon's knot lost its single throw in the pull (257
+// nodes, μ 0.2); at 15 mN all 60 cases tie and hold (common/thread/README.md, "Tie and hold").
+inline constexpr double kTieMatrixPullTension_N = 15e-3;
+
 // Ties the throws on a fresh thread of `def` (laid out and grasped by SetUpKnotTying; a second
 // throw is tied by the other hand 3 mm beyond the knot), each with its script's hold and pull
 // tensions, then holds (`hold`). Times every step; after every step the brute-force distance.

@@ -6,13 +6,15 @@
 //   microdex-bench thread --accuracy --json FILE
 //   microdex-bench thread --adversarial [--steps 1000000] [--json FILE]
 //   microdex-bench thread --tie 2 | 1r,1l | 2r,1l [--nodes N] [--stitch] [--obj FILE] [--json FILE]
-//                         tie the throws, pull, hold 20 mN for 2 s; report per phase;
+//                         tie the throws, pull each to 15 mN (--pull-tension N, newtons),
+//                         hold 20 mN for 2 s; report per phase;
 //                         --stitch: around a stitch (an 18 mm thread through three rods);
 //                         --stitch-geometry X,DEPTH,OFFSET,ROD_R,GUIDE_R,START,LENGTH (mm)
 //                         --force-limited-pull: each hand limits its pull to the pull tension;
 //                         --obj with --stitch: in the tissue's frame (the knot quiz's shapes)
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
-//                         five knots x 129..513 nodes x mu 0.1..0.3 (README table)
+//                         five knots x 129..513 nodes x mu 0.1..0.3 (README table), the same
+//                         pull tension for every case
 //   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
 //   --quick                                              reduced sizes (CTest)
 #include <algorithm>
@@ -24,6 +26,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -496,17 +499,21 @@ void PrintPhase(const TiePhaseReport& r) {
 // Ties the throws of `spec` (ParseKnotThrows: "2" double overhand, "1r,1l" square, "1r,1r"
 // granny, "2r,1l" surgeon's), pulls, holds 20 mN for 2 s, and reports per phase.
 // With `stitch`: around it (KnotStitchDef), a thread of stitch_length_m.
-int RunTie(const std::string& spec, int nodes, bool force_limited_pull, const KnotStitchDef* stitch,
-           double stitch_length_m, const std::string& obj, const std::string& json,
-           const ContactOverrides& contact) {
+int RunTie(const std::string& spec, int nodes, bool force_limited_pull, double pull_tension_N,
+           const KnotStitchDef* stitch, double stitch_length_m, const std::string& obj,
+           const std::string& json, const ContactOverrides& contact) {
   ThreadDef def = contact.Apply(KnotTyingDef(nodes));
   if (stitch != nullptr) def.length_m = stitch_length_m;
   std::printf(
-      "tie %s, %d nodes%s: exact_contact_pairs %d, friction %.3g (thread), %.3g (objects)\n",
-      spec.c_str(), nodes, stitch != nullptr ? ", around a stitch" : "", def.exact_contact_pairs,
-      def.friction_coefficient, def.object_friction_coefficient);
+      "tie %s, %d nodes%s: pull %.3g mN, exact_contact_pairs %d, friction %.3g (thread), %.3g "
+      "(objects)\n",
+      spec.c_str(), nodes, stitch != nullptr ? ", around a stitch" : "", pull_tension_N * 1e3,
+      def.exact_contact_pairs, def.friction_coefficient, def.object_friction_coefficient);
   std::vector<KnotThrowOptions> throws = ParseKnotThrows(spec);
-  for (KnotThrowOptions& t : throws) t.force_limited_pull = force_limited_pull;
+  for (KnotThrowOptions& t : throws) {
+    t.force_limited_pull = force_limited_pull;
+    t.pull_tension_N = pull_tension_N;
+  }
   const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{}, PrintPhase, stitch);
   std::printf(
       "knot %s (after the pull %s), min distance %.3f d, held %s (knot moved %.3g mm along the "
@@ -530,7 +537,8 @@ int RunTie(const std::string& spec, int nodes, bool force_limited_pull, const Kn
     knot::WriteObjPolyline(
         obj, tissue_frame,
         {"microdex-bench thread --tie " + spec + " --nodes " + std::to_string(nodes) + " --stitch" +
-             (force_limited_pull ? " --force-limited-pull" : "") + ": " + r.knot,
+             (force_limited_pull ? " --force-limited-pull" : "") + " --pull-tension " +
+             Num(pull_tension_N) + ": " + r.knot,
          "the tissue's frame: surface z = 0, the first puncture at x = 0, metres"});
   } else if (!obj.empty()) {
     std::ostringstream out;
@@ -554,8 +562,9 @@ bool Selected(const std::string& only, const std::string& spec) {
 
 // The matrix of the README: five knots x node counts x thread-on-thread friction, one run each,
 // the same script and tensions. Writes the JSON of every run and a markdown table.
-int RunTieMatrix(bool quick, const std::string& only, const std::string& json,
-                 const std::string& markdown, const ContactOverrides& contact) {
+int RunTieMatrix(bool quick, const std::string& only, double pull_tension_N,
+                 const std::string& json, const std::string& markdown,
+                 const ContactOverrides& contact) {
   struct Knot {
     const char* name;
     const char* spec;
@@ -571,10 +580,11 @@ int RunTieMatrix(bool quick, const std::string& only, const std::string& json,
   const std::vector<double> mus =
       quick ? std::vector<double>{0.2} : std::vector<double>{0.1, 0.2, 0.3};
   std::ostringstream runs, table;
-  table
-      << "| knot | nodes | mu | knot after hold | tied + held | min dist / d | steps/s (median) | "
-         "tick p99 [us] |\n|---|---:|---:|---|---|---:|---:|---:|\n";
-  int ok = 0, total = 0;
+  table << "| knot | nodes | μ | knot after hold | tied + held, ≥ 0.95 d | min distance / d | knot "
+           "moved in hold [mm] | max strain tie / hold | capstan: driver / bound | steps/s "
+           "(median, whole run) | tick p99 [µs] |\n"
+           "|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|\n";
+  int ok = 0, total = 0, capstan_exceeded = 0, two_throw = 0;
   const auto t0 = Clock::now();
   int selected = 0;
   for (const Knot& k : knots) selected += Selected(only, k.spec) ? 1 : 0;
@@ -586,7 +596,9 @@ int RunTieMatrix(bool quick, const std::string& only, const std::string& json,
         ContactOverrides c = contact;
         c.friction = mu;
         const ThreadDef def = c.Apply(KnotTyingDef(n));
-        const TieReport r = RunKnotTie(def, ParseKnotThrows(k.spec), KnotHoldOptions{});
+        std::vector<KnotThrowOptions> throws = ParseKnotThrows(k.spec);
+        for (KnotThrowOptions& t : throws) t.pull_tension_N = pull_tension_N;
+        const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{});
         const bool good = r.knot == k.expected && r.held && r.min_distance_over_d >= 0.95;
         ok += good ? 1 : 0;
         ++total;
@@ -599,18 +611,39 @@ int RunTieMatrix(bool quick, const std::string& only, const std::string& json,
             good ? "ok" : "FAIL");
         std::fflush(stdout);
         runs << (total > 1 ? ",\n  " : "\n  ") << TieJson(k.spec, n, mu, r);
-        char row[256];
-        std::snprintf(row, sizeof(row), "| %s | %d | %.1f | %s | %s | %.3f | %.0f | %.0f |\n",
-                      k.name, n, mu, r.knot.c_str(), good ? "yes" : "**no**", r.min_distance_over_d,
-                      r.steps_per_s, r.tick_p99_us);
+        // The capstan check of thread_knot_tying_test on the second throw's exit: the driver's
+        // largest pull against exp(3 pi mu) times the standing hand's largest.
+        std::string capstan = "–";
+        for (const TiePhaseReport& p : r.phases) {
+          if (p.phase != "exit" || p.throw_index != 2) continue;
+          const double bound = std::exp(3.0 * std::numbers::pi * mu) * p.f_standing_max_N;
+          const bool exceeded = p.f_driver_max_N > bound;
+          char cell[96];
+          std::snprintf(cell, sizeof(cell), "%.1f / %.1f mN%s", p.f_driver_max_N * 1e3, bound * 1e3,
+                        exceeded ? " **exceeded**" : "");
+          capstan = cell;
+          ++two_throw;
+          capstan_exceeded += exceeded ? 1 : 0;
+        }
+        char row[512];
+        std::snprintf(row, sizeof(row),
+                      "| %s | %d | %.1f | %s | %s | %.3f | %.2f | %.1f %% / %.1f %% | %s | %.0f | "
+                      "%.0f |\n",
+                      k.name, n, mu, r.knot.c_str(), good ? "yes" : "**NO**", r.min_distance_over_d,
+                      r.hold_shift_m * 1e3, 100.0 * r.max_strain, 100.0 * r.max_strain_hold,
+                      capstan.c_str(), r.steps_per_s, r.tick_p99_us);
         table << row;
       }
     }
   }
-  std::printf("%d of %d tied and held with min distance >= 0.95 d\n%s", ok, total,
-              table.str().c_str());
-  if (!json.empty())
-    WriteFile(json, "{\"study\": \"tie matrix\", \"runs\": [" + runs.str() + "\n]}\n");
+  std::printf(
+      "pull %.3g mN: %d of %d tied and held with min distance >= 0.95 d; capstan bound exceeded "
+      "in %d of %d two-throw knots\n%s",
+      pull_tension_N * 1e3, ok, total, capstan_exceeded, two_throw, table.str().c_str());
+  if (!json.empty()) {
+    WriteFile(json, "{\"study\": \"tie matrix\", \"pull_tension_N\": " + Num(pull_tension_N) +
+                        ", \"runs\": [" + runs.str() + "\n]}\n");
+  }
   if (!markdown.empty()) WriteFile(markdown, table.str());
   return ok == total ? 0 : 1;
 }
@@ -709,6 +742,7 @@ int Main(int argc, char** argv) {
   int nodes = 257;
   bool tie_matrix = false;
   std::string json, plot, tie, obj, markdown, only;
+  double pull_tension_N = kTieMatrixPullTension_N;
   ContactOverrides contact;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -754,6 +788,11 @@ int Main(int argc, char** argv) {
       tie_matrix = true;
     } else if (arg == "--only") {
       only = value("--only");
+    } else if (arg == "--pull-tension") {
+      pull_tension_N = std::atof(value("--pull-tension").c_str());
+      if (!(pull_tension_N > 0.0 && pull_tension_N < 1.0)) {
+        throw std::invalid_argument("--pull-tension: expected a tension in (0, 1) N");
+      }
     } else if (arg == "--markdown") {
       markdown = value("--markdown");
     } else if (arg == "--friction") {
@@ -780,7 +819,7 @@ int Main(int argc, char** argv) {
           "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --adversarial "
           "[--steps N] | --tie THROWS "
           "[--nodes N] [--stitch] [--obj FILE] | --tie-matrix [--only SPEC;SPEC] [--markdown "
-          "FILE]] "
+          "FILE]] [--pull-tension N (default 0.015)] "
           "[--friction MU] "
           "[--object-friction MU] [--exact-pairs N] "
           "[--json FILE] [--quick]\n");
@@ -790,10 +829,10 @@ int Main(int argc, char** argv) {
     }
   }
   if (!tie.empty()) {
-    return RunTie(tie, nodes, force_limited_pull, stitch ? &stitch_def : nullptr, stitch_length_m,
-                  obj, json, contact);
+    return RunTie(tie, nodes, force_limited_pull, pull_tension_N, stitch ? &stitch_def : nullptr,
+                  stitch_length_m, obj, json, contact);
   }
-  if (tie_matrix) return RunTieMatrix(quick, only, json, markdown, contact);
+  if (tie_matrix) return RunTieMatrix(quick, only, pull_tension_N, json, markdown, contact);
   if (stability) return RunStability(quick, json, plot);
   if (adversarial) return RunAdversarial(quick ? 20000 : steps, json);
   if (accuracy) return RunAccuracy(quick, json);

@@ -1,7 +1,7 @@
 // Knot tying in simulation (thesis §5.5, Fig. 5.7): a scripted bimanual trajectory of two
 // grasped nodes ties an overhand, a double overhand, and two throws of the opposite (square) or
 // the same (granny) handedness or a double then a single throw (surgeon's knot), pulls each
-// throw tight and then holds both ends at 20 mN for 2 s. The same script and tensions for every
+// throw to 15 mN and then holds both ends at 20 mN for 2 s. The same script and tensions for every
 // knot, thread size and friction. After each phase the thread's polyline is classified by the
 // knot recogniser; after every step no two non-adjacent links may come closer than 0.95
 // diameters (brute force over all pairs, independent of the simulation's hierarchy).
@@ -17,6 +17,7 @@
 #include <numbers>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "common/knot/stitch_knot.h"
 #include "tests/support/thread_scenarios.h"
@@ -41,10 +42,12 @@ TEST_P(KnotTying, TiesAndHoldsWithoutInterpenetration) {
   const TieCase& c = GetParam();
   ThreadDef def = KnotTyingDef(c.nodes);
   def.friction_coefficient = c.friction;
-  const TieReport r = RunKnotTie(def, ParseKnotThrows(c.throws), KnotHoldOptions{});
+  std::vector<KnotThrowOptions> throws = ParseKnotThrows(c.throws);
+  for (KnotThrowOptions& t : throws) t.pull_tension_N = kTieMatrixPullTension_N;
+  const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{});
   EXPECT_EQ(r.knot_after_pull, c.expected);
   EXPECT_EQ(r.knot, c.expected);
-  EXPECT_TRUE(r.pulled_tight);  // every throw's pull reached 10 mN on both hands
+  EXPECT_TRUE(r.pulled_tight);  // every throw's pull reached 15 mN on both hands
   EXPECT_TRUE(r.held) << "knot moved " << r.hold_shift_m * 1e3 << " mm along the thread";
   EXPECT_LT(r.hold_shift_m, 1e-3);
   EXPECT_GE(r.min_distance_over_d, 0.95);
