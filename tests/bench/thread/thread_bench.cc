@@ -15,7 +15,8 @@
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
 //                         five knots x 129..513 nodes x mu 0.1..0.3 (README table), the same
 //                         pull tension for every case
-//   --friction MU --object-friction MU --exact-pairs N  contact model (tie and speed)
+//   --friction MU --object-friction MU --exact-pairs N --friction-contacts N
+//                                                        contact model (tie and speed)
 //   --quick                                              reduced sizes (CTest)
 #include <algorithm>
 #include <chrono>
@@ -306,17 +307,20 @@ int RunAccuracy(bool quick, const std::string& json) {
 }
 
 // Contact model options of the command line (--friction MU, --object-friction MU,
-// --exact-pairs N), applied on top of a thread's defaults; negative: keep the default.
+// --exact-pairs N, --friction-contacts N), applied on top of a thread's defaults; negative: keep
+// the default.
 struct ContactOverrides {
   double friction = -1.0;
   double object_friction = -1.0;
   int exact_pairs = -1;
+  int friction_contacts = -1;
   double contact_force = -1.0;
   ThreadDef Apply(ThreadDef def) const {
     if (contact_force >= 0.0) def.contact_force_N = contact_force;
     if (friction >= 0.0) def.friction_coefficient = friction;
     if (object_friction >= 0.0) def.object_friction_coefficient = object_friction;
     if (exact_pairs >= 0) def.exact_contact_pairs = exact_pairs;
+    if (friction_contacts >= 0) def.friction_contacts = friction_contacts;
     return def;
   }
 };
@@ -808,6 +812,11 @@ int Main(int argc, char** argv) {
       if (!(contact.contact_force >= 0.0)) {
         throw std::invalid_argument("--contact-force: expected a force >= 0 N");
       }
+    } else if (arg == "--friction-contacts") {
+      contact.friction_contacts = std::atoi(value("--friction-contacts").c_str());
+      if (contact.friction_contacts < 0) {
+        throw std::invalid_argument("--friction-contacts: expected N >= 0");
+      }
     } else if (arg == "--exact-pairs") {
       contact.exact_pairs = std::atoi(value("--exact-pairs").c_str());
       if (contact.exact_pairs < 0) throw std::invalid_argument("--exact-pairs: expected N >= 0");
@@ -821,7 +830,7 @@ int Main(int argc, char** argv) {
           "[--nodes N] [--stitch] [--obj FILE] | --tie-matrix [--only SPEC;SPEC] [--markdown "
           "FILE]] [--pull-tension N (default 0.015)] "
           "[--friction MU] "
-          "[--object-friction MU] [--exact-pairs N] "
+          "[--object-friction MU] [--exact-pairs N] [--friction-contacts N] "
           "[--json FILE] [--quick]\n");
       return 0;
     } else {
