@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 
 namespace {
@@ -74,6 +76,35 @@ TEST(ThreadBench, TieJsonShape) {
     EXPECT_GT(phase["tick_p99_us"].as<double>(), 0.0);
   }
   EXPECT_EQ(root["phases"][root["phases"].size() - 1]["phase"].as<std::string>(), "hold");
+}
+
+// --tie-matrix in its quick mode (the five knots at 129 nodes, μ 0.2): every knot ties and holds
+// at the matrix's pull tension (the bench exits 0 only then), the JSON says the tension, and
+// the markdown is the README's table: a row per case with the README's eleven columns.
+TEST(ThreadBench, TieMatrixQuickTiesAndHoldsEveryKnot) {
+  const std::string markdown = ::testing::TempDir() + "/tie_matrix.md";
+  const YAML::Node root = RunBench("--tie-matrix --markdown " + markdown, "tie_matrix");
+  EXPECT_DOUBLE_EQ(root["pull_tension_N"].as<double>(), 0.015);
+  ASSERT_TRUE(root["runs"].IsSequence());
+  ASSERT_EQ(root["runs"].size(), 5u);
+  const char* expected[] = {"overhand-right", "double-overhand", "square", "granny", "surgeons"};
+  for (std::size_t k = 0; k < 5; ++k) {
+    const YAML::Node run = root["runs"][k];
+    EXPECT_EQ(run["knot"].as<std::string>(), expected[k]) << k;
+    EXPECT_TRUE(run["held"].as<bool>()) << k;
+    EXPECT_TRUE(run["pulled_tight"].as<bool>()) << k;
+    EXPECT_GE(run["min_distance_over_d"].as<double>(), 0.95) << k;
+  }
+  std::ifstream in(markdown);
+  ASSERT_TRUE(in.good()) << markdown;
+  int rows = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("| ", 0) != 0 || line.rfind("| knot ", 0) == 0) continue;
+    EXPECT_EQ(std::count(line.begin(), line.end(), '|'), 12) << line;
+    EXPECT_NE(line.find("| yes |"), std::string::npos) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 5);
 }
 
 }  // namespace
