@@ -264,6 +264,17 @@ struct PhaseMeter {
 
 }  // namespace
 
+const TiePhaseReport* SecondThrowExit(const TieReport& r) {
+  for (const TiePhaseReport& p : r.phases) {
+    if (p.phase == "exit" && p.throw_index == 2) return &p;
+  }
+  return nullptr;
+}
+
+double CapstanBound_N(const TiePhaseReport& exit, double friction) {
+  return std::exp(friction * 3.0 * std::numbers::pi) * exit.f_standing_max_N;
+}
+
 TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
                      KnotHoldOptions hold, void (*on_phase)(const TiePhaseReport&),
                      const KnotStitchDef* stitch) {

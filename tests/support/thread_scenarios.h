@@ -92,6 +92,15 @@ struct TieReport {
   Eigen::Matrix3Xd x_final_W;    // node positions at the end
 };
 
+// The second throw's exit of a two-throw tie (nullptr for one throw), and the capstan bound on
+// the driver's pull there: drawing the end out past the first knot, contact friction can make
+// the driver's pull at most exp(mu theta) times the standing hand's, theta the throw's wrap of
+// thread on thread (1.5 turns, 3 pi). An anchoring contact model drags the whole knot and
+// exceeds it several times over. (A single throw's exit draws the thread round the jig's pegs
+// and jaws as well, which the estimate does not cover.)
+const TiePhaseReport* SecondThrowExit(const TieReport& r);
+double CapstanBound_N(const TiePhaseReport& exit, double friction);
+
 // The tension each throw of the tie matrix is pulled to (`microdex-bench thread --tie-matrix`,
 // `--tie`, and the matrix's cases in thread_knot_tying_test) before the 20 mN hold: the same
 // for every knot, node count and friction. At 10 mN (the scripts' default) a double overhand's

@@ -27,7 +27,6 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
-#include <numbers>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -615,16 +614,14 @@ int RunTieMatrix(bool quick, const std::string& only, double pull_tension_N,
             good ? "ok" : "FAIL");
         std::fflush(stdout);
         runs << (total > 1 ? ",\n  " : "\n  ") << TieJson(k.spec, n, mu, r);
-        // The capstan check of thread_knot_tying_test on the second throw's exit: the driver's
-        // largest pull against exp(3 pi mu) times the standing hand's largest.
+        // The capstan check of thread_knot_tying_test on the second throw's exit.
         std::string capstan = "–";
-        for (const TiePhaseReport& p : r.phases) {
-          if (p.phase != "exit" || p.throw_index != 2) continue;
-          const double bound = std::exp(3.0 * std::numbers::pi * mu) * p.f_standing_max_N;
-          const bool exceeded = p.f_driver_max_N > bound;
+        if (const TiePhaseReport* exit = SecondThrowExit(r)) {
+          const double bound = CapstanBound_N(*exit, mu);
+          const bool exceeded = exit->f_driver_max_N > bound;
           char cell[96];
-          std::snprintf(cell, sizeof(cell), "%.1f / %.1f mN%s", p.f_driver_max_N * 1e3, bound * 1e3,
-                        exceeded ? " **exceeded**" : "");
+          std::snprintf(cell, sizeof(cell), "%.1f / %.1f mN%s", exit->f_driver_max_N * 1e3,
+                        bound * 1e3, exceeded ? " **exceeded**" : "");
           capstan = cell;
           ++two_throw;
           capstan_exceeded += exceeded ? 1 : 0;

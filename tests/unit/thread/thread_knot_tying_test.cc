@@ -14,7 +14,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -53,19 +52,11 @@ TEST_P(KnotTying, TiesAndHoldsWithoutInterpenetration) {
   EXPECT_GE(r.min_distance_over_d, 0.95);
   EXPECT_EQ(r.rollbacks, 0);
   EXPECT_LT(r.max_strain, 0.1);  // up to the end of the pull (the hold's is reported by the bench)
-  // Drawing the end of a second throw out past the first knot: contact friction can make the
-  // driver's pull at most the capstan factor exp(mu theta) times the standing hand's, theta the
-  // throw's wrap of thread on thread (1.5 turns, 3 pi). An anchoring contact model drags the
-  // whole knot and exceeds it several times over. (A single throw's exit draws the thread round
-  // the jig's pegs and jaws as well, which the estimate does not cover.)
-  const TiePhaseReport* exit = nullptr;
-  for (const TiePhaseReport& p : r.phases) {
-    if (p.phase == "exit" && p.throw_index == 2) exit = &p;
-  }
+  // The capstan bound on the second throw's exit (CapstanBound_N).
+  const TiePhaseReport* exit = SecondThrowExit(r);
   if (exit == nullptr) return;
-  const double capstan = std::exp(c.friction * 3.0 * std::numbers::pi);
   EXPECT_GT(exit->f_standing_max_N, 0.0);
-  EXPECT_LE(exit->f_driver_max_N, capstan * exit->f_standing_max_N);
+  EXPECT_LE(exit->f_driver_max_N, CapstanBound_N(*exit, c.friction));
 }
 
 INSTANTIATE_TEST_SUITE_P(
