@@ -47,6 +47,8 @@ StrainBandScratch MakeStrainBandScratch(int num_links) {
   s.nodes = Eigen::VectorXi::Zero(num_links + 1);
   s.window = Eigen::VectorXi::Zero(num_links);
   s.in_window = Eigen::VectorXi::Zero(num_links);
+  s.listed = Eigen::VectorXi::Zero(num_links);
+  s.merged = Eigen::VectorXi::Zero(num_links);
   return s;
 }
 
@@ -96,49 +98,79 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
   // A Newton step moves only the nodes of the links it holds; the links touching those nodes
   // (the window) are the only ones whose length changes, so after the first iteration only
   // they are classified again, and the line search measures only them against the unchanged
-  // rest. Same arithmetic as visiting every link, in less time: the band usually holds a few
-  // short runs of a long chain.
+  // rest. The links that were ever held or outside the band are listed (ascending): every
+  // other link is free, inside the band and has multiplier 0, so the solve, the release and
+  // the largest violation visit only the list. Same arithmetic as visiting every link, in less
+  // time: the band usually holds a few short runs of a long chain.
   int num_nodes = 0;   // s.nodes[0..num_nodes): the nodes the step moves, ascending
   int num_window = 0;  // s.window[0..num_window): the links touching them, ascending
+  int num_listed = 0;  // s.listed[0..num_listed)
   double worst = 0.0;
   for (int it = 0; it <= max_iterations; ++it) {
     if (it == 0) {
-      for (int j = 0; j < nl; ++j) classify(j, true);
+      for (int j = 0; j < nl; ++j) {
+        classify(j, true);
+        s.lambda[j] = 0.0;
+        if (s.active[j] != 0 || s.violation[j] > 0.0) s.listed[num_listed++] = j;
+      }
     } else {
-      for (int k = 0; k < num_window; ++k) classify(s.window[k], false);
+      // The window's links, classified again, merged into the list.
+      int a = 0, b = 0, m = 0;
+      while (a < num_listed || b < num_window) {
+        const int la = a < num_listed ? s.listed[a] : nl;
+        const int wb = b < num_window ? s.window[b] : nl;
+        if (wb < la) {
+          classify(wb, false);
+          if (s.active[wb] != 0 || s.violation[wb] > 0.0) s.merged[m++] = wb;
+          ++b;
+        } else {
+          if (wb == la) {
+            classify(wb, false);
+            ++b;
+          }
+          s.merged[m++] = la;
+          ++a;
+        }
+      }
+      std::swap(s.listed, s.merged);
+      num_listed = m;
     }
-    worst = s.violation.head(nl).maxCoeff();
+    worst = 0.0;
+    for (int k = 0; k < num_listed; ++k) worst = std::max(worst, s.violation[s.listed[k]]);
     if (worst <= kTolerance || it == max_iterations) break;
     // (J W J^T + damping) lambda = -C over the active links; inactive links are identity rows
     // (lambda 0), so the tridiagonal system falls apart into the runs of consecutive active
     // links, each solved by the Thomas algorithm (symmetric, diagonally dominant: no pivoting
     // needed).
     num_nodes = 0;
-    for (int j = 0; j < nl;) {
+    for (int k = 0; k < num_listed;) {
+      const int j = s.listed[k];
       if (s.active[j] == 0) {
         s.lambda[j] = 0.0;
-        ++j;
+        ++k;
         continue;
       }
       const int start = j;
       int end = j;
-      while (end < nl && s.active[end] != 0) ++end;
-      for (int k = start; k < end; ++k) {
-        s.diag[k] = (w[k] + w[k + 1]) * (1.0 + kDamping);
-        s.off[k] = k + 1 < end ? -w[k + 1] * s.e.col(k).dot(s.e.col(k + 1)) : 0.0;
+      while (k < num_listed && s.listed[k] == end && s.active[end] != 0) {
+        ++end;
+        ++k;
+      }
+      for (int i = start; i < end; ++i) {
+        s.diag[i] = (w[i] + w[i + 1]) * (1.0 + kDamping);
+        s.off[i] = i + 1 < end ? -w[i + 1] * s.e.col(i).dot(s.e.col(i + 1)) : 0.0;
       }
       double pivot = s.diag[start];
       s.lambda[start] = -s.c[start] / pivot;
       s.work[start] = s.off[start] / pivot;
-      for (int k = start + 1; k < end; ++k) {
-        pivot = s.diag[k] - s.off[k - 1] * s.work[k - 1];
+      for (int i = start + 1; i < end; ++i) {
+        pivot = s.diag[i] - s.off[i - 1] * s.work[i - 1];
         if (!(pivot > 0.0)) return result;
-        s.work[k] = s.off[k] / pivot;
-        s.lambda[k] = (-s.c[k] - s.off[k - 1] * s.lambda[k - 1]) / pivot;
+        s.work[i] = s.off[i] / pivot;
+        s.lambda[i] = (-s.c[i] - s.off[i - 1] * s.lambda[i - 1]) / pivot;
       }
-      for (int k = end - 2; k >= start; --k) s.lambda[k] -= s.work[k] * s.lambda[k + 1];
+      for (int i = end - 2; i >= start; --i) s.lambda[i] -= s.work[i] * s.lambda[i + 1];
       for (int i = start; i <= end; ++i) s.nodes[num_nodes++] = i;  // the run's nodes
-      j = end;
     }
     // The window: links touching a moved node, each once, ascending.
     num_window = 0;
@@ -149,7 +181,8 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
     }
     // A link held inside the band whose multiplier would stretch it beyond its length at the
     // upper edge's side (or shorten it at the lower edge's) is let go from now on.
-    for (int j = 0; j < nl; ++j) {
+    for (int k = 0; k < num_listed; ++k) {
+      const int j = s.listed[k];
       if ((s.active[j] == 1 || s.active[j] == -1) && s.c[j] == 0.0 &&
           s.active[j] * s.lambda[j] > 0.0) {
         s.active[j] = 0;
@@ -171,7 +204,8 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
     // The violation of the links outside the window, which the move leaves as they are.
     for (int k = 0; k < num_window; ++k) s.in_window[s.window[k]] = 1;
     double rest = 0.0;
-    for (int j = 0; j < nl; ++j) {
+    for (int k = 0; k < num_listed; ++k) {
+      const int j = s.listed[k];
       if (s.in_window[j] == 0) rest = std::max(rest, s.violation[j]);
     }
     for (int k = 0; k < num_window; ++k) s.in_window[s.window[k]] = 0;

@@ -28,6 +28,8 @@ struct StrainBandScratch {
   Eigen::VectorXi nodes;      // the nodes a Newton step moves (num_links + 1)
   Eigen::VectorXi window;     // the links touching them
   Eigen::VectorXi in_window;  // per link: 1 while listed in window (cleared after use)
+  Eigen::VectorXi listed;     // the links held or outside the band at some iteration, ascending
+  Eigen::VectorXi merged;     // listed merged with a window
 };
 StrainBandScratch MakeStrainBandScratch(int num_links);
 
