@@ -212,6 +212,7 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
   // skip). `clock` counts the tests; every move stamps its nodes with it.
   int clock = 0;
   w.node_moved_at.setZero();
+  w.node_travel_m.setZero();
   // Moves the nodes so that sum_k g_k dx_k . dir = amount, each in proportion to g_k / m_k
   // (the smallest mass-weighted move); grasped nodes do not move.
   auto move = [&](const int* nodes, const double* g, int count, const Eigen::Vector3d& dir,
@@ -221,8 +222,10 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     if (!(denom > 0.0)) return false;
     const double lambda = amount / denom;
     for (int k = 0; k < count; ++k) {
-      x.col(nodes[k]) += (lambda * g[k] * InverseMass(model, w, nodes[k])) * dir;
+      const double step = lambda * g[k] * InverseMass(model, w, nodes[k]);
+      x.col(nodes[k]) += step * dir;
       w.node_moved_at[nodes[k]] = clock;
+      w.node_travel_m[nodes[k]] += std::abs(step);
     }
     return true;
   };
@@ -252,16 +255,23 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     if (fraction > 0.0) {
       for (int k = 0; k < num_pairs; ++k) {
         const LinkPair& pair = w.pairs[k];
-        if (sweep > 0 && w.pair_checked_at[k] >
-                             std::max({w.node_moved_at[pair.a], w.node_moved_at[pair.a + 1],
-                                       w.node_moved_at[pair.b], w.node_moved_at[pair.b + 1]})) {
+        const double travel = w.node_travel_m[pair.a] + w.node_travel_m[pair.a + 1] +
+                              w.node_travel_m[pair.b] + w.node_travel_m[pair.b + 1];
+        if (sweep > 0 && (w.pair_checked_at[k] >
+                              std::max({w.node_moved_at[pair.a], w.node_moved_at[pair.a + 1],
+                                        w.node_moved_at[pair.b], w.node_moved_at[pair.b + 1]}) ||
+                          travel < w.pair_clear_m[k])) {
           continue;
         }
         ++clock;
+        ++state.status.pair_tests;
         w.pair_checked_at[k] = clock;  // satisfied, unless a move below stamps its nodes
         const PairStart& before = w.pair_start[k];
         const geometry::SegmentClosest now = geometry::ClosestSegmentSegment(
             x.col(pair.a), x.col(pair.a + 1), x.col(pair.b), x.col(pair.b + 1));
+        // No point of either link has moved further than its nodes' largest move: until their
+        // summed travel exceeds the clearance, the links stay apart.
+        w.pair_clear_m[k] = now.distance_m - min_dist + travel;
         const bool interior = before.interior && now.s > kInterior && now.s < 1.0 - kInterior &&
                               now.t > kInterior && now.t < 1.0 - kInterior;
         Eigen::Vector3d n;
@@ -281,6 +291,7 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
         }
         const double deficit = min_dist - separation;
         residual = std::max(residual, deficit);
+        w.pair_clear_m[k] = -std::numeric_limits<double>::infinity();
         const int nodes[4] = {pair.a, pair.a + 1, pair.b, pair.b + 1};
         const double g[4] = {1.0 - now.s, now.s, -(1.0 - now.t), -now.t};
         if (move(nodes, g, 4, n, deficit)) {
@@ -344,7 +355,10 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
                                                       kStrainIterations, x, w.strain_band);
       ++clock;
       for (int i = 0; i < model.num_nodes; ++i) {
-        if ((x.col(i).array() != w.x_sweep_W.col(i).array()).any()) w.node_moved_at[i] = clock;
+        if ((x.col(i).array() != w.x_sweep_W.col(i).array()).any()) {
+          w.node_moved_at[i] = clock;
+          w.node_travel_m[i] += (x.col(i) - w.x_sweep_W.col(i)).norm();
+        }
       }
       result.strain_corrections += band.corrected_links;
       residual = std::max(residual, band.max_violation_m);

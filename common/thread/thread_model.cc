@@ -94,6 +94,8 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.pair_checked_at = Eigen::VectorXi::Zero(model.contact_capacity);
   w.object_checked_at = Eigen::VectorXi::Zero(model.contact_capacity);
   w.x_sweep_W = Eigen::Matrix3Xd::Zero(3, n);
+  w.node_travel_m = Eigen::VectorXd::Zero(n);
+  w.pair_clear_m = Eigen::VectorXd::Zero(model.contact_capacity);
   w.strain_band = MakeStrainBandScratch(model.num_links);
   w.self_contacts.assign(model.contact_capacity, SelfContact{});
   w.object_contacts.assign(model.contact_capacity, ObjectContact{});

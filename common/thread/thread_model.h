@@ -82,6 +82,7 @@ struct ThreadStatus {
   std::int64_t contact_overflows = 0;       // more candidate pairs than capacity
   std::int64_t guard_corrections = 0;       // non-penetration projections applied
   std::int64_t strain_corrections = 0;      // link lengths projected by the strain limit
+  std::int64_t pair_tests = 0;  // link-pair distances computed by the contact projection
   int num_candidate_pairs = 0;
   int num_self_contacts = 0;
   int num_object_contacts = 0;
@@ -131,6 +132,11 @@ struct ThreadWorkspace {
   Eigen::VectorXi pair_checked_at;
   Eigen::VectorXi object_checked_at;  // the same per (link, collider) candidate
   Eigen::Matrix3Xd x_sweep_W;
+  // Per node the distance it has moved in the projection so far; per candidate pair found
+  // satisfied, its clearance beyond the contact distance plus its nodes' travel at that test
+  // (-inf if none): while its nodes' travel stays below that, the pair cannot have closed in.
+  Eigen::VectorXd node_travel_m;
+  Eigen::VectorXd pair_clear_m;
   // The contact projection's link-length solve (strain band): inverse node masses (0 for
   // grasped nodes) and the tridiagonal solve's scratch.
   Eigen::VectorXd inverse_mass;

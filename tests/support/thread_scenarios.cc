@@ -223,8 +223,11 @@ knot::KnotAnalysis AnalyzeThread(const ThreadModel& model, const ThreadState& st
 struct PhaseMeter {
   std::vector<double> step_us;
   TiePhaseReport report;
+  std::int64_t pair_tests_seen = 0;  // the state's count at the last step measured
+  std::int64_t pair_tests = 0;       // in this phase
   void Start(int throw_index, const char* phase) {
     step_us.clear();
+    pair_tests = 0;
     report = TiePhaseReport{};
     report.throw_index = throw_index;
     report.phase = phase;
@@ -234,6 +237,9 @@ struct PhaseMeter {
            const KnotTyingHands& hands) {
     step_us.push_back(us);
     ++report.steps;
+    pair_tests += state.status.pair_tests - pair_tests_seen;
+    pair_tests_seen = state.status.pair_tests;
+    report.pair_tests_per_step = static_cast<double>(pair_tests) / report.steps;
     report.min_distance_over_d = std::min(report.min_distance_over_d, d_over_d);
     report.max_self_contacts = std::max(report.max_self_contacts, state.status.num_self_contacts);
     if (ws != nullptr) {
@@ -300,6 +306,7 @@ TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
   const long long trouble0 = state.status.nonfinite_resets + state.status.factorization_failures;
   std::vector<double> all_us;
   PhaseMeter meter;
+  meter.pair_tests_seen = state.status.pair_tests;
   auto finish_phase = [&] {
     const TiePhaseReport r = meter.Finish(model, state);
     all_us.insert(all_us.end(), meter.step_us.begin(), meter.step_us.end());
