@@ -49,7 +49,25 @@ StrainBandScratch MakeStrainBandScratch(int num_links) {
   s.in_window = Eigen::VectorXi::Zero(num_links);
   s.listed = Eigen::VectorXi::Zero(num_links);
   s.merged = Eigen::VectorXi::Zero(num_links);
+  s.dirty = Eigen::VectorXi::Zero(num_links + 1);
+  s.dirty_flag = Eigen::VectorXi::Zero(num_links + 1);
+  s.moved = Eigen::VectorXi::Zero(num_links + 1);
+  s.moved_flag = Eigen::VectorXi::Zero(num_links + 1);
+  s.x_before = Eigen::Matrix3Xd::Zero(3, num_links + 1);
   return s;
+}
+
+void StrainBandScratch::StartTracking() {
+  tracking = true;
+  num_listed = -1;
+  for (int k = 0; k < num_dirty; ++k) dirty_flag[dirty[k]] = 0;
+  num_dirty = 0;
+  ClearMoved();
+}
+
+void StrainBandScratch::ClearMoved() {
+  for (int k = 0; k < num_moved; ++k) moved_flag[moved[k]] = 0;
+  num_moved = 0;
 }
 
 StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::VectorXd& inverse_mass,
@@ -58,7 +76,8 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
   StrainBandResult result;
   const int nl = model.num_links;
   const Eigen::VectorXd& w = inverse_mass;
-  s.active.setZero();
+  const bool incremental = s.tracking && s.num_listed >= 0;
+  if (!incremental) s.active.setZero();
   const double max_move = kMaxMove * model.rest_length_m.minCoeff();
   // Link j at the current positions: its direction, constraint value, place in the active set
   // and violation (of the band, relative to the rest length). Links outside the band are pulled
@@ -105,35 +124,62 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
   int num_nodes = 0;   // s.nodes[0..num_nodes): the nodes the step moves, ascending
   int num_window = 0;  // s.window[0..num_window): the links touching them, ascending
   int num_listed = 0;  // s.listed[0..num_listed)
+  // Merges the ascending links[0..count) into the list, classifying each of them. In the first
+  // iteration (`first`) the listed links are classified too and only the links held or outside
+  // the band stay listed; later, every listed link stays.
+  auto merge = [&](const int* links, int count, bool first) {
+    int a = 0, b = 0, m = 0;
+    while (a < num_listed || b < count) {
+      const int la = a < num_listed ? s.listed[a] : nl;
+      const int lb = b < count ? links[b] : nl;
+      const int j = std::min(la, lb);
+      if (lb == j || first) classify(j, first);
+      const bool was_listed = la == j;
+      if (la == j) ++a;
+      if (lb == j) ++b;
+      if ((was_listed && !first) || s.active[j] != 0 || s.violation[j] > 0.0) s.merged[m++] = j;
+    }
+    std::swap(s.listed, s.merged);
+    num_listed = m;
+  };
+  // The classification at the end of a call is that of the positions it leaves (a failed line
+  // search's rounding aside, whose nodes are marked moved), so a tracked call keeps it.
+  auto finish = [&]() {
+    if (s.tracking) s.num_listed = num_listed;
+    return result;
+  };
   double worst = 0.0;
   for (int it = 0; it <= max_iterations; ++it) {
-    if (it == 0) {
+    if (it == 0 && !incremental) {
       for (int j = 0; j < nl; ++j) {
         classify(j, true);
         s.lambda[j] = 0.0;
         if (s.active[j] != 0 || s.violation[j] > 0.0) s.listed[num_listed++] = j;
       }
-    } else {
-      // The window's links, classified again, merged into the list.
-      int a = 0, b = 0, m = 0;
-      while (a < num_listed || b < num_window) {
-        const int la = a < num_listed ? s.listed[a] : nl;
-        const int wb = b < num_window ? s.window[b] : nl;
-        if (wb < la) {
-          classify(wb, false);
-          if (s.active[wb] != 0 || s.violation[wb] > 0.0) s.merged[m++] = wb;
-          ++b;
-        } else {
-          if (wb == la) {
-            classify(wb, false);
-            ++b;
-          }
-          s.merged[m++] = la;
-          ++a;
+      for (int k = 0; k < s.num_dirty; ++k) s.dirty_flag[s.dirty[k]] = 0;
+      s.num_dirty = 0;
+    } else if (it == 0) {
+      // The last call's list, released, and the links touching the nodes moved since (in
+      // s.window, free until the first solve), classified again: every other link is still
+      // free and inside the band.
+      num_listed = s.num_listed;
+      for (int k = 0; k < num_listed; ++k) {
+        s.active[s.listed[k]] = 0;
+        s.lambda[s.listed[k]] = 0.0;
+      }
+      std::sort(s.dirty.data(), s.dirty.data() + s.num_dirty);
+      int count = 0;
+      for (int k = 0; k < s.num_dirty; ++k) {
+        const int i = s.dirty[k];
+        s.dirty_flag[i] = 0;
+        for (int j = std::max(0, i - 1); j <= std::min(nl - 1, i); ++j) {
+          if (count == 0 || s.window[count - 1] < j) s.window[count++] = j;
         }
       }
-      std::swap(s.listed, s.merged);
-      num_listed = m;
+      s.num_dirty = 0;
+      merge(s.window.data(), count, true);
+    } else {
+      merge(s.window.data(), num_window, false);  // the window's links, classified again
     }
     worst = 0.0;
     for (int k = 0; k < num_listed; ++k) worst = std::max(worst, s.violation[s.listed[k]]);
@@ -165,7 +211,7 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
       s.work[start] = s.off[start] / pivot;
       for (int i = start + 1; i < end; ++i) {
         pivot = s.diag[i] - s.off[i - 1] * s.work[i - 1];
-        if (!(pivot > 0.0)) return result;
+        if (!(pivot > 0.0)) return finish();
         s.work[i] = s.off[i] / pivot;
         s.lambda[i] = (-s.c[i] - s.off[i - 1] * s.lambda[i - 1]) / pivot;
       }
@@ -211,6 +257,15 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
     for (int k = 0; k < num_window; ++k) s.in_window[s.window[k]] = 0;
     double step = largest > max_move ? max_move / largest : 1.0;
     bool improved = false;
+    if (s.tracking) {
+      for (int k = 0; k < num_nodes; ++k) {
+        const int i = s.nodes[k];
+        if (s.moved_flag[i] != 0) continue;
+        s.moved_flag[i] = 1;
+        s.moved[s.num_moved++] = i;
+        s.x_before.col(i) = x.col(i);
+      }
+    }
     for (int half = 0; half < kLineSearchSteps && !improved; ++half, step *= 0.5) {
       for (int k = 0; k < num_nodes; ++k) x.col(s.nodes[k]) += step * s.dx.col(s.nodes[k]);
       double trial = rest;
@@ -224,9 +279,15 @@ StrainBandResult ProjectStrainBand(const ThreadModel& model, const Eigen::Vector
       }
     }
     ++result.iterations;
-    if (!improved) break;
+    if (!improved) {
+      // The moves taken back may leave the last bit changed.
+      if (s.tracking) {
+        for (int k = 0; k < num_nodes; ++k) s.MarkMoved(s.nodes[k]);
+      }
+      break;
+    }
   }
-  return result;
+  return finish();
 }
 
 }  // namespace microdex::thread

@@ -30,6 +30,31 @@ struct StrainBandScratch {
   Eigen::VectorXi in_window;  // per link: 1 while listed in window (cleared after use)
   Eigen::VectorXi listed;     // the links held or outside the band at some iteration, ascending
   Eigen::VectorXi merged;     // listed merged with a window
+  // Tracking across calls on the same chain (false: every call classifies every link). While
+  // tracking, a call starts from the last call's classification, valid when num_listed >= 0:
+  // it classifies again only the links listed then and the links touching the nodes moved
+  // since, which the caller reports with MarkMoved. Each call lists the nodes it moved
+  // (moved[0..num_moved), ascending by first move) with their positions before it
+  // (x_before); the caller reads and clears them with ClearMoved.
+  bool tracking = false;
+  int num_listed = -1;
+  Eigen::VectorXi dirty;  // nodes moved by the caller since the last call
+  int num_dirty = 0;
+  Eigen::VectorXi dirty_flag;  // per node: 1 while listed in dirty
+  Eigen::VectorXi moved;       // nodes the last call moved
+  int num_moved = 0;
+  Eigen::VectorXi moved_flag;  // per node: 1 while listed in moved
+  Eigen::Matrix3Xd x_before;   // per listed moved node: its position before the call
+
+  // Starts tracking a chain whose positions may have changed anywhere (the next call classifies
+  // every link).
+  void StartTracking();
+  void MarkMoved(int node) {
+    if (dirty_flag[node] != 0) return;
+    dirty_flag[node] = 1;
+    dirty[num_dirty++] = node;
+  }
+  void ClearMoved();
 };
 StrainBandScratch MakeStrainBandScratch(int num_links);
 

@@ -226,6 +226,7 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
       x.col(nodes[k]) += step * dir;
       w.node_moved_at[nodes[k]] = clock;
       w.node_travel_m[nodes[k]] += std::abs(step);
+      if (strain_limit > 0.0) w.strain_band.MarkMoved(nodes[k]);
     }
     return true;
   };
@@ -249,6 +250,7 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
   double residual = 0.0;
   if (strain_limit > 0.0) {
     for (int i = 0; i < model.num_nodes; ++i) w.inverse_mass[i] = InverseMass(model, w, i);
+    w.strain_band.StartTracking();
   }
   for (; sweep < kMaxProjectionSweeps; ++sweep) {
     residual = 0.0;
@@ -350,16 +352,18 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
     }
     if (strain_limit > 0.0 && sweep < kStrainSweeps) {
       // Link lengths into [1 - limit, 1 + limit] rest lengths, all links at once.
-      w.x_sweep_W = x;
+      StrainBandScratch& band_scratch = w.strain_band;
       const StrainBandResult band = ProjectStrainBand(model, w.inverse_mass, strain_limit,
-                                                      kStrainIterations, x, w.strain_band);
+                                                      kStrainIterations, x, band_scratch);
       ++clock;
-      for (int i = 0; i < model.num_nodes; ++i) {
-        if ((x.col(i).array() != w.x_sweep_W.col(i).array()).any()) {
+      for (int k = 0; k < band_scratch.num_moved; ++k) {
+        const int i = band_scratch.moved[k];
+        if ((x.col(i).array() != band_scratch.x_before.col(i).array()).any()) {
           w.node_moved_at[i] = clock;
-          w.node_travel_m[i] += (x.col(i) - w.x_sweep_W.col(i)).norm();
+          w.node_travel_m[i] += (x.col(i) - band_scratch.x_before.col(i)).norm();
         }
       }
+      band_scratch.ClearMoved();
       result.strain_corrections += band.corrected_links;
       residual = std::max(residual, band.max_violation_m);
     }

@@ -93,7 +93,6 @@ ThreadWorkspace MakeThreadWorkspace(const ThreadModel& model) {
   w.node_moved_at = Eigen::VectorXi::Zero(n);
   w.pair_checked_at = Eigen::VectorXi::Zero(model.contact_capacity);
   w.object_checked_at = Eigen::VectorXi::Zero(model.contact_capacity);
-  w.x_sweep_W = Eigen::Matrix3Xd::Zero(3, n);
   w.node_travel_m = Eigen::VectorXd::Zero(n);
   w.pair_clear_m = Eigen::VectorXd::Zero(model.contact_capacity);
   w.strain_band = MakeStrainBandScratch(model.num_links);

@@ -126,12 +126,10 @@ struct ThreadWorkspace {
   int projection_parts = 0;  // the step's motion was projected in this many parts
   // The contact projection's bookkeeping of what changed: per node the moment (a count of the
   // projection's pair tests) it last moved, per candidate pair the moment it was last found
-  // satisfied; a pair satisfied after its nodes' last moves is not tested again. The nodes at
-  // the start of the strain-band solve, to see which it moved.
+  // satisfied; a pair satisfied after its nodes' last moves is not tested again.
   Eigen::VectorXi node_moved_at;
   Eigen::VectorXi pair_checked_at;
   Eigen::VectorXi object_checked_at;  // the same per (link, collider) candidate
-  Eigen::Matrix3Xd x_sweep_W;
   // Per node the distance it has moved in the projection so far; per candidate pair found
   // satisfied, its clearance beyond the contact distance plus its nodes' travel at that test
   // (-inf if none): while its nodes' travel stays below that, the pair cannot have closed in.
