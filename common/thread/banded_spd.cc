@@ -23,7 +23,7 @@ void BandedSpd::AddBlock(int a, int b, const Eigen::Matrix3d& block) {
       const int i = 3 * a + r;
       const int j = 3 * b + c;
       if (i < j) continue;
-      band_(i - j, i) += block(r, c);
+      band_(i - j, j) += block(r, c);
     }
   }
 }
@@ -35,45 +35,59 @@ void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
   for (int i = 0; i < size_; ++i) {
     double sum = band_(0, i) * x[i];
     const int lo = std::max(0, i - p_);
-    for (int j = lo; j < i; ++j) sum += band_(i - j, i) * x[j];
+    for (int j = lo; j < i; ++j) sum += band_(i - j, j) * x[j];
     const int hi = std::min(size_ - 1, i + p_);
-    for (int j = i + 1; j <= hi; ++j) sum += band_(j - i, j) * x[j];
+    for (int j = i + 1; j <= hi; ++j) sum += band_(j - i, i) * x[j];
     y[i] = sum;
   }
 }
 
+namespace {
+
 // Right-looking (column by column): column j is scaled by its pivot's inverse and at once
-// subtracted from the p x p block below it. The block's updates are independent of each other,
-// so only the pivots form a dependency chain (a row-by-row factorisation chains every entry of
-// a row to the one before it). The inverse pivots are kept for the solves.
-bool BandedSpd::Factorize() {
-  for (int j = 0; j < size_; ++j) {
-    const double pivot = band_(0, j);
+// subtracted from the p x p block below it, column by column: A(j+c.., j+c) -= L(j+c.., j)
+// L(j+c, j), contiguous in the band storage on both sides and element by element independent
+// (vectorised, the same bits at every width). Only the pivots form a dependency chain. The
+// inverse pivots are kept for the solves.
+MICRODEX_VECTOR_CLONES
+bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p) {
+  for (int j = 0; j < size; ++j) {
+    double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * rows;
+    const double pivot = col[0];
     if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
-    band_(0, j) = std::sqrt(pivot);
-    const double inv = 1.0 / band_(0, j);
-    inv_diag_[j] = inv;
-    const int hi = std::min(size_ - 1, j + p_);
-    for (int i = j + 1; i <= hi; ++i) band_(i - j, i) *= inv;  // L(i, j)
-    for (int i = j + 1; i <= hi; ++i) {
-      const double lij = band_(i - j, i);
-      for (int k = j + 1; k <= i; ++k) band_(i - k, i) -= lij * band_(k - j, k);
+    col[0] = std::sqrt(pivot);
+    const double inv = 1.0 / col[0];
+    inv_diag[j] = inv;
+    const int m = std::min(size - 1 - j, p);
+    for (int d = 1; d <= m; ++d) col[d] *= inv;  // L(j + d, j)
+    for (int c = 1; c <= m; ++c) {
+      const double lcj = col[c];
+      double* __restrict target = band + static_cast<std::ptrdiff_t>(j + c) * rows;
+      for (int r = 0; r <= m - c; ++r) target[r] -= col[c + r] * lcj;
     }
   }
   return true;
 }
 
+}  // namespace
+
+bool BandedSpd::Factorize() {
+  return FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_);
+}
+
 void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
-  for (int i = std::max(0, first_row); i < size_; ++i) {  // L y = b
-    double sum = b[i];
-    const int lo = std::max(first_row, i - p_);
-    for (int k = lo; k < i; ++k) sum -= band_(i - k, i) * b[k];
-    b[i] = sum * inv_diag_[i];
+  // L y = b by columns: each row is reduced by the solved rows above it in the order of a
+  // row-by-row substitution (k ascending), with L's columns read contiguously.
+  for (int j = std::max(0, first_row); j < size_; ++j) {
+    b[j] *= inv_diag_[j];
+    const int m = std::min(size_ - 1 - j, p_);
+    const double yj = b[j];
+    for (int d = 1; d <= m; ++d) b[j + d] -= band_(d, j) * yj;
   }
   for (int i = size_ - 1; i >= 0; --i) {  // L^T x = y
     double sum = b[i];
     const int hi = std::min(size_ - 1, i + p_);
-    for (int k = i + 1; k <= hi; ++k) sum -= band_(k - i, k) * b[k];
+    for (int k = i + 1; k <= hi; ++k) sum -= band_(k - i, i) * b[k];
     b[i] = sum * inv_diag_[i];
   }
 }
@@ -93,7 +107,7 @@ void SubstituteRows(const double* band, int band_rows, const double* inv_diag, i
       while (active < cols && first_rows[active] <= i) ++active;
       double* __restrict row = b + static_cast<std::ptrdiff_t>(i) * stride;
       for (int k = std::max(top, i - p); k < i; ++k) {
-        const double l = band[static_cast<std::ptrdiff_t>(i) * band_rows + (i - k)];
+        const double l = band[static_cast<std::ptrdiff_t>(k) * band_rows + (i - k)];
         const double* __restrict other = b + static_cast<std::ptrdiff_t>(k) * stride;
         for (int c = 0; c < active; ++c) row[c] -= l * other[c];
       }
@@ -106,7 +120,7 @@ void SubstituteRows(const double* band, int band_rows, const double* inv_diag, i
     double* __restrict row = b + static_cast<std::ptrdiff_t>(i) * stride;
     const int hi = std::min(size - 1, i + p);
     for (int k = i + 1; k <= hi; ++k) {
-      const double l = band[static_cast<std::ptrdiff_t>(k) * band_rows + (k - i)];
+      const double l = band[static_cast<std::ptrdiff_t>(i) * band_rows + (k - i)];
       const double* __restrict other = b + static_cast<std::ptrdiff_t>(k) * stride;
       for (int c = 0; c < cols; ++c) row[c] -= l * other[c];
     }

@@ -21,8 +21,8 @@ class BandedSpd {
 
   void SetZero() { band_.setZero(); }
   // A(i, j) for |i - j| <= p (symmetric: either triangle may be given).
-  double& At(int i, int j) { return i >= j ? band_(i - j, i) : band_(j - i, j); }
-  double At(int i, int j) const { return i >= j ? band_(i - j, i) : band_(j - i, j); }
+  double& At(int i, int j) { return i >= j ? band_(i - j, j) : band_(j - i, i); }
+  double At(int i, int j) const { return i >= j ? band_(i - j, j) : band_(j - i, i); }
   // Adds a 3x3 block at block row a, block column b (|a - b| small enough for the band). Only
   // the lower triangle is written, so add each off-diagonal block once with a > b.
   void AddBlock(int a, int b, const Eigen::Matrix3d& block);
@@ -47,7 +47,10 @@ class BandedSpd {
  private:
   int size_ = 0;
   int p_ = 0;
-  Eigen::MatrixXd band_;      // band_(d, i) = A(i, i - d), d in [0, p]
+  // band_(d, j) = A(j + d, j), d in [0, p] (LAPACK's lower band storage): column j of the
+  // lower triangle is contiguous, so the factorisation's updates are contiguous.
+  Eigen::MatrixXd band_;
+
   Eigen::VectorXd inv_diag_;  // 1 / L(i, i) after Factorize()
 };
 
