@@ -17,17 +17,6 @@ BandedSpd::BandedSpd(int size, int half_bandwidth)
   MICRODEX_CHECK(size >= 1 && half_bandwidth >= 0);
 }
 
-void BandedSpd::AddBlock(int a, int b, const Eigen::Matrix3d& block) {
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) {
-      const int i = 3 * a + r;
-      const int j = 3 * b + c;
-      if (i < j) continue;
-      band_(i - j, j) += block(r, c);
-    }
-  }
-}
-
 // x and y are Refs so that a Map of the state is read in place (a const VectorXd& would
 // build a heap temporary from it on every step).
 void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -129,6 +118,16 @@ void SubstituteRows(const double* band, int band_rows, const double* inv_diag, i
   }
 }
 
+// out[s] += weight * (dir0 a[s] + dir1 b[s] + dir2 c[s]) for s < count (element-wise: the same
+// bits at every vector width).
+MICRODEX_VECTOR_CLONES
+void AddCombinedRows(const double* __restrict a, const double* __restrict b,
+                     const double* __restrict c, const Eigen::Vector3d& dir, double weight,
+                     int count, double* __restrict out) {
+  const double d0 = dir[0], d1 = dir[1], d2 = dir[2];
+  for (int s = 0; s < count; ++s) out[s] += weight * (d0 * a[s] + d1 * b[s] + d2 * c[s]);
+}
+
 }  // namespace
 
 void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const {
@@ -201,6 +200,7 @@ LowRankSolver::LowRankSolver(int size, int max_columns)
       h_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
       x_ut_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
       small_(Eigen::VectorXd::Zero(std::max(1, max_columns))),
+      row_(Eigen::VectorXd::Zero(std::max(1, max_columns))),
       correction_(Eigen::VectorXd::Zero(std::max(1, max_columns))) {
   MICRODEX_CHECK(size >= 1 && max_columns >= 0);
 }
@@ -243,20 +243,19 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
   }
   factor.SolveColumns(y_, m, first_row_.data());
   // H = V^T Y, symmetric: the lower triangle from the sparse columns (zero weights skipped: a
-  // zero column's rows of Y are not solved).
+  // zero column's rows of Y are not solved). Row i of H is a combination of the (at most 12)
+  // rows of Y that column i touches, formed over every slot at once (contiguous rows of the
+  // row-major Y); its lower triangle is kept.
   for (int i = 0; i < m; ++i) {
     const NodeColumn& c = columns[i];
-    for (int j = 0; j <= i; ++j) {
-      const int sj = slot_[j];
-      double sum = 0.0;
-      for (int k = 0; k < c.count; ++k) {
-        if (c.weight[k] == 0.0) continue;
-        const int row = 3 * c.node[k];
-        sum += c.weight[k] *
-               (c.dir[0] * y_(row, sj) + c.dir[1] * y_(row + 1, sj) + c.dir[2] * y_(row + 2, sj));
-      }
-      h_(i, j) = sum;
+    row_.head(m).setZero();
+    for (int k = 0; k < c.count; ++k) {
+      if (c.weight[k] == 0.0) continue;
+      const int row = 3 * c.node[k];
+      AddCombinedRows(y_.row(row).data(), y_.row(row + 1).data(), y_.row(row + 2).data(), c.dir,
+                      c.weight[k], m, row_.data());
     }
+    for (int j = 0; j <= i; ++j) h_(i, j) = row_[slot_[j]];
   }
   for (int i = 0; i < m; ++i) {
     for (int j = i + 1; j < m; ++j) h_(i, j) = h_(j, i);

@@ -7,6 +7,7 @@
 // temporaries while factorising; this one works in storage sized once, O(N p^2) per solve.
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <span>
 
 namespace microdex::thread {
@@ -25,7 +26,21 @@ class BandedSpd {
   double At(int i, int j) const { return i >= j ? band_(i - j, j) : band_(j - i, i); }
   // Adds a 3x3 block at block row a, block column b (|a - b| small enough for the band). Only
   // the lower triangle is written, so add each off-diagonal block once with a > b.
-  void AddBlock(int a, int b, const Eigen::Matrix3d& block);
+  void AddBlock(int a, int b, const Eigen::Matrix3d& block) {
+    if (a < b) return;  // upper triangle: not stored
+    // Column 3b + c of the lower triangle holds rows 3a + r at offsets 3(a - b) + r - c.
+    const int d0 = 3 * (a - b);
+    for (int c = 0; c < 3; ++c) {
+      double* col = band_.data() + static_cast<std::ptrdiff_t>(3 * b + c) * (p_ + 1);
+      for (int r = a == b ? c : 0; r < 3; ++r) col[d0 + r - c] += block(r, c);
+    }
+  }
+  // AddBlock(a, b, s * Identity) without the zeros.
+  void AddIdentityBlock(int a, int b, double s) {
+    if (a < b) return;
+    const int d0 = 3 * (a - b);
+    for (int c = 0; c < 3; ++c) band_(d0, 3 * b + c) += s;
+  }
 
   // y = A x using the (unfactorised) band.
   void Multiply(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const;
@@ -123,6 +138,7 @@ class LowRankSolver {
   Eigen::MatrixXd h_;           // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
   Eigen::MatrixXd x_ut_;        // L_S^-1 H_UT
   Eigen::VectorXd small_;       // length max_columns
+  Eigen::VectorXd row_;         // length max_columns: a row of H over y_'s slots
   Eigen::VectorXd correction_;  // S^-1 U^T x of BeginCorrection, length max_columns
 };
 

@@ -71,8 +71,7 @@ void AddBendForces(const ThreadModel& model, const Eigen::Matrix3Xd& x_W, Eigen:
       const double c[3] = {1.0 / r0, -(1.0 / r0 + 1.0 / r1), 1.0 / r1};
       for (int a = 0; a < 3; ++a) {
         for (int b = 0; b <= a; ++b) {
-          system->AddBlock(i - 1 + a, i - 1 + b,
-                           (h2 * k * c[a] * c[b]) * Eigen::Matrix3d::Identity());
+          system->AddIdentityBlock(i - 1 + a, i - 1 + b, h2 * k * c[a] * c[b]);
         }
       }
     }
