@@ -128,6 +128,13 @@ void AddCombinedRows(const double* __restrict a, const double* __restrict b,
   for (int s = 0; s < count; ++s) out[s] += weight * (d0 * a[s] + d1 * b[s] + d2 * c[s]);
 }
 
+// out[j] -= scale * row[j] for j < count (element-wise).
+MICRODEX_VECTOR_CLONES
+void SubtractScaledRow(const double* __restrict row, double scale, int count,
+                       double* __restrict out) {
+  for (int j = 0; j < count; ++j) out[j] -= scale * row[j];
+}
+
 }  // namespace
 
 void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const {
@@ -198,7 +205,7 @@ LowRankSolver::LowRankSolver(int size, int max_columns)
       first_row_(Eigen::VectorXi::Zero(std::max(1, max_columns))),
       work_(Eigen::VectorXd::Zero(size)),
       h_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
-      x_ut_(Eigen::MatrixXd::Zero(std::max(1, max_columns), std::max(1, max_columns))),
+      x_ut_(BandedSpd::RowMajorMatrix::Zero(std::max(1, max_columns), std::max(1, max_columns))),
       small_(Eigen::VectorXd::Zero(std::max(1, max_columns))),
       row_(Eigen::VectorXd::Zero(std::max(1, max_columns))),
       correction_(Eigen::VectorXd::Zero(std::max(1, max_columns))) {
@@ -316,21 +323,34 @@ double LowRankSolver::CorrectionDot(int t) const {
 void LowRankSolver::FinishCorrection(const Eigen::Ref<const Eigen::VectorXd>& p,
                                      Eigen::Ref<Eigen::VectorXd> x) {
   // x - A^-1 U s + A^-1 (T p - U S^-1 H_UT p) = x + A^-1 (T p - U (s + L_S^-T X p)).
-  for (int k = 0; k < num_u_; ++k) small_[k] = x_ut_.row(k).head(num_t_).dot(p.head(num_t_));
+  for (int k = 0; k < num_u_; ++k) small_[k] = RowDot(k, p);
   BackSolve(h_, num_u_, small_.data());
   for (int k = 0; k < num_u_; ++k) small_[k] = -(small_[k] + correction_[k]);
   for (int j = 0; j < num_t_; ++j) small_[num_u_ + j] = p[j];
   if (SolveColumnSum(small_.data(), 0, num_u_ + num_t_)) x += work_;
 }
 
+double LowRankSolver::RowDot(int k, const Eigen::Ref<const Eigen::VectorXd>& p) const {
+  // Summed in index order (a vectorised dot would sum in another order).
+  if (num_t_ == 0) return 0.0;
+  const double* row = x_ut_.row(k).data();
+  double sum = row[0] * p[0];
+  for (int j = 1; j < num_t_; ++j) sum += row[j] * p[j];
+  return sum;
+}
+
 void LowRankSolver::Delassus(Eigen::MatrixXd& g) {
-  // G = H_TT - X^T X, X = L_S^-1 H_UT.
+  // G = H_TT - X^T X, X = L_S^-1 H_UT: row i of G's lower triangle at once, X's rows
+  // (contiguous, row-major) subtracted in k order, element by element.
   for (int i = 0; i < num_t_; ++i) {
+    double* acc = row_.data();
+    for (int j = 0; j <= i; ++j) acc[j] = h_(num_u_ + i, num_u_ + j);
+    for (int k = 0; k < num_u_; ++k) {
+      SubtractScaledRow(x_ut_.row(k).data(), x_ut_(k, i), i + 1, acc);
+    }
     for (int j = 0; j <= i; ++j) {
-      double v = h_(num_u_ + i, num_u_ + j);
-      for (int k = 0; k < num_u_; ++k) v -= x_ut_(k, i) * x_ut_(k, j);
-      g(i, j) = v;
-      g(j, i) = v;
+      g(i, j) = acc[j];
+      g(j, i) = acc[j];
     }
   }
 }
@@ -339,7 +359,7 @@ void LowRankSolver::AddResponse(const Eigen::Ref<const Eigen::VectorXd>& p,
                                 Eigen::Ref<Eigen::VectorXd> x) {
   if (num_t_ == 0) return;
   // (A + U D U^T)^-1 T p = A^-1 (T p - U S^-1 H_UT p), with S^-1 H_UT p = L_S^-T X p.
-  for (int k = 0; k < num_u_; ++k) small_[k] = x_ut_.row(k).head(num_t_).dot(p.head(num_t_));
+  for (int k = 0; k < num_u_; ++k) small_[k] = RowDot(k, p);
   BackSolve(h_, num_u_, small_.data());
   for (int k = 0; k < num_u_; ++k) small_[k] = -small_[k];
   for (int j = 0; j < num_t_; ++j) small_[num_u_ + j] = p[j];

@@ -126,6 +126,8 @@ class LowRankSolver {
   // work_ = A^-1 (sum of the columns first.. first + count - 1 times the coefficients), one
   // banded solve of that sparse vector; false (work_ zero) if the sum touches no row.
   bool SolveColumnSum(const double* coefficients, int first, int count);
+  // Row k of x_ut_ (its first num_t_ entries) dotted with p.
+  double RowDot(int k, const Eigen::Ref<const Eigen::VectorXd>& p) const;
 
   const BandedSpd* factor_ = nullptr;    // the caller's, from Prepare
   std::span<const NodeColumn> columns_;  // the caller's, from Prepare
@@ -135,11 +137,11 @@ class LowRankSolver {
   Eigen::VectorXi column_first_;         // first touched row of column j of [U T]
   Eigen::VectorXi first_row_;            // first touched row of y_'s columns, ascending
   Eigen::VectorXd work_;                 // length size
-  Eigen::MatrixXd h_;           // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
-  Eigen::MatrixXd x_ut_;        // L_S^-1 H_UT
-  Eigen::VectorXd small_;       // length max_columns
-  Eigen::VectorXd row_;         // length max_columns: a row of H over y_'s slots
-  Eigen::VectorXd correction_;  // S^-1 U^T x of BeginCorrection, length max_columns
+  Eigen::MatrixXd h_;  // [U T]^T A^-1 [U T]; lower triangle of S = D^-1 + H_uu factorised
+  BandedSpd::RowMajorMatrix x_ut_;  // L_S^-1 H_UT
+  Eigen::VectorXd small_;           // length max_columns
+  Eigen::VectorXd row_;             // length max_columns: a row of H over y_'s slots
+  Eigen::VectorXd correction_;      // S^-1 U^T x of BeginCorrection, length max_columns
 };
 
 }  // namespace microdex::thread
