@@ -39,8 +39,8 @@ namespace {
 // (vectorised, the same bits at every width). Only the pivots form a dependency chain. The
 // inverse pivots are kept for the solves.
 MICRODEX_VECTOR_CLONES
-bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p) {
-  for (int j = 0; j < size; ++j) {
+bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p, int first) {
+  for (int j = first; j < size; ++j) {
     double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * rows;
     const double pivot = col[0];
     if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
@@ -58,35 +58,104 @@ bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p) {
   return true;
 }
 
+// FactorizeBand's columns 0 .. size - P - 1 (those with a full p x p trailing block) for a
+// half bandwidth P known at compile time: the same operations on the same elements in the same
+// order (the same bits), the loops unrolled. Returns the first column not done, or -1 on a
+// non-positive pivot.
+template <int P>
+MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, int size) {
+  constexpr int kRows = P + 1;
+  int j = 0;
+  for (; j + P < size; ++j) {
+    double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * kRows;
+    const double pivot = col[0];
+    if (!(pivot > 0.0) || !std::isfinite(pivot)) return -1;
+    col[0] = std::sqrt(pivot);
+    const double inv = 1.0 / col[0];
+    inv_diag[j] = inv;
+    for (int d = 1; d <= P; ++d) col[d] *= inv;
+    for (int c = 1; c <= P; ++c) {
+      const double lcj = col[c];
+      double* __restrict target = col + c * kRows;
+      for (int r = 0; r <= P - c; ++r) target[r] -= col[c + r] * lcj;
+    }
+  }
+  return j;
+}
+
 }  // namespace
 
 bool BandedSpd::Factorize() {
-  return FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_);
+  int first = 0;
+  if (p_ == 8) {  // the thread's system (banded_spd.h)
+    first = FactorizeFullColumns<8>(band_.data(), inv_diag_.data(), size_);
+    if (first < 0) return false;
+  }
+  return FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, first);
 }
+
+namespace {
+
+// BandedSpd::Solve for a half bandwidth P known at compile time (unrolled; the same operations
+// in the same order), rows with a full band only: the forward pass's columns first .. size - P - 1
+// (returns where it stopped) and the backward pass's rows size - P - 1 down to 0 (after the
+// caller's rows above them).
+template <int P>
+int ForwardFullColumns(const double* band, const double* inv_diag, int size, int first,
+                       double* __restrict b) {
+  int j = first;
+  for (; j + P < size; ++j) {
+    const double* col = band + static_cast<std::ptrdiff_t>(j) * (P + 1);
+    b[j] *= inv_diag[j];
+    const double yj = b[j];
+    for (int d = 1; d <= P; ++d) b[j + d] -= col[d] * yj;
+  }
+  return j;
+}
+
+template <int P>
+void BackwardFullRows(const double* band, const double* inv_diag, int size, double* __restrict b) {
+  for (int i = size - P - 1; i >= 0; --i) {
+    const double* col = band + static_cast<std::ptrdiff_t>(i) * (P + 1);
+    double sum = b[i];
+    for (int d = 1; d <= P; ++d) sum -= col[d] * b[i + d];
+    b[i] = sum * inv_diag[i];
+  }
+}
+
+}  // namespace
 
 void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
   // L y = b by columns: each row is reduced by the solved rows above it in the order of a
   // row-by-row substitution (k ascending), with L's columns read contiguously.
-  for (int j = std::max(0, first_row); j < size_; ++j) {
+  int start = std::max(0, first_row);
+  if (p_ == 8)
+    start = ForwardFullColumns<8>(band_.data(), inv_diag_.data(), size_, start, b.data());
+  for (int j = start; j < size_; ++j) {
     b[j] *= inv_diag_[j];
     const int m = std::min(size_ - 1 - j, p_);
     const double yj = b[j];
     for (int d = 1; d <= m; ++d) b[j + d] -= band_(d, j) * yj;
   }
-  for (int i = size_ - 1; i >= 0; --i) {  // L^T x = y
+  // L^T x = y, the rows without a full band first.
+  const int full = p_ == 8 ? std::max(0, size_ - p_) : 0;
+  for (int i = size_ - 1; i >= full; --i) {
     double sum = b[i];
     const int hi = std::min(size_ - 1, i + p_);
     for (int k = i + 1; k <= hi; ++k) sum -= band_(k - i, i) * b[k];
     b[i] = sum * inv_diag_[i];
   }
+  if (p_ == 8 && full > 0) BackwardFullRows<8>(band_.data(), inv_diag_.data(), size_, b.data());
 }
 
 namespace {
 
 // Rows top..size-1 of L Y = B (forward) or L^T X = Y (backward) in place on the row-major b
 // (stride doubles per row), each row's update vectorised over its contiguous columns
-// (vector_clones.h: the same bits on every machine): the forward pass runs each row over the
-// columns that start at or above it (first_rows ascending), the backward pass over all `cols`.
+// (vector_clones.h: the same bits on every machine). Both passes run each row over the columns
+// that start at or above it (first_rows ascending): the forward pass because the others are
+// still zero there, the backward pass because a column's solution is wanted only from its
+// first row down (and the rows below never read the rows above).
 MICRODEX_VECTOR_CLONES
 void SubstituteRows(const double* band, int band_rows, const double* inv_diag, int size, int p,
                     bool forward, int top, double* b, int stride, const int* first_rows, int cols) {
@@ -105,16 +174,18 @@ void SubstituteRows(const double* band, int band_rows, const double* inv_diag, i
     }
     return;
   }
+  active = cols;
   for (int i = size - 1; i >= top; --i) {
+    while (active > 0 && first_rows[active - 1] > i) --active;
     double* __restrict row = b + static_cast<std::ptrdiff_t>(i) * stride;
     const int hi = std::min(size - 1, i + p);
     for (int k = i + 1; k <= hi; ++k) {
       const double l = band[static_cast<std::ptrdiff_t>(i) * band_rows + (k - i)];
       const double* __restrict other = b + static_cast<std::ptrdiff_t>(k) * stride;
-      for (int c = 0; c < cols; ++c) row[c] -= l * other[c];
+      for (int c = 0; c < active; ++c) row[c] -= l * other[c];
     }
     const double inv = inv_diag[i];
-    for (int c = 0; c < cols; ++c) row[c] *= inv;
+    for (int c = 0; c < active; ++c) row[c] *= inv;
   }
 }
 
@@ -141,12 +212,12 @@ void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows)
   MICRODEX_CHECK(b.rows() == size_ && cols <= b.cols());
   if (cols <= 0 || first_rows[0] >= size_) return;
   const int top = first_rows[0];
-  // L Y = B with each column's leading zeros skipped, then L^T X = Y down to the first touched
-  // row.
+  // L Y = B with each column's leading zeros skipped, then L^T X = Y for each column down to
+  // its own first row.
   SubstituteRows(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, true, top, b.data(),
                  static_cast<int>(b.cols()), first_rows, cols);
   SubstituteRows(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, false, top, b.data(),
-                 static_cast<int>(b.cols()), nullptr, cols);
+                 static_cast<int>(b.cols()), first_rows, cols);
 }
 
 double NodeColumn::Dot(const Eigen::Ref<const Eigen::VectorXd>& x) const {
@@ -249,23 +320,26 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
     }
   }
   factor.SolveColumns(y_, m, first_row_.data());
-  // H = V^T Y, symmetric: the lower triangle from the sparse columns (zero weights skipped: a
-  // zero column's rows of Y are not solved). Row i of H is a combination of the (at most 12)
-  // rows of Y that column i touches, formed over every slot at once (contiguous rows of the
-  // row-major Y); its lower triangle is kept.
+  // H = V^T Y, symmetric, from the sparse columns (zero weights skipped). Y's column in slot s
+  // is solved only from that column's first row down, so entry (i, j) is formed from the rows
+  // of whichever of the two columns comes later in slot order (its rows lie at or below the
+  // other's first row): row i of H over slots 0..slot_[i] is a combination of the (at most 12)
+  // rows of Y that column i touches, formed over those slots at once (contiguous rows of the
+  // row-major Y), and gives H(i, j) = H(j, i) for the columns j in those slots.
   for (int i = 0; i < m; ++i) {
     const NodeColumn& c = columns[i];
-    row_.head(m).setZero();
+    const int count = slot_[i] + 1;
+    row_.head(count).setZero();
     for (int k = 0; k < c.count; ++k) {
       if (c.weight[k] == 0.0) continue;
       const int row = 3 * c.node[k];
       AddCombinedRows(y_.row(row).data(), y_.row(row + 1).data(), y_.row(row + 2).data(), c.dir,
-                      c.weight[k], m, row_.data());
+                      c.weight[k], count, row_.data());
     }
-    for (int j = 0; j <= i; ++j) h_(i, j) = row_[slot_[j]];
-  }
-  for (int i = 0; i < m; ++i) {
-    for (int j = i + 1; j < m; ++j) h_(i, j) = h_(j, i);
+    for (int s = 0; s < count; ++s) {
+      h_(i, order_[s]) = row_[s];
+      h_(order_[s], i) = row_[s];
+    }
   }
   // S = D^-1 + H_UU in place (lower triangle), then X = L_S^-1 H_UT.
   for (int i = 0; i < num_u_; ++i) {

@@ -52,10 +52,10 @@ class BandedSpd {
   void Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row = 0) const;
   // The same for the first `cols` columns of b at once (row-major: each row's columns are
   // contiguous, so the substitutions run across them, vectorised), for sparse columns: column j
-  // is zero above row first_rows[j] on entry, first_rows ascending. The forward substitution of row
-  // i runs only over the columns that start at or above it, and only the rows from first_rows[0]
-  // down are solved (the rows above it are left unsolved: L^T's back substitution never needs them
-  // for the rows below).
+  // is zero above row first_rows[j] on entry, first_rows ascending. Both substitutions of row i
+  // run only over the columns that start at or above it: column j is solved from row
+  // first_rows[j] down only (the rows above are left unsolved: L^T's back substitution never
+  // needs them for the rows below).
   using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   void SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const;
 
@@ -88,9 +88,10 @@ struct NodeColumn {
 // columns T (contact impulses of the same system). One multi-column banded solve Y = A^-1 [U T],
 // then small dense algebra: S = D^-1 + U^T A^-1 U (Cholesky), G = T^T Y_T - (U^T Y_T)^T S^-1
 // (U^T Y_T). Y is needed only at the rows the columns touch: the columns are solved in the
-// order of their first row (the forward substitution skips each column's leading zeros, the
-// back substitution stops at the first touched row), and the solution corrections, which are
-// Y times a vector, are one banded solve of that vector's sparse right-hand side instead.
+// order of their first row, each from that row down (the forward substitution skips its leading
+// zeros, the back substitution stops there; an entry of the symmetric U^T Y is read from the
+// column that starts lower), and the solution corrections, which are Y times a vector, are one
+// banded solve of that vector's sparse right-hand side instead.
 // Storage sized at construction; nothing allocates afterwards.
 class LowRankSolver {
  public:

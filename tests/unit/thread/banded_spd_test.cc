@@ -64,8 +64,8 @@ TEST(BandedSpd, SolveColumnsEqualsSingleSolvesBitForBit) {
   for (int j = 0; j < cols; ++j) {
     Eigen::VectorXd x = rhs.col(j);
     band.Solve(x, first[j]);
-    // Rows from the first column's first row down are solved; compare those.
-    for (int r = first[0]; r < n; ++r) {
+    // Each column is solved from its own first row down; compare those rows.
+    for (int r = first[j]; r < n; ++r) {
       ASSERT_EQ(b(r, j), x[r]) << "column " << j << " row " << r;
     }
   }
