@@ -13,7 +13,8 @@ BandedSpd::BandedSpd(int size, int half_bandwidth)
     : size_(size),
       p_(half_bandwidth),
       band_(Eigen::MatrixXd::Zero(half_bandwidth + 1, size)),
-      inv_diag_(Eigen::VectorXd::Zero(size)) {
+      inv_diag_(Eigen::VectorXd::Zero(size)),
+      twist_(size) {
   MICRODEX_CHECK(size >= 1 && half_bandwidth >= 0);
 }
 
@@ -39,8 +40,8 @@ namespace {
 // (vectorised, the same bits at every width). Only the pivots form a dependency chain. The
 // inverse pivots are kept for the solves.
 MICRODEX_VECTOR_CLONES
-bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p, int first) {
-  for (int j = first; j < size; ++j) {
+bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p, int first, int end) {
+  for (int j = first; j < end; ++j) {
     double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * rows;
     const double pivot = col[0];
     if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
@@ -63,10 +64,10 @@ bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p, in
 // order (the same bits), the loops unrolled. Returns the first column not done, or -1 on a
 // non-positive pivot.
 template <int P>
-MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, int size) {
+MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, int size, int end) {
   constexpr int kRows = P + 1;
   int j = 0;
-  for (; j + P < size; ++j) {
+  for (; j < end && j + P < size; ++j) {
     double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * kRows;
     const double pivot = col[0];
     if (!(pivot > 0.0) || !std::isfinite(pivot)) return -1;
@@ -83,15 +84,43 @@ MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, 
   return j;
 }
 
+// The twisted part: columns size - 1 down to twist of what the top part left (its Schur
+// complement), eliminated upwards: U U^T with U upper triangular, U(j - d, j) stored in place of
+// A(j, j - d), i.e. at band(d, j - d). Each column is scaled by its pivot's inverse and
+// subtracted from the p x p block above it.
+bool FactorizeBandUp(double* band, int rows, double* inv_diag, int size, int p, int twist) {
+  for (int j = size - 1; j >= twist; --j) {
+    double* diag = band + static_cast<std::ptrdiff_t>(j) * rows;
+    const double pivot = diag[0];
+    if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
+    diag[0] = std::sqrt(pivot);
+    const double inv = 1.0 / diag[0];
+    inv_diag[j] = inv;
+    const int m = std::min(p, j - twist);
+    for (int d = 1; d <= m; ++d) band[static_cast<std::ptrdiff_t>(j - d) * rows + d] *= inv;
+    for (int c = 1; c <= m; ++c) {
+      const double ucj = band[static_cast<std::ptrdiff_t>(j - c) * rows + c];  // U(j - c, j)
+      // A(j - c, j - c - r) -= U(j - c, j) U(j - c - r, j), r = 0 .. m - c.
+      for (int r = 0; r <= m - c; ++r) {
+        double* col = band + static_cast<std::ptrdiff_t>(j - c - r) * rows;
+        col[r] -= col[c + r] * ucj;
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
-bool BandedSpd::Factorize() {
+bool BandedSpd::Factorize(int twist) {
+  twist_ = twist < 0 || twist > size_ ? size_ : twist;
   int first = 0;
   if (p_ == 8) {  // the thread's system (banded_spd.h)
-    first = FactorizeFullColumns<8>(band_.data(), inv_diag_.data(), size_);
+    first = FactorizeFullColumns<8>(band_.data(), inv_diag_.data(), size_, twist_);
     if (first < 0) return false;
   }
-  return FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, first);
+  return FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, first, twist_) &&
+         FactorizeBandUp(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, twist_);
 }
 
 namespace {
@@ -101,10 +130,10 @@ namespace {
 // (returns where it stopped) and the backward pass's rows size - P - 1 down to 0 (after the
 // caller's rows above them).
 template <int P>
-int ForwardFullColumns(const double* band, const double* inv_diag, int size, int first,
+int ForwardFullColumns(const double* band, const double* inv_diag, int size, int first, int end,
                        double* __restrict b) {
   int j = first;
-  for (; j + P < size; ++j) {
+  for (; j < end && j + P < size; ++j) {
     const double* col = band + static_cast<std::ptrdiff_t>(j) * (P + 1);
     b[j] *= inv_diag[j];
     const double yj = b[j];
@@ -114,8 +143,8 @@ int ForwardFullColumns(const double* band, const double* inv_diag, int size, int
 }
 
 template <int P>
-void BackwardFullRows(const double* band, const double* inv_diag, int size, double* __restrict b) {
-  for (int i = size - P - 1; i >= 0; --i) {
+void BackwardFullRows(const double* band, const double* inv_diag, int last, double* __restrict b) {
+  for (int i = last; i >= 0; --i) {
     const double* col = band + static_cast<std::ptrdiff_t>(i) * (P + 1);
     double sum = b[i];
     for (int d = 1; d <= P; ++d) sum -= col[d] * b[i + d];
@@ -126,62 +155,108 @@ void BackwardFullRows(const double* band, const double* inv_diag, int size, doub
 }  // namespace
 
 void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
-  // L y = b by columns: each row is reduced by the solved rows above it in the order of a
-  // row-by-row substitution (k ascending), with L's columns read contiguously.
+  // The top part, L y = b by columns: each row is reduced by the solved rows above it in the
+  // order of a row-by-row substitution (k ascending), with L's columns read contiguously; its
+  // last columns reach into the twisted part's first rows.
+  const int t = twist_;
   int start = std::max(0, first_row);
   if (p_ == 8)
-    start = ForwardFullColumns<8>(band_.data(), inv_diag_.data(), size_, start, b.data());
-  for (int j = start; j < size_; ++j) {
+    start = ForwardFullColumns<8>(band_.data(), inv_diag_.data(), size_, start, t, b.data());
+  for (int j = start; j < t; ++j) {
     b[j] *= inv_diag_[j];
     const int m = std::min(size_ - 1 - j, p_);
     const double yj = b[j];
     for (int d = 1; d <= m; ++d) b[j + d] -= band_(d, j) * yj;
   }
-  // L^T x = y, the rows without a full band first.
-  const int full = p_ == 8 ? std::max(0, size_ - p_) : 0;
-  for (int i = size_ - 1; i >= full; --i) {
+  // The twisted part, U y = b from the bottom up, then U^T x = y from the twist down.
+  for (int j = size_ - 1; j >= t; --j) {
+    b[j] *= inv_diag_[j];
+    const int m = std::min(p_, j - t);
+    const double yj = b[j];
+    for (int d = 1; d <= m; ++d) b[j - d] -= band_(d, j - d) * yj;
+  }
+  for (int i = t; i < size_; ++i) {
+    double sum = b[i];
+    const int m = std::min(p_, i - t);
+    for (int d = 1; d <= m; ++d) sum -= band_(d, i - d) * b[i - d];
+    b[i] = sum * inv_diag_[i];
+  }
+  // L^T x = y for the top part, the rows without a full band first.
+  int i = t - 1;
+  for (; i >= 0 && (p_ != 8 || i + p_ > size_ - 1); --i) {
     double sum = b[i];
     const int hi = std::min(size_ - 1, i + p_);
     for (int k = i + 1; k <= hi; ++k) sum -= band_(k - i, i) * b[k];
     b[i] = sum * inv_diag_[i];
   }
-  if (p_ == 8 && full > 0) BackwardFullRows<8>(band_.data(), inv_diag_.data(), size_, b.data());
+  if (i >= 0) BackwardFullRows<8>(band_.data(), inv_diag_.data(), i, b.data());
 }
 
 namespace {
 
-// Rows top..size-1 of L Y = B (forward) or L^T X = Y (backward) in place on the row-major b
-// (stride doubles per row), each row's update vectorised over its contiguous columns
-// (vector_clones.h: the same bits on every machine). Both passes run each row over the columns
-// that start at or above it (first_rows ascending): the forward pass because the others are
-// still zero there, the backward pass because a column's solution is wanted only from its
-// first row down (and the rows below never read the rows above).
+// The multi-column solve of BandedSpd::SolveColumns in place on the row-major b (stride doubles
+// per row), each row's update vectorised over its contiguous columns (vector_clones.h: the same
+// bits on every machine). Above the twist t (L's rows) each row runs over the columns that
+// start at or above it (first_rows ascending): forward because the others are still zero there,
+// backward because a column's solution is wanted only from its first row down (and the rows
+// below never read the rows above). Below the twist (U's rows) every column, and only the rows
+// t .. end: b is zero below `end` on entry, and no row at or above `end` reads one below it.
 MICRODEX_VECTOR_CLONES
-void SubstituteRows(const double* band, int band_rows, const double* inv_diag, int size, int p,
-                    bool forward, int top, double* b, int stride, const int* first_rows, int cols) {
+void SubstituteColumns(const double* band, int band_rows, const double* inv_diag, int size, int p,
+                       int t, int top, int end, double* b, int stride, const int* first_rows,
+                       int cols) {
+  auto row_at = [&](int i) { return b + static_cast<std::ptrdiff_t>(i) * stride; };
+  auto at = [&](int d, int j) { return band[static_cast<std::ptrdiff_t>(j) * band_rows + d]; };
+  // L y = b over the top rows; the rows t .. t + p - 1 below them take the part of L's last
+  // columns when they are reached.
   int active = 0;
-  if (forward) {
-    for (int i = top; i < size; ++i) {
-      while (active < cols && first_rows[active] <= i) ++active;
-      double* __restrict row = b + static_cast<std::ptrdiff_t>(i) * stride;
-      for (int k = std::max(top, i - p); k < i; ++k) {
-        const double l = band[static_cast<std::ptrdiff_t>(k) * band_rows + (i - k)];
-        const double* __restrict other = b + static_cast<std::ptrdiff_t>(k) * stride;
-        for (int c = 0; c < active; ++c) row[c] -= l * other[c];
-      }
-      const double inv = inv_diag[i];
-      for (int c = 0; c < active; ++c) row[c] *= inv;
+  for (int i = top; i < t; ++i) {
+    while (active < cols && first_rows[active] <= i) ++active;
+    double* __restrict row = row_at(i);
+    for (int k = std::max(top, i - p); k < i; ++k) {
+      const double l = at(i - k, k);
+      const double* __restrict other = row_at(k);
+      for (int c = 0; c < active; ++c) row[c] -= l * other[c];
     }
-    return;
+    const double inv = inv_diag[i];
+    for (int c = 0; c < active; ++c) row[c] *= inv;
   }
+  // U y = b - L_21 y_1 from `end` up to the twist.
+  for (int i = end; i >= t; --i) {
+    double* __restrict row = row_at(i);
+    for (int k = std::max(top, i - p); k < t; ++k) {
+      const double l = at(i - k, k);
+      const double* __restrict other = row_at(k);
+      for (int c = 0; c < cols; ++c) row[c] -= l * other[c];
+    }
+    for (int k = std::min(end, i + p); k > i; --k) {  // in BandedSpd::Solve's order
+      const double u = at(k - i, i);                  // U(i, k)
+      const double* __restrict other = row_at(k);
+      for (int c = 0; c < cols; ++c) row[c] -= u * other[c];
+    }
+    const double inv = inv_diag[i];
+    for (int c = 0; c < cols; ++c) row[c] *= inv;
+  }
+  // U^T x = y from the twist down to `end`.
+  for (int i = t; i <= end; ++i) {
+    double* __restrict row = row_at(i);
+    for (int k = i - 1; k >= std::max(t, i - p); --k) {  // in BandedSpd::Solve's order
+      const double u = at(i - k, k);                     // U(k, i)
+      const double* __restrict other = row_at(k);
+      for (int c = 0; c < cols; ++c) row[c] -= u * other[c];
+    }
+    const double inv = inv_diag[i];
+    for (int c = 0; c < cols; ++c) row[c] *= inv;
+  }
+  // L^T x = y - L_21^T x_2 from the twist up to `top`.
   active = cols;
-  for (int i = size - 1; i >= top; --i) {
+  for (int i = std::min(t, size) - 1; i >= top; --i) {
     while (active > 0 && first_rows[active - 1] > i) --active;
-    double* __restrict row = b + static_cast<std::ptrdiff_t>(i) * stride;
+    double* __restrict row = row_at(i);
     const int hi = std::min(size - 1, i + p);
     for (int k = i + 1; k <= hi; ++k) {
-      const double l = band[static_cast<std::ptrdiff_t>(i) * band_rows + (k - i)];
-      const double* __restrict other = b + static_cast<std::ptrdiff_t>(k) * stride;
+      const double l = at(k - i, i);
+      const double* __restrict other = row_at(k);
       for (int c = 0; c < active; ++c) row[c] -= l * other[c];
     }
     const double inv = inv_diag[i];
@@ -208,16 +283,12 @@ void SubtractScaledRow(const double* __restrict row, double scale, int count,
 
 }  // namespace
 
-void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const {
+void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows,
+                             int last_row) const {
   MICRODEX_CHECK(b.rows() == size_ && cols <= b.cols());
   if (cols <= 0 || first_rows[0] >= size_) return;
-  const int top = first_rows[0];
-  // L Y = B with each column's leading zeros skipped, then L^T X = Y for each column down to
-  // its own first row.
-  SubstituteRows(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, true, top, b.data(),
-                 static_cast<int>(b.cols()), first_rows, cols);
-  SubstituteRows(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, false, top, b.data(),
-                 static_cast<int>(b.cols()), first_rows, cols);
+  SubstituteColumns(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, twist_, first_rows[0],
+                    SolvedEnd(last_row), b.data(), static_cast<int>(b.cols()), first_rows, cols);
 }
 
 double NodeColumn::Dot(const Eigen::Ref<const Eigen::VectorXd>& x) const {
@@ -294,11 +365,14 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
   if (m == 0) return true;
   // Columns in the order of their first touched row (a column of grasped nodes only is zero
   // and goes last).
+  int last = 0;
   for (int j = 0; j < m; ++j) {
     const NodeColumn& c = columns[j];
     int first = size_;
     for (int k = 0; k < c.count; ++k) {
-      if (c.weight[k] != 0.0) first = std::min(first, 3 * c.node[k]);
+      if (c.weight[k] == 0.0) continue;
+      first = std::min(first, 3 * c.node[k]);
+      last = std::max(last, 3 * c.node[k] + 2);
     }
     column_first_[j] = first;
     order_[j] = j;
@@ -311,7 +385,7 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
     first_row_[s] = column_first_[order_[s]];
   }
   const int top = first_row_[0];
-  if (top < size_) y_.block(top, 0, size_ - top, m).setZero();
+  if (top < size_) y_.block(top, 0, factor.SolvedEnd(last) + 1 - top, m).setZero();
   for (int j = 0; j < m; ++j) {
     const NodeColumn& c = columns[j];
     for (int k = 0; k < c.count; ++k) {
@@ -319,7 +393,7 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
       for (int r = 0; r < 3; ++r) y_(3 * c.node[k] + r, slot_[j]) += c.weight[k] * c.dir[r];
     }
   }
-  factor.SolveColumns(y_, m, first_row_.data());
+  factor.SolveColumns(y_, m, first_row_.data(), last);
   // H = V^T Y, symmetric, from the sparse columns (zero weights skipped). Y's column in slot s
   // is solved only from that column's first row down, so entry (i, j) is formed from the rows
   // of whichever of the two columns comes later in slot order (its rows lie at or below the

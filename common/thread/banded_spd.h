@@ -7,6 +7,7 @@
 // temporaries while factorising; this one works in storage sized once, O(N p^2) per solve.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <span>
 
@@ -45,19 +46,29 @@ class BandedSpd {
   // y = A x using the (unfactorised) band.
   void Multiply(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) const;
 
-  // In place A = L L^T. Returns false (and leaves garbage) on a non-positive pivot.
-  bool Factorize();
-  // Solves L L^T x = b in place, after Factorize(). b's rows above first_row must be zero on
+  // In place A = M M^T, twisted at row `twist` (BABE: "burn at both ends"): the rows above it
+  // are eliminated downwards (M's top block L, lower triangular), the rows from it down are
+  // eliminated upwards on what is left (M's bottom block U, upper triangular). A twist outside
+  // [0, size) is size: the plain Cholesky factor. The multi-column solve of columns that touch
+  // only rows lo .. hi, with the twist between, then costs O((hi - lo) p) per column instead of
+  // O((size - lo) p). Returns false (and leaves garbage) on a non-positive pivot.
+  bool Factorize(int twist = -1);
+  int twist() const { return twist_; }
+  // Solves A x = b in place, after Factorize(). b's rows above first_row must be zero on
   // entry (a sparse right-hand side): the forward substitution starts there.
   void Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row = 0) const;
   // The same for the first `cols` columns of b at once (row-major: each row's columns are
   // contiguous, so the substitutions run across them, vectorised), for sparse columns: column j
-  // is zero above row first_rows[j] on entry, first_rows ascending. Both substitutions of row i
-  // run only over the columns that start at or above it: column j is solved from row
-  // first_rows[j] down only (the rows above are left unsolved: L^T's back substitution never
-  // needs them for the rows below).
+  // is nonzero only in rows first_rows[j] .. last_row on entry, first_rows ascending. The
+  // solution is computed only in rows first_rows[j] .. SolvedEnd(last_row) of column j (the
+  // rest is left unsolved), which b must hold zero down to on entry: above the twist both
+  // substitutions of row i run only over the columns that start at or above it; below it they
+  // stop at SolvedEnd(last_row).
   using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  void SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows) const;
+  void SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows, int last_row) const;
+  int SolvedEnd(int last_row) const {
+    return twist_ >= size_ ? size_ - 1 : std::min(size_ - 1, std::max(last_row, twist_ + p_ - 1));
+  }
 
  private:
   int size_ = 0;
@@ -66,7 +77,8 @@ class BandedSpd {
   // lower triangle is contiguous, so the factorisation's updates are contiguous.
   Eigen::MatrixXd band_;
 
-  Eigen::VectorXd inv_diag_;  // 1 / L(i, i) after Factorize()
+  Eigen::VectorXd inv_diag_;  // 1 / M(i, i) after Factorize()
+  int twist_ = 0;             // of the last Factorize()
 };
 
 // A column of a low-rank term over 3-vector node blocks (the matrix is 3N x 3N, node i owns rows
@@ -88,10 +100,12 @@ struct NodeColumn {
 // columns T (contact impulses of the same system). One multi-column banded solve Y = A^-1 [U T],
 // then small dense algebra: S = D^-1 + U^T A^-1 U (Cholesky), G = T^T Y_T - (U^T Y_T)^T S^-1
 // (U^T Y_T). Y is needed only at the rows the columns touch: the columns are solved in the
-// order of their first row, each from that row down (the forward substitution skips its leading
-// zeros, the back substitution stops there; an entry of the symmetric U^T Y is read from the
-// column that starts lower), and the solution corrections, which are Y times a vector, are one
-// banded solve of that vector's sparse right-hand side instead.
+// order of their first row, each from that row down to the last row any column touches (the
+// forward substitution skips its leading zeros, the back substitution stops there; an entry of
+// the symmetric U^T Y is read from the column that starts lower; a factor twisted between the
+// first and the last row stops both substitutions at the last), and the solution corrections,
+// which are Y times a vector, are one banded solve of that vector's sparse right-hand side
+// instead.
 // Storage sized at construction; nothing allocates afterwards.
 class LowRankSolver {
  public:

@@ -344,26 +344,42 @@ void EliminateGraspedNodes(const ThreadModel& model, double h, ThreadWorkspace& 
   });
 }
 
+// Where to twist the banded factor for the low-rank columns: at the last of their first rows
+// (each column's topmost node). Above it the multi-column solve skips each column's leading
+// zeros, below it every column is solved, down to the last row any column touches only
+// (BandedSpd::Factorize); -1 (no twist) without columns.
+int TwistRow(std::span<const NodeColumn> cols) {
+  int twist = -1;
+  for (const NodeColumn& c : cols) {
+    int first = -1;
+    for (int k = 0; k < c.count; ++k) {
+      if (c.weight[k] != 0.0 && (first < 0 || c.node[k] < first)) first = c.node[k];
+    }
+    twist = std::max(twist, 3 * first);
+  }
+  return twist;
+}
+
 // Factorises the banded system and solves it in place (w.rhs becomes dv), then adds the
 // exactly coupled pairs and the friction as low-rank terms on top of the banded factor.
 bool SolveImplicitSystem(int m, ThreadWorkspace& w, ThreadState& state) {
   BandedSpd& A = w.system;
   Eigen::VectorXd& dv = w.rhs;
-  if (!A.Factorize()) return false;
-  A.Solve(dv);
   const int nf = state.status.num_friction_contacts;
+  for (int q = 0; q < m; ++q) {
+    w.columns[q] = MakeSolveColumn(MakePairTerm(w.self_contacts[q]), w.self_contacts[q].n_W, w);
+  }
+  for (int j = 0; j < 2 * nf; ++j) {
+    w.columns[m + j] = w.friction_columns[j];
+    NodeColumn& c = w.columns[m + j];
+    for (int k = 0; k < c.count; ++k) {
+      if (w.grasp_slot[c.node[k]] >= 0) c.weight[k] = 0.0;
+    }
+  }
+  const std::span<const NodeColumn> cols(w.columns.data(), m + 2 * nf);
+  if (!A.Factorize(TwistRow(cols))) return false;
+  A.Solve(dv);
   if (m + nf > 0) {
-    for (int q = 0; q < m; ++q) {
-      w.columns[q] = MakeSolveColumn(MakePairTerm(w.self_contacts[q]), w.self_contacts[q].n_W, w);
-    }
-    for (int j = 0; j < 2 * nf; ++j) {
-      w.columns[m + j] = w.friction_columns[j];
-      NodeColumn& c = w.columns[m + j];
-      for (int k = 0; k < c.count; ++k) {
-        if (w.grasp_slot[c.node[k]] >= 0) c.weight[k] = 0.0;
-      }
-    }
-    const std::span<const NodeColumn> cols(w.columns.data(), m + 2 * nf);
     if (!w.low_rank.Prepare(A, cols, m, w.pair_d.data())) return false;
     if (nf > 0) {
       // The pairs' correction and the friction response in one banded solve.
