@@ -20,9 +20,31 @@ BandedSpd::BandedSpd(int size, int half_bandwidth)
 
 // x and y are Refs so that a Map of the state is read in place (a const VectorXd& would
 // build a heap temporary from it on every step).
+namespace {
+
+// Row i of the product for a half bandwidth P known at compile time, rows with a full band on
+// both sides (P <= i < size - P): the same operations in the same order as the general loop.
+template <int P>
+void MultiplyFullRows(const double* band, const double* __restrict x, int size,
+                      double* __restrict y) {
+  for (int i = P; i < size - P; ++i) {
+    double sum = band[static_cast<std::ptrdiff_t>(i) * (P + 1)] * x[i];
+    for (int j = i - P; j < i; ++j)
+      sum += band[static_cast<std::ptrdiff_t>(j) * (P + 1) + i - j] * x[j];
+    const double* col = band + static_cast<std::ptrdiff_t>(i) * (P + 1);
+    for (int d = 1; d <= P; ++d) sum += col[d] * x[i + d];
+    y[i] = sum;
+  }
+}
+
+}  // namespace
+
 void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
                          Eigen::Ref<Eigen::VectorXd> y) const {
+  const bool unrolled = p_ == 8 && size_ > 2 * p_;
+  if (unrolled) MultiplyFullRows<8>(band_.data(), x.data(), size_, y.data());
   for (int i = 0; i < size_; ++i) {
+    if (unrolled && i == p_) i = size_ - p_;  // the rows between are done
     double sum = band_(0, i) * x[i];
     const int lo = std::max(0, i - p_);
     for (int j = lo; j < i; ++j) sum += band_(i - j, j) * x[j];
@@ -88,8 +110,39 @@ MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, 
 // complement), eliminated upwards: U U^T with U upper triangular, U(j - d, j) stored in place of
 // A(j, j - d), i.e. at band(d, j - d). Each column is scaled by its pivot's inverse and
 // subtracted from the p x p block above it.
+// FactorizeBandUp's columns size - 1 down to twist + P (a full p x p block above each) for a
+// half bandwidth P known at compile time, unrolled, in the same order. Returns the next column,
+// or -2 on a non-positive pivot.
+template <int P>
+int FactorizeFullColumnsUp(double* band, double* inv_diag, int size, int twist) {
+  constexpr int kRows = P + 1;
+  int j = size - 1;
+  for (; j - P >= twist; --j) {
+    double* diag = band + static_cast<std::ptrdiff_t>(j) * kRows;
+    const double pivot = diag[0];
+    if (!(pivot > 0.0) || !std::isfinite(pivot)) return -2;
+    diag[0] = std::sqrt(pivot);
+    const double inv = 1.0 / diag[0];
+    inv_diag[j] = inv;
+    for (int d = 1; d <= P; ++d) band[static_cast<std::ptrdiff_t>(j - d) * kRows + d] *= inv;
+    for (int c = 1; c <= P; ++c) {
+      const double ucj = band[static_cast<std::ptrdiff_t>(j - c) * kRows + c];
+      for (int r = 0; r <= P - c; ++r) {
+        double* col = band + static_cast<std::ptrdiff_t>(j - c - r) * kRows;
+        col[r] -= col[c + r] * ucj;
+      }
+    }
+  }
+  return j;
+}
+
 bool FactorizeBandUp(double* band, int rows, double* inv_diag, int size, int p, int twist) {
-  for (int j = size - 1; j >= twist; --j) {
+  int start = size - 1;
+  if (p == 8) {
+    start = FactorizeFullColumnsUp<8>(band, inv_diag, size, twist);
+    if (start == -2) return false;
+  }
+  for (int j = start; j >= twist; --j) {
     double* diag = band + static_cast<std::ptrdiff_t>(j) * rows;
     const double pivot = diag[0];
     if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
@@ -152,6 +205,32 @@ void BackwardFullRows(const double* band, const double* inv_diag, int last, doub
   }
 }
 
+// The twisted part's U y = b, columns size - 1 down to twist + P (returns where it stopped), and
+// U^T x = y, rows first .. size - 1 (each at least P below the twist), unrolled.
+template <int P>
+int UpwardFullColumns(const double* band, const double* inv_diag, int size, int twist,
+                      double* __restrict b) {
+  int j = size - 1;
+  for (; j - P >= twist; --j) {
+    b[j] *= inv_diag[j];
+    const double yj = b[j];
+    for (int d = 1; d <= P; ++d)
+      b[j - d] -= band[static_cast<std::ptrdiff_t>(j - d) * (P + 1) + d] * yj;
+  }
+  return j;
+}
+
+template <int P>
+void DownwardFullRows(const double* band, const double* inv_diag, int size, int first,
+                      double* __restrict b) {
+  for (int i = first; i < size; ++i) {
+    double sum = b[i];
+    for (int d = 1; d <= P; ++d)
+      sum -= band[static_cast<std::ptrdiff_t>(i - d) * (P + 1) + d] * b[i - d];
+    b[i] = sum * inv_diag[i];
+  }
+}
+
 }  // namespace
 
 void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
@@ -169,18 +248,23 @@ void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
     for (int d = 1; d <= m; ++d) b[j + d] -= band_(d, j) * yj;
   }
   // The twisted part, U y = b from the bottom up, then U^T x = y from the twist down.
-  for (int j = size_ - 1; j >= t; --j) {
+  int j = size_ - 1;
+  if (p_ == 8) j = UpwardFullColumns<8>(band_.data(), inv_diag_.data(), size_, t, b.data());
+  for (; j >= t; --j) {
     b[j] *= inv_diag_[j];
     const int m = std::min(p_, j - t);
     const double yj = b[j];
     for (int d = 1; d <= m; ++d) b[j - d] -= band_(d, j - d) * yj;
   }
-  for (int i = t; i < size_; ++i) {
+  const int full_from = p_ == 8 ? std::min(size_, t + p_) : size_;
+  for (int i = t; i < full_from; ++i) {
     double sum = b[i];
     const int m = std::min(p_, i - t);
     for (int d = 1; d <= m; ++d) sum -= band_(d, i - d) * b[i - d];
     b[i] = sum * inv_diag_[i];
   }
+  if (full_from < size_)
+    DownwardFullRows<8>(band_.data(), inv_diag_.data(), size_, full_from, b.data());
   // L^T x = y for the top part, the rows without a full band first.
   int i = t - 1;
   for (; i >= 0 && (p_ != 8 || i + p_ > size_ - 1); --i) {
