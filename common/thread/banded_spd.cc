@@ -13,6 +13,7 @@ BandedSpd::BandedSpd(int size, int half_bandwidth)
     : size_(size),
       p_(half_bandwidth),
       band_(Eigen::MatrixXd::Zero(half_bandwidth + 1, size)),
+      upper_(Eigen::MatrixXd::Zero(half_bandwidth + 1, size)),
       inv_diag_(Eigen::VectorXd::Zero(size)),
       twist_(size) {
   MICRODEX_CHECK(size >= 1 && half_bandwidth >= 0);
@@ -107,60 +108,55 @@ MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, 
 }
 
 // The twisted part: columns size - 1 down to twist of what the top part left (its Schur
-// complement), eliminated upwards: U U^T with U upper triangular, U(j - d, j) stored in place of
-// A(j, j - d), i.e. at band(d, j - d). Each column is scaled by its pivot's inverse and
-// subtracted from the p x p block above it.
+// complement), eliminated upwards: U U^T with U upper triangular, in the upper band storage
+// upper(d, j) = A(j - d, j) (column j of U contiguous, as L's columns are in the lower). Each
+// column is scaled by its pivot's inverse and subtracted from the p x p block above it, column
+// by column, contiguous and element by element independent (vectorised, the same bits at every
+// width).
+MICRODEX_VECTOR_CLONES
+bool FactorizeBandUp(double* upper, int rows, double* inv_diag, int p, int twist, int first) {
+  for (int j = first; j >= twist; --j) {
+    double* __restrict col = upper + static_cast<std::ptrdiff_t>(j) * rows;
+    const double pivot = col[0];
+    if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
+    col[0] = std::sqrt(pivot);
+    const double inv = 1.0 / col[0];
+    inv_diag[j] = inv;
+    const int m = std::min(p, j - twist);
+    for (int d = 1; d <= m; ++d) col[d] *= inv;  // U(j - d, j)
+    for (int c = 1; c <= m; ++c) {
+      const double ucj = col[c];
+      // A(j - c - r, j - c) -= U(j - c - r, j) U(j - c, j), r = 0 .. m - c.
+      double* __restrict target = upper + static_cast<std::ptrdiff_t>(j - c) * rows;
+      for (int r = 0; r <= m - c; ++r) target[r] -= col[c + r] * ucj;
+    }
+  }
+  return true;
+}
+
 // FactorizeBandUp's columns size - 1 down to twist + P (a full p x p block above each) for a
 // half bandwidth P known at compile time, unrolled, in the same order. Returns the next column,
 // or -2 on a non-positive pivot.
 template <int P>
-int FactorizeFullColumnsUp(double* band, double* inv_diag, int size, int twist) {
+MICRODEX_VECTOR_CLONES int FactorizeFullColumnsUp(double* upper, double* inv_diag, int size,
+                                                  int twist) {
   constexpr int kRows = P + 1;
   int j = size - 1;
   for (; j - P >= twist; --j) {
-    double* diag = band + static_cast<std::ptrdiff_t>(j) * kRows;
-    const double pivot = diag[0];
+    double* __restrict col = upper + static_cast<std::ptrdiff_t>(j) * kRows;
+    const double pivot = col[0];
     if (!(pivot > 0.0) || !std::isfinite(pivot)) return -2;
-    diag[0] = std::sqrt(pivot);
-    const double inv = 1.0 / diag[0];
+    col[0] = std::sqrt(pivot);
+    const double inv = 1.0 / col[0];
     inv_diag[j] = inv;
-    for (int d = 1; d <= P; ++d) band[static_cast<std::ptrdiff_t>(j - d) * kRows + d] *= inv;
+    for (int d = 1; d <= P; ++d) col[d] *= inv;
     for (int c = 1; c <= P; ++c) {
-      const double ucj = band[static_cast<std::ptrdiff_t>(j - c) * kRows + c];
-      for (int r = 0; r <= P - c; ++r) {
-        double* col = band + static_cast<std::ptrdiff_t>(j - c - r) * kRows;
-        col[r] -= col[c + r] * ucj;
-      }
+      const double ucj = col[c];
+      double* __restrict target = col - c * kRows;
+      for (int r = 0; r <= P - c; ++r) target[r] -= col[c + r] * ucj;
     }
   }
   return j;
-}
-
-bool FactorizeBandUp(double* band, int rows, double* inv_diag, int size, int p, int twist) {
-  int start = size - 1;
-  if (p == 8) {
-    start = FactorizeFullColumnsUp<8>(band, inv_diag, size, twist);
-    if (start == -2) return false;
-  }
-  for (int j = start; j >= twist; --j) {
-    double* diag = band + static_cast<std::ptrdiff_t>(j) * rows;
-    const double pivot = diag[0];
-    if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
-    diag[0] = std::sqrt(pivot);
-    const double inv = 1.0 / diag[0];
-    inv_diag[j] = inv;
-    const int m = std::min(p, j - twist);
-    for (int d = 1; d <= m; ++d) band[static_cast<std::ptrdiff_t>(j - d) * rows + d] *= inv;
-    for (int c = 1; c <= m; ++c) {
-      const double ucj = band[static_cast<std::ptrdiff_t>(j - c) * rows + c];  // U(j - c, j)
-      // A(j - c, j - c - r) -= U(j - c, j) U(j - c - r, j), r = 0 .. m - c.
-      for (int r = 0; r <= m - c; ++r) {
-        double* col = band + static_cast<std::ptrdiff_t>(j - c - r) * rows;
-        col[r] -= col[c + r] * ucj;
-      }
-    }
-  }
-  return true;
 }
 
 }  // namespace
@@ -172,8 +168,19 @@ bool BandedSpd::Factorize(int twist) {
     first = FactorizeFullColumns<8>(band_.data(), inv_diag_.data(), size_, twist_);
     if (first < 0) return false;
   }
-  return FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, first, twist_) &&
-         FactorizeBandUp(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, twist_);
+  if (!FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, first, twist_))
+    return false;
+  if (twist_ >= size_) return true;
+  // The Schur complement below the twist into the upper band storage.
+  for (int j = twist_; j < size_; ++j) {
+    for (int d = 0; d <= std::min(p_, j - twist_); ++d) upper_(d, j) = band_(d, j - d);
+  }
+  int start = size_ - 1;
+  if (p_ == 8) {
+    start = FactorizeFullColumnsUp<8>(upper_.data(), inv_diag_.data(), size_, twist_);
+    if (start == -2) return false;
+  }
+  return FactorizeBandUp(upper_.data(), p_ + 1, inv_diag_.data(), p_, twist_, start);
 }
 
 namespace {
@@ -208,25 +215,25 @@ void BackwardFullRows(const double* band, const double* inv_diag, int last, doub
 // The twisted part's U y = b, columns size - 1 down to twist + P (returns where it stopped), and
 // U^T x = y, rows first .. size - 1 (each at least P below the twist), unrolled.
 template <int P>
-int UpwardFullColumns(const double* band, const double* inv_diag, int size, int twist,
+int UpwardFullColumns(const double* upper, const double* inv_diag, int size, int twist,
                       double* __restrict b) {
   int j = size - 1;
   for (; j - P >= twist; --j) {
+    const double* col = upper + static_cast<std::ptrdiff_t>(j) * (P + 1);
     b[j] *= inv_diag[j];
     const double yj = b[j];
-    for (int d = 1; d <= P; ++d)
-      b[j - d] -= band[static_cast<std::ptrdiff_t>(j - d) * (P + 1) + d] * yj;
+    for (int d = 1; d <= P; ++d) b[j - d] -= col[d] * yj;
   }
   return j;
 }
 
 template <int P>
-void DownwardFullRows(const double* band, const double* inv_diag, int size, int first,
+void DownwardFullRows(const double* upper, const double* inv_diag, int size, int first,
                       double* __restrict b) {
   for (int i = first; i < size; ++i) {
+    const double* col = upper + static_cast<std::ptrdiff_t>(i) * (P + 1);
     double sum = b[i];
-    for (int d = 1; d <= P; ++d)
-      sum -= band[static_cast<std::ptrdiff_t>(i - d) * (P + 1) + d] * b[i - d];
+    for (int d = 1; d <= P; ++d) sum -= col[d] * b[i - d];
     b[i] = sum * inv_diag[i];
   }
 }
@@ -249,22 +256,22 @@ void BandedSpd::Solve(Eigen::Ref<Eigen::VectorXd> b, int first_row) const {
   }
   // The twisted part, U y = b from the bottom up, then U^T x = y from the twist down.
   int j = size_ - 1;
-  if (p_ == 8) j = UpwardFullColumns<8>(band_.data(), inv_diag_.data(), size_, t, b.data());
+  if (p_ == 8) j = UpwardFullColumns<8>(upper_.data(), inv_diag_.data(), size_, t, b.data());
   for (; j >= t; --j) {
     b[j] *= inv_diag_[j];
     const int m = std::min(p_, j - t);
     const double yj = b[j];
-    for (int d = 1; d <= m; ++d) b[j - d] -= band_(d, j - d) * yj;
+    for (int d = 1; d <= m; ++d) b[j - d] -= upper_(d, j) * yj;
   }
   const int full_from = p_ == 8 ? std::min(size_, t + p_) : size_;
   for (int i = t; i < full_from; ++i) {
     double sum = b[i];
     const int m = std::min(p_, i - t);
-    for (int d = 1; d <= m; ++d) sum -= band_(d, i - d) * b[i - d];
+    for (int d = 1; d <= m; ++d) sum -= upper_(d, i) * b[i - d];
     b[i] = sum * inv_diag_[i];
   }
   if (full_from < size_)
-    DownwardFullRows<8>(band_.data(), inv_diag_.data(), size_, full_from, b.data());
+    DownwardFullRows<8>(upper_.data(), inv_diag_.data(), size_, full_from, b.data());
   // L^T x = y for the top part, the rows without a full band first.
   int i = t - 1;
   for (; i >= 0 && (p_ != 8 || i + p_ > size_ - 1); --i) {
@@ -286,11 +293,12 @@ namespace {
 // below never read the rows above). Below the twist (U's rows) every column, and only the rows
 // t .. end: b is zero below `end` on entry, and no row at or above `end` reads one below it.
 MICRODEX_VECTOR_CLONES
-void SubstituteColumns(const double* band, int band_rows, const double* inv_diag, int size, int p,
-                       int t, int top, int end, double* b, int stride, const int* first_rows,
-                       int cols) {
+void SubstituteColumns(const double* band, const double* upper, int band_rows,
+                       const double* inv_diag, int size, int p, int t, int top, int end, double* b,
+                       int stride, const int* first_rows, int cols) {
   auto row_at = [&](int i) { return b + static_cast<std::ptrdiff_t>(i) * stride; };
   auto at = [&](int d, int j) { return band[static_cast<std::ptrdiff_t>(j) * band_rows + d]; };
+  auto up = [&](int d, int j) { return upper[static_cast<std::ptrdiff_t>(j) * band_rows + d]; };
   // L y = b over the top rows; the rows t .. t + p - 1 below them take the part of L's last
   // columns when they are reached.
   int active = 0;
@@ -314,7 +322,7 @@ void SubstituteColumns(const double* band, int band_rows, const double* inv_diag
       for (int c = 0; c < cols; ++c) row[c] -= l * other[c];
     }
     for (int k = std::min(end, i + p); k > i; --k) {  // in BandedSpd::Solve's order
-      const double u = at(k - i, i);                  // U(i, k)
+      const double u = up(k - i, k);                  // U(i, k)
       const double* __restrict other = row_at(k);
       for (int c = 0; c < cols; ++c) row[c] -= u * other[c];
     }
@@ -325,7 +333,7 @@ void SubstituteColumns(const double* band, int band_rows, const double* inv_diag
   for (int i = t; i <= end; ++i) {
     double* __restrict row = row_at(i);
     for (int k = i - 1; k >= std::max(t, i - p); --k) {  // in BandedSpd::Solve's order
-      const double u = at(i - k, k);                     // U(k, i)
+      const double u = up(i - k, i);                     // U(k, i)
       const double* __restrict other = row_at(k);
       for (int c = 0; c < cols; ++c) row[c] -= u * other[c];
     }
@@ -371,8 +379,9 @@ void BandedSpd::SolveColumns(RowMajorMatrix& b, int cols, const int* first_rows,
                              int last_row) const {
   MICRODEX_CHECK(b.rows() == size_ && cols <= b.cols());
   if (cols <= 0 || first_rows[0] >= size_) return;
-  SubstituteColumns(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, twist_, first_rows[0],
-                    SolvedEnd(last_row), b.data(), static_cast<int>(b.cols()), first_rows, cols);
+  SubstituteColumns(band_.data(), upper_.data(), p_ + 1, inv_diag_.data(), size_, p_, twist_,
+                    first_rows[0], SolvedEnd(last_row), b.data(), static_cast<int>(b.cols()),
+                    first_rows, cols);
 }
 
 double NodeColumn::Dot(const Eigen::Ref<const Eigen::VectorXd>& x) const {

@@ -76,6 +76,9 @@ class BandedSpd {
   // band_(d, j) = A(j + d, j), d in [0, p] (LAPACK's lower band storage): column j of the
   // lower triangle is contiguous, so the factorisation's updates are contiguous.
   Eigen::MatrixXd band_;
+  // upper_(d, j) = A(j - d, j) for t <= j - d <= j, t the twist: the bottom block after the top
+  // part's elimination, then its factor U (column j of U contiguous).
+  Eigen::MatrixXd upper_;
 
   Eigen::VectorXd inv_diag_;  // 1 / M(i, i) after Factorize()
   int twist_ = 0;             // of the last Factorize()

@@ -7,6 +7,7 @@
 
 #include "common/thread/thread_contacts.h"
 #include "common/thread/thread_forces.h"
+#include "common/thread/vector_clones.h"
 
 namespace microdex::thread {
 namespace {
@@ -98,6 +99,13 @@ void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadWorkspace
   state.status.num_sliding_contacts = 0;
 }
 
+// out[j] += a[j] d0 + b[j] d1 for j < n (element-wise: the same bits at every vector width).
+MICRODEX_VECTOR_CLONES
+void AddTwoColumns(const double* __restrict a, const double* __restrict b, double d0, double d1,
+                   int n, double* __restrict out) {
+  for (int j = 0; j < n; ++j) out[j] += a[j] * d0 + b[j] * d1;
+}
+
 // Stage: Coulomb friction in the implicit system. dv is A^-1 b on entry (the banded part's
 // solution; BeginCorrection holds the exact pairs' correction to it) and the step's velocity
 // change with the pairs and friction on return; the friction impulses p (two per contact, in the
@@ -140,7 +148,7 @@ void SolveFriction(ThreadWorkspace& w, ThreadState& state, Eigen::VectorXd& dv) 
       }
       const double d0 = p0 - w.friction_p[i], d1 = p1 - w.friction_p[i + 1];
       if (d0 == 0.0 && d1 == 0.0) continue;
-      for (int j = 0; j < nt; ++j) w.friction_vt[j] += G(j, i) * d0 + G(j, i + 1) * d1;
+      AddTwoColumns(G.col(i).data(), G.col(i + 1).data(), d0, d1, nt, w.friction_vt.data());
       w.friction_p[i] = p0;
       w.friction_p[i + 1] = p1;
       change = std::max(change, std::hypot(d0, d1));
