@@ -30,9 +30,11 @@ void MultiplyFullRows(const double* band, const double* __restrict x, int size,
                       double* __restrict y) {
   for (int i = P; i < size - P; ++i) {
     double sum = band[static_cast<std::ptrdiff_t>(i) * (P + 1)] * x[i];
+#pragma GCC unroll 8
     for (int j = i - P; j < i; ++j)
       sum += band[static_cast<std::ptrdiff_t>(j) * (P + 1) + i - j] * x[j];
     const double* col = band + static_cast<std::ptrdiff_t>(i) * (P + 1);
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) sum += col[d] * x[i + d];
     y[i] = sum;
   }
@@ -97,10 +99,13 @@ MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, 
     col[0] = std::sqrt(pivot);
     const double inv = 1.0 / col[0];
     inv_diag[j] = inv;
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) col[d] *= inv;
+#pragma GCC unroll 8
     for (int c = 1; c <= P; ++c) {
       const double lcj = col[c];
       double* __restrict target = col + c * kRows;
+#pragma GCC unroll 8
       for (int r = 0; r <= P - c; ++r) target[r] -= col[c + r] * lcj;
     }
   }
@@ -149,10 +154,13 @@ MICRODEX_VECTOR_CLONES int FactorizeFullColumnsUp(double* upper, double* inv_dia
     col[0] = std::sqrt(pivot);
     const double inv = 1.0 / col[0];
     inv_diag[j] = inv;
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) col[d] *= inv;
+#pragma GCC unroll 8
     for (int c = 1; c <= P; ++c) {
       const double ucj = col[c];
       double* __restrict target = col - c * kRows;
+#pragma GCC unroll 8
       for (int r = 0; r <= P - c; ++r) target[r] -= col[c + r] * ucj;
     }
   }
@@ -197,6 +205,7 @@ int ForwardFullColumns(const double* band, const double* inv_diag, int size, int
     const double* col = band + static_cast<std::ptrdiff_t>(j) * (P + 1);
     b[j] *= inv_diag[j];
     const double yj = b[j];
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) b[j + d] -= col[d] * yj;
   }
   return j;
@@ -207,6 +216,7 @@ void BackwardFullRows(const double* band, const double* inv_diag, int last, doub
   for (int i = last; i >= 0; --i) {
     const double* col = band + static_cast<std::ptrdiff_t>(i) * (P + 1);
     double sum = b[i];
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) sum -= col[d] * b[i + d];
     b[i] = sum * inv_diag[i];
   }
@@ -222,6 +232,7 @@ int UpwardFullColumns(const double* upper, const double* inv_diag, int size, int
     const double* col = upper + static_cast<std::ptrdiff_t>(j) * (P + 1);
     b[j] *= inv_diag[j];
     const double yj = b[j];
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) b[j - d] -= col[d] * yj;
   }
   return j;
@@ -233,6 +244,7 @@ void DownwardFullRows(const double* upper, const double* inv_diag, int size, int
   for (int i = first; i < size; ++i) {
     const double* col = upper + static_cast<std::ptrdiff_t>(i) * (P + 1);
     double sum = b[i];
+#pragma GCC unroll 8
     for (int d = 1; d <= P; ++d) sum -= col[d] * b[i - d];
     b[i] = sum * inv_diag[i];
   }
