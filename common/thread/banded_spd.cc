@@ -198,8 +198,8 @@ namespace {
 // (returns where it stopped) and the backward pass's rows size - P - 1 down to 0 (after the
 // caller's rows above them).
 template <int P>
-int ForwardFullColumns(const double* band, const double* inv_diag, int size, int first, int end,
-                       double* __restrict b) {
+MICRODEX_VECTOR_CLONES int ForwardFullColumns(const double* band, const double* inv_diag, int size,
+                                              int first, int end, double* __restrict b) {
   int j = first;
   for (; j < end && j + P < size; ++j) {
     const double* col = band + static_cast<std::ptrdiff_t>(j) * (P + 1);
@@ -225,8 +225,8 @@ void BackwardFullRows(const double* band, const double* inv_diag, int last, doub
 // The twisted part's U y = b, columns size - 1 down to twist + P (returns where it stopped), and
 // U^T x = y, rows first .. size - 1 (each at least P below the twist), unrolled.
 template <int P>
-int UpwardFullColumns(const double* upper, const double* inv_diag, int size, int twist,
-                      double* __restrict b) {
+MICRODEX_VECTOR_CLONES int UpwardFullColumns(const double* upper, const double* inv_diag, int size,
+                                             int twist, double* __restrict b) {
   int j = size - 1;
   for (; j - P >= twist; --j) {
     const double* col = upper + static_cast<std::ptrdiff_t>(j) * (P + 1);
@@ -526,10 +526,14 @@ bool LowRankSolver::Prepare(const BandedSpd& factor, std::span<const NodeColumn>
     h_(i, i) += 1.0 / d[i];
   }
   if (!CholeskyInPlace(h_, num_u_)) return false;
-  for (int j = 0; j < num_t_; ++j) {
-    for (int i = 0; i < num_u_; ++i) small_[i] = h_(num_u_ + j, i);  // H_TU row = H_UT column
-    ForwardSolve(h_, num_u_, small_.data());
-    for (int i = 0; i < num_u_; ++i) x_ut_(i, j) = small_[i];
+  // Row by row over all of X's columns at once (X row-major; the same operations per element
+  // as a forward substitution of each column).
+  for (int i = 0; i < num_u_; ++i) {
+    double* __restrict xi = x_ut_.row(i).data();
+    for (int j = 0; j < num_t_; ++j) xi[j] = h_(num_u_ + j, i);  // H_UT(i, j) = H_TU(j, i)
+    for (int k = 0; k < i; ++k) SubtractScaledRow(x_ut_.row(k).data(), h_(i, k), num_t_, xi);
+    const double lii = h_(i, i);
+    for (int j = 0; j < num_t_; ++j) xi[j] = xi[j] / lii;
   }
   return true;
 }
