@@ -59,136 +59,82 @@ void BandedSpd::Multiply(const Eigen::Ref<const Eigen::VectorXd>& x,
 
 namespace {
 
-// Right-looking (column by column): column j is scaled by its pivot's inverse and at once
-// subtracted from the p x p block below it, column by column: A(j+c.., j+c) -= L(j+c.., j)
-// L(j+c, j), contiguous in the band storage on both sides and element by element independent
-// (vectorised, the same bits at every width). Only the pivots form a dependency chain. The
-// inverse pivots are kept for the solves.
-MICRODEX_VECTOR_CLONES
-bool FactorizeBand(double* band, int rows, double* inv_diag, int size, int p, int first, int end) {
-  for (int j = first; j < end; ++j) {
-    double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * rows;
-    const double pivot = col[0];
-    if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
-    col[0] = std::sqrt(pivot);
-    const double inv = 1.0 / col[0];
-    inv_diag[j] = inv;
-    const int m = std::min(size - 1 - j, p);
-    for (int d = 1; d <= m; ++d) col[d] *= inv;  // L(j + d, j)
-    for (int c = 1; c <= m; ++c) {
-      const double lcj = col[c];
-      double* __restrict target = band + static_cast<std::ptrdiff_t>(j + c) * rows;
-      for (int r = 0; r <= m - c; ++r) target[r] -= col[c + r] * lcj;
-    }
+// One column of the factorisation: the pivot's square root (false if the pivot is not
+// positive), the m entries next to it scaled by its inverse (kept for the solves), and the
+// m x m block they reach updated column by column: the column `c` steps away (at col + c * step)
+// loses col[c + r] col[c], r = 0 .. m - c. Contiguous on both sides and element by element
+// independent (vectorised in the callers' clones, the same bits at every width); only the
+// pivots form a dependency chain. M > 0: m == M known at compile time (the loops unrolled:
+// as loops of lengths 8 .. 1 they did not vectorise); M == 0: m at run time.
+template <int M>
+[[gnu::always_inline]] inline bool EliminateColumn(double* __restrict col, std::ptrdiff_t step,
+                                                   int m_run, double* inv_diag) {
+  const int m = M > 0 ? M : m_run;
+  const double pivot = col[0];
+  if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
+  col[0] = std::sqrt(pivot);
+  const double inv = 1.0 / col[0];
+  *inv_diag = inv;
+#pragma GCC unroll 8
+  for (int d = 1; d <= m; ++d) col[d] *= inv;
+#pragma GCC unroll 8
+  for (int c = 1; c <= m; ++c) {
+    const double lc = col[c];
+    double* __restrict target = col + c * step;
+#pragma GCC unroll 8
+    for (int r = 0; r <= m - c; ++r) target[r] -= col[c + r] * lc;
   }
   return true;
 }
 
-// FactorizeBand's columns 0 .. size - P - 1 (those with a full p x p trailing block) for a
-// half bandwidth P known at compile time: the same operations on the same elements in the same
-// order (the same bits), the loops unrolled. Returns the first column not done, or -1 on a
-// non-positive pivot.
+// The top part, right-looking: columns *j .. end - 1 of the lower band storage, each subtracted
+// from the block below it (A(j+c.., j+c) -= L(j+c.., j) L(j+c, j)). P > 0: only the columns with
+// a full P x P block below (the loops unrolled), P == 0: any. Leaves *j at the next column.
 template <int P>
-MICRODEX_VECTOR_CLONES int FactorizeFullColumns(double* band, double* inv_diag, int size, int end) {
-  constexpr int kRows = P + 1;
-  int j = 0;
-  for (; j < end && j + P < size; ++j) {
-    double* __restrict col = band + static_cast<std::ptrdiff_t>(j) * kRows;
-    const double pivot = col[0];
-    if (!(pivot > 0.0) || !std::isfinite(pivot)) return -1;
-    col[0] = std::sqrt(pivot);
-    const double inv = 1.0 / col[0];
-    inv_diag[j] = inv;
-#pragma GCC unroll 8
-    for (int d = 1; d <= P; ++d) col[d] *= inv;
-#pragma GCC unroll 8
-    for (int c = 1; c <= P; ++c) {
-      const double lcj = col[c];
-      double* __restrict target = col + c * kRows;
-#pragma GCC unroll 8
-      for (int r = 0; r <= P - c; ++r) target[r] -= col[c + r] * lcj;
-    }
-  }
-  return j;
-}
-
-// The twisted part: columns size - 1 down to twist of what the top part left (its Schur
-// complement), eliminated upwards: U U^T with U upper triangular, in the upper band storage
-// upper(d, j) = A(j - d, j) (column j of U contiguous, as L's columns are in the lower). Each
-// column is scaled by its pivot's inverse and subtracted from the p x p block above it, column
-// by column, contiguous and element by element independent (vectorised, the same bits at every
-// width).
-MICRODEX_VECTOR_CLONES
-bool FactorizeBandUp(double* upper, int rows, double* inv_diag, int p, int twist, int first) {
-  for (int j = first; j >= twist; --j) {
-    double* __restrict col = upper + static_cast<std::ptrdiff_t>(j) * rows;
-    const double pivot = col[0];
-    if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
-    col[0] = std::sqrt(pivot);
-    const double inv = 1.0 / col[0];
-    inv_diag[j] = inv;
-    const int m = std::min(p, j - twist);
-    for (int d = 1; d <= m; ++d) col[d] *= inv;  // U(j - d, j)
-    for (int c = 1; c <= m; ++c) {
-      const double ucj = col[c];
-      // A(j - c - r, j - c) -= U(j - c - r, j) U(j - c, j), r = 0 .. m - c.
-      double* __restrict target = upper + static_cast<std::ptrdiff_t>(j - c) * rows;
-      for (int r = 0; r <= m - c; ++r) target[r] -= col[c + r] * ucj;
-    }
+MICRODEX_VECTOR_CLONES bool FactorizeDown(double* band, int rows, double* inv_diag, int size, int p,
+                                          int end, int* j) {
+  const std::ptrdiff_t stride = P > 0 ? P + 1 : rows;
+  for (; *j < end && (P == 0 || *j + P < size); ++*j) {
+    const int m = std::min(size - 1 - *j, p);
+    if (!EliminateColumn<P>(band + *j * stride, stride, m, inv_diag + *j)) return false;
   }
   return true;
 }
 
-// FactorizeBandUp's columns size - 1 down to twist + P (a full p x p block above each) for a
-// half bandwidth P known at compile time, unrolled, in the same order. Returns the next column,
-// or -2 on a non-positive pivot.
+// The twisted part: columns *j down to twist of what the top part left (its Schur complement),
+// eliminated upwards: U U^T with U upper triangular, in the upper band storage
+// upper(d, j) = A(j - d, j) (column j of U contiguous, as L's columns are in the lower), each
+// column subtracted from the block above it. P as for FactorizeDown.
 template <int P>
-MICRODEX_VECTOR_CLONES int FactorizeFullColumnsUp(double* upper, double* inv_diag, int size,
-                                                  int twist) {
-  constexpr int kRows = P + 1;
-  int j = size - 1;
-  for (; j - P >= twist; --j) {
-    double* __restrict col = upper + static_cast<std::ptrdiff_t>(j) * kRows;
-    const double pivot = col[0];
-    if (!(pivot > 0.0) || !std::isfinite(pivot)) return -2;
-    col[0] = std::sqrt(pivot);
-    const double inv = 1.0 / col[0];
-    inv_diag[j] = inv;
-#pragma GCC unroll 8
-    for (int d = 1; d <= P; ++d) col[d] *= inv;
-#pragma GCC unroll 8
-    for (int c = 1; c <= P; ++c) {
-      const double ucj = col[c];
-      double* __restrict target = col - c * kRows;
-#pragma GCC unroll 8
-      for (int r = 0; r <= P - c; ++r) target[r] -= col[c + r] * ucj;
-    }
+MICRODEX_VECTOR_CLONES bool FactorizeUp(double* upper, int rows, double* inv_diag, int p, int twist,
+                                        int* j) {
+  const std::ptrdiff_t stride = P > 0 ? P + 1 : rows;
+  for (; *j >= twist && (P == 0 || *j - P >= twist); --*j) {
+    const int m = std::min(p, *j - twist);
+    if (!EliminateColumn<P>(upper + *j * stride, -stride, m, inv_diag + *j)) return false;
   }
-  return j;
+  return true;
 }
 
 }  // namespace
 
 bool BandedSpd::Factorize(int twist) {
   twist_ = twist < 0 || twist > size_ ? size_ : twist;
-  int first = 0;
-  if (p_ == 8) {  // the thread's system (banded_spd.h)
-    first = FactorizeFullColumns<8>(band_.data(), inv_diag_.data(), size_, twist_);
-    if (first < 0) return false;
-  }
-  if (!FactorizeBand(band_.data(), p_ + 1, inv_diag_.data(), size_, p_, first, twist_))
+  const int rows = p_ + 1;
+  int j = 0;
+  // The thread's system (half bandwidth 8, banded_spd.h) unrolled where the band is full.
+  if (p_ == 8 && !FactorizeDown<8>(band_.data(), rows, inv_diag_.data(), size_, p_, twist_, &j))
     return false;
+  if (!FactorizeDown<0>(band_.data(), rows, inv_diag_.data(), size_, p_, twist_, &j)) return false;
   if (twist_ >= size_) return true;
   // The Schur complement below the twist into the upper band storage.
-  for (int j = twist_; j < size_; ++j) {
-    for (int d = 0; d <= std::min(p_, j - twist_); ++d) upper_(d, j) = band_(d, j - d);
+  for (int c = twist_; c < size_; ++c) {
+    for (int d = 0; d <= std::min(p_, c - twist_); ++d) upper_(d, c) = band_(d, c - d);
   }
-  int start = size_ - 1;
-  if (p_ == 8) {
-    start = FactorizeFullColumnsUp<8>(upper_.data(), inv_diag_.data(), size_, twist_);
-    if (start == -2) return false;
-  }
-  return FactorizeBandUp(upper_.data(), p_ + 1, inv_diag_.data(), p_, twist_, start);
+  j = size_ - 1;
+  if (p_ == 8 && !FactorizeUp<8>(upper_.data(), rows, inv_diag_.data(), p_, twist_, &j))
+    return false;
+  return FactorizeUp<0>(upper_.data(), rows, inv_diag_.data(), p_, twist_, &j);
 }
 
 namespace {
