@@ -76,6 +76,10 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
     const auto surgeons = static_cast<std::int32_t>(knot::StitchKnotType::kSurgeons);
     return t.tied_knot == square || t.tied_knot == surgeons ? 0.0 : 1.0;
   }
+  // Knot tying: the ends' pull in the hold against the hold tension (RMS, relative).
+  if (metric == "tension_error") {
+    return std::sqrt(Ratio(t.tension_sq_sum, static_cast<double>(t.tension_samples)));
+  }
   if (metric == "entry_error_m") return t.entry_error_m;
   if (metric == "exit_error_m") return t.exit_error_m;
   if (metric == "peak_strain") return t.peak_strain;

@@ -39,6 +39,8 @@
 //                      surgeon's, else 1 (granny, slip, half hitch, none, unknown, or not yet
 //                      recognised: totals.tied_knot is set off the haptic thread by
 //                      RecogniseTiedKnot at the end)
+//   tension_error      knot tying: RMS over the hold of (|pull on an end| − hold tension) /
+//                      hold tension, both ends (no value before the hold)
 //
 // follow_path (the module demos) keeps its own formula:
 //   needle:        100 (1 − c) (1 + g) / 2,  c the contact fraction, g = clamp(mean

@@ -300,6 +300,20 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     const state::KnotTieState& k = s.thread->tie;
     const scene::KnotTyingSceneDef& kt = *scene.knot_tying;
     t.throws_pulled = k.pulled;
+    // The hold: the hands keep the hold tension on both ends, through the trainee's deviations
+    // (sampled once these are fully coupled in, 0.25 s into the hold).
+    if (k.holding != 0 && k.done == 0 && k.coupling >= 1.0) {
+      const thread::ThreadState& th = s.thread->thread;
+      const double target = kt.hold_tension_N;
+      for (const int slot : {k.hands.standing_slot, k.hands.driver_slot}) {
+        if (slot < 0 || slot >= static_cast<int>(th.grasps.size())) continue;
+        const double pull = th.grasps[static_cast<std::size_t>(slot)].f_T_W.norm();
+        if (!std::isfinite(pull)) continue;
+        const double e = (pull - target) / target;
+        t.tension_sq_sum += e * e;
+        ++t.tension_samples;
+      }
+    }
     t.progress = k.done != 0 ? 1.0 : static_cast<double>(k.pulled) / (kt.throws + 1);
     if (k.done != 0) t.outcome = 1;
   } else if (task.kind == scene::TaskKind::kLoopAlongWire) {

@@ -78,7 +78,8 @@ constexpr const char* kScoreMetrics[] = {"time_s",
                                          "torn_m",
                                          "off_circle_m",
                                          "extra_punctures",
-                                         "knot_wrong"};
+                                         "knot_wrong",
+                                         "tension_error"};
 
 grasp::ShapeKind ParseGraspShape(const std::string& text) {
   for (grasp::ShapeKind k :

@@ -154,6 +154,10 @@ struct ScoreState {
   // thread at the task's end (knot::StitchKnotType; -1 until recognised, off the haptic thread).
   std::int32_t throws_pulled = 0;
   std::int32_t tied_knot = -1;
+  // Knot tying, in the hold after the last throw: the ends' pull against the scene's hold
+  // tension, squared relative errors summed over both ends, and the samples (two per step).
+  double tension_sq_sum = 0;
+  std::uint64_t tension_samples = 0;
   // The needle through tissue (common/puncture), copied for the score; 1 m while the entry
   // (exit) has not been made.
   double entry_error_m = 1;

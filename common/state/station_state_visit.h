@@ -156,6 +156,8 @@ void Score(S& s, V& v) {
   v("score.shape_error_m", &s.shape_error_m, 1);
   v("score.throws_pulled", &s.throws_pulled, 1);
   v("score.tied_knot", &s.tied_knot, 1);
+  v("score.tension_sq_sum", &s.tension_sq_sum, 1);
+  v("score.tension_samples", &s.tension_samples, 1);
   v("score.entry_error_m", &s.entry_error_m, 1);
   v("score.exit_error_m", &s.exit_error_m, 1);
   v("score.peak_strain", &s.peak_strain, 1);

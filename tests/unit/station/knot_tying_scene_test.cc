@@ -5,6 +5,8 @@
 // Buttons that choose no throw are ignored, and a scene section out of range is named.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -38,6 +40,8 @@ TEST(KnotTyingScene, TheTraineeTiesASquareOrAGrannyAndTheRecogniserNamesIt) {
     double skill;
     double knot_wrong;
   };
+  double tension_error[2] = {0, 0};
+  int run = 0;
   for (const Case c : {Case{0.9, 0.0}, Case{0.2, 1.0}}) {
     SimTraineeDef def;
     def.skill = c.skill;
@@ -51,7 +55,11 @@ TEST(KnotTyingScene, TheTraineeTiesASquareOrAGrannyAndTheRecogniserNamesIt) {
     EXPECT_EQ(r.score.outcome, 1) << "skill " << c.skill;
     EXPECT_EQ(Term(r.score, "knot_wrong"), c.knot_wrong) << "skill " << c.skill;
     EXPECT_LT(r.score.duration_s, scene.task.time_limit_s);
+    tension_error[run++] = Term(r.score, "tension_error");
   }
+  // The hold tension wavers more in a novice's hands (tremor and drift at the ends).
+  EXPECT_GT(tension_error[0], 0.0);
+  EXPECT_LT(tension_error[0], tension_error[1]);
 }
 
 // Throws chosen with the buttons, the hands at rest: 3 then 2 (a double right-handed throw,
@@ -93,6 +101,17 @@ TEST(KnotTyingScene, ButtonsChooseTheThrows) {
     for (std::size_t i = 0; i < 12; ++i) nodes[i].y() -= 0.6e-3;
     EXPECT_EQ(RecogniseTiedKnot(scene, nodes), c.knot) << "tail lowered";
     EXPECT_LT(state.thread->thread.status.max_strain, scene.thread->max_strain);
+    // Hands at rest: both ends sampled every step of the hold once the hands' deviations are
+    // coupled in (after 0.25 s), the pull within 0.5 % of the hold tension (the hands' servo
+    // alone; an expert's tremor and drift make it 1.5 %, a novice's 4.7 %).
+    const auto sampled_steps =
+        static_cast<std::uint64_t>((scene.knot_tying->hold_s - 0.25) / sim.dt_s());
+    EXPECT_GE(state.score.tension_samples, 2 * sampled_steps - 4);
+    EXPECT_LE(state.score.tension_samples, 2 * sampled_steps + 4);
+    const double rms =
+        std::sqrt(state.score.tension_sq_sum / static_cast<double>(state.score.tension_samples));
+    std::printf("%u, %u: hold tension error %.4f\n", c.first, c.second, rms);
+    EXPECT_LT(rms, 0.005);
   }
 }
 
