@@ -90,6 +90,8 @@ void ThreadDef::Validate() const {
           "object_friction_coefficient", "a coefficient in [0, 10]");
   Require(friction_contacts >= 0 && friction_contacts <= 1024, "friction_contacts",
           "0 (no friction) to 1024");
+  Require(friction_self_contacts >= 0 && friction_self_contacts <= 1024, "friction_self_contacts",
+          "0 (friction on objects only) to 1024");
 }
 
 ThreadDef StiffNylon10_0() {
@@ -111,6 +113,13 @@ ThreadDef StiffNylon10_0() {
   def.exact_contact_pairs = 64;
   def.friction_coefficient = 0.2;  // nylon on nylon 0.15-0.25 (ThreadDef)
   def.object_friction_coefficient = 0.2;
+  // Implicit thread-on-thread friction for the 16 contacts that carry the most force; the
+  // others take the contact projection's position-level friction. With 64, the two friction
+  // columns per contact dominate the tight phases of a tie at 385 nodes (tick p99 1.15-1.42
+  // against 0.69-1.19 ms with 16); the 60 cases of the tie matrix tie and hold with 64, 32 or
+  // 16 (common/thread/README.md, "Fourth round"). Object contacts keep theirs (a capstan wrap
+  // needs all of them).
+  def.friction_self_contacts = 16;
   return def;
 }
 
@@ -203,7 +212,8 @@ ThreadDef LoadThreadDef(const std::string& path) {
                              "exact_contact_pairs",
                              "friction_coefficient",
                              "object_friction_coefficient",
-                             "friction_contacts"});
+                             "friction_contacts",
+                             "friction_self_contacts"});
   ThreadDef def;
   // An empty base starts from the defaults.
   if (!thread.String("base", "").empty()) def = thread.Enum("base", &ThreadPreset, def);
@@ -238,6 +248,7 @@ ThreadDef LoadThreadDef(const std::string& path) {
   def.object_friction_coefficient =
       thread.FiniteDouble("object_friction_coefficient", def.object_friction_coefficient);
   def.friction_contacts = thread.Int("friction_contacts", def.friction_contacts);
+  def.friction_self_contacts = thread.Int("friction_self_contacts", def.friction_self_contacts);
   def.gravity_m_per_s2 = thread.Vec3("gravity_m_per_s2", def.gravity_m_per_s2);
   def.integrator = thread.Enum("integrator", &ParseIntegrator, def.integrator);
   try {

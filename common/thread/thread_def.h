@@ -109,6 +109,10 @@ struct ThreadDef {
   // Contacts (self first, deepest first, then object contacts) that get friction in one step;
   // each adds two columns to the linearly implicit step's low-rank solve. 0: none.
   int friction_contacts = 64;
+  // Of those, at most this many self contacts (the deepest); the self contacts beyond it take
+  // only the contact projection's position-level friction, and the object contacts keep the
+  // rest of friction_contacts. 0: friction on objects only.
+  int friction_self_contacts = 64;
 
   // Throws std::invalid_argument for the first bad field, whose message starts with the field
   // name followed by ': ' (e.g. `diameter_m: expected a positive diameter below 10 link lengths`).

@@ -47,7 +47,8 @@ NodeColumn MakeSolveColumn(const PairTerm& t, const Eigen::Vector3d& dir,
 // (largest force) go first. std::sort does not allocate.
 void SortSelfContactsByDepth(const ThreadModel& model, ThreadWorkspace& w) {
   const int n = w.num_self_contacts;
-  const int exact = model.exact_pair_capacity, friction = model.friction_capacity;
+  const int exact = model.exact_pair_capacity;
+  const int friction = std::min(model.friction_capacity, model.def.friction_self_contacts);
   if (!((exact > 0 && n > exact) || (friction > 0 && n > friction))) return;
   std::sort(w.self_contacts.begin(), w.self_contacts.begin() + n,
             [](const SelfContact& a, const SelfContact& b) { return a.gap_m < b.gap_m; });
@@ -80,7 +81,8 @@ void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadWorkspace
     ++nf;
   };
   if (def.friction_coefficient > 0.0) {
-    for (int c = 0; c < w.num_self_contacts; ++c) {
+    const int self = std::min(w.num_self_contacts, def.friction_self_contacts);
+    for (int c = 0; c < self; ++c) {
       const PairTerm t = MakePairTerm(w.self_contacts[c]);
       add(t.node, t.g, 4, t.n,
           def.friction_coefficient * ContactForceMagnitude(def, w.self_contacts[c].gap_m) * h);

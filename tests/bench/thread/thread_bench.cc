@@ -313,6 +313,7 @@ struct ContactOverrides {
   double object_friction = -1.0;
   int exact_pairs = -1;
   int friction_contacts = -1;
+  int friction_self_contacts = -1;
   double contact_force = -1.0;
   ThreadDef Apply(ThreadDef def) const {
     if (contact_force >= 0.0) def.contact_force_N = contact_force;
@@ -320,6 +321,7 @@ struct ContactOverrides {
     if (object_friction >= 0.0) def.object_friction_coefficient = object_friction;
     if (exact_pairs >= 0) def.exact_contact_pairs = exact_pairs;
     if (friction_contacts >= 0) def.friction_contacts = friction_contacts;
+    if (friction_self_contacts >= 0) def.friction_self_contacts = friction_self_contacts;
     return def;
   }
 };
@@ -816,6 +818,11 @@ int Main(int argc, char** argv) {
       if (contact.friction_contacts < 0) {
         throw std::invalid_argument("--friction-contacts: expected N >= 0");
       }
+    } else if (arg == "--friction-self-contacts") {
+      contact.friction_self_contacts = std::atoi(value("--friction-self-contacts").c_str());
+      if (contact.friction_self_contacts < 0) {
+        throw std::invalid_argument("--friction-self-contacts: expected N >= 0");
+      }
     } else if (arg == "--exact-pairs") {
       contact.exact_pairs = std::atoi(value("--exact-pairs").c_str());
       if (contact.exact_pairs < 0) throw std::invalid_argument("--exact-pairs: expected N >= 0");
@@ -830,6 +837,7 @@ int Main(int argc, char** argv) {
           "FILE]] [--pull-tension N (default 0.015)] "
           "[--friction MU] "
           "[--object-friction MU] [--exact-pairs N] [--friction-contacts N] "
+          "[--friction-self-contacts N] "
           "[--json FILE] [--quick]\n");
       return 0;
     } else {

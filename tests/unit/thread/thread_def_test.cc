@@ -39,6 +39,8 @@ TEST(ThreadDef, PresetsValidateAndMatchTheirFiles) {
     EXPECT_DOUBLE_EQ(loaded.youngs_modulus_Pa, preset.youngs_modulus_Pa);
     EXPECT_DOUBLE_EQ(loaded.contact_force_N, preset.contact_force_N);
     EXPECT_DOUBLE_EQ(loaded.bend_stiffness_N_m, preset.bend_stiffness_N_m);
+    EXPECT_EQ(loaded.friction_contacts, preset.friction_contacts);
+    EXPECT_EQ(loaded.friction_self_contacts, preset.friction_self_contacts);
   }
 }
 
@@ -50,6 +52,18 @@ TEST(ThreadDef, ValidateNamesTheBadField) {
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("diameter_m"), std::string::npos);
+  }
+}
+
+TEST(ThreadDef, FrictionSelfContactsOutOfRangeIsNamed) {
+  ThreadDef def = StiffNylon10_0();
+  def.friction_self_contacts = -1;
+  try {
+    def.Validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "friction_self_contacts: expected 0 (friction on objects only) to 1024");
   }
 }
 

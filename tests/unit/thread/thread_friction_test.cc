@@ -4,6 +4,7 @@
 // only the fluid drag may resist.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -205,6 +206,47 @@ TEST(ThreadContactCoupling, RigidMotionOfCrossingStrandsFeelsOnlyTheDrag) {
   EXPECT_NEAR(exact.z(), -drag_N, 0.1 * drag_N) << "drag " << drag_N;
   EXPECT_LT(exact.head<2>().norm(), 0.1 * drag_N);
   EXPECT_GT(bound.norm(), 100.0 * drag_N) << "drag " << drag_N;
+}
+
+// friction_self_contacts: a thread folded into a U over a capsule has many self contacts and
+// some object contacts. With the self cap at 4 the step gives implicit friction to the 4
+// deepest self contacts and to every object contact (within friction_contacts); with the cap
+// above the count, to all of them.
+TEST(ThreadFriction, SelfContactsBeyondTheCapTakeNoImplicitFriction) {
+  for (const int cap : {4, 1024}) {
+    ThreadDef def = StiffNylon10_0();
+    def.friction_self_contacts = cap;
+    def.friction_contacts = 1024;
+    const ThreadModel model = MakeThreadModel(def);
+    ThreadState state =
+        MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+    ThreadWorkspace ws = MakeThreadWorkspace(model);
+    for (int i = 33; i < model.num_nodes; ++i) {
+      state.x_W.col(i) = Eigen::Vector3d(state.x_W(0, 64 - i), 30e-6, 0.0);
+    }
+    const std::vector<Collider> colliders = {Collider::Capsule(
+        Eigen::Vector3d(0.005, -0.01, -40e-6), Eigen::Vector3d(0.005, 0.01, -40e-6), 20e-6)};
+    GraspNode(model, 0, state);
+    GraspNode(model, 64, state);
+    int capped_steps = 0;
+    for (int k = 0; k < 50; ++k) {
+      StepThread(model, colliders, ws, state);
+      const int self = state.status.num_self_contacts;
+      const int objects = state.status.num_object_contacts;
+      ASSERT_EQ(state.status.num_friction_contacts, std::min(self, cap) + objects)
+          << "cap " << cap << " step " << k;
+      if (self > cap) {
+        ++capped_steps;
+        // The deepest go first: no contact beyond the cap is deeper than one within it.
+        double within = -1.0;
+        for (int c = 0; c < cap; ++c) within = std::max(within, ws.self_contacts[c].gap_m);
+        for (int c = cap; c < self; ++c) EXPECT_GE(ws.self_contacts[c].gap_m, within);
+      }
+    }
+    if (cap == 4) {
+      EXPECT_GT(capped_steps, 0);
+    }
+  }
 }
 
 }  // namespace
