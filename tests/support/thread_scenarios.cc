@@ -150,6 +150,16 @@ ThreadDef KnotTyingDef(int num_nodes) {
   return def;
 }
 
+std::vector<Collider> FoldIntoUOverACapsule(const ThreadModel& model, ThreadState& state) {
+  MICRODEX_CHECK(model.num_nodes == 65);
+  state = MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  for (int i = 33; i < model.num_nodes; ++i) {
+    state.x_W.col(i) = Eigen::Vector3d(state.x_W(0, 64 - i), 30e-6, 0.0);
+  }
+  return {Collider::Capsule(Eigen::Vector3d(0.005, -0.01, -40e-6),
+                            Eigen::Vector3d(0.005, 0.01, -40e-6), 20e-6)};
+}
+
 KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state) {
   for (Grasp& g : state.grasps) {
     if (g.node >= 0) ReleaseGrasp(state, static_cast<int>(&g - state.grasps.data()));

@@ -53,6 +53,11 @@ SwingPullReport RunSwingPull(const ThreadDef& def, const SwingPullOptions& optio
 // benchmark carries the same knot-tying trajectory.
 ThreadDef KnotTyingDef(int num_nodes);
 
+// A 65-node thread (model.num_nodes == 65) laid along +x from the origin and folded into a U
+// (its second half back along the first, 30 um beside it), so that it has self contacts, over
+// a capsule across it just below (object contacts): the colliders.
+std::vector<Collider> FoldIntoUOverACapsule(const ThreadModel& model, ThreadState& state);
+
 // Lays the thread straight along +x from the origin and grasps both ends.
 KnotTyingHands SetUpKnotTying(const ThreadModel& model, ThreadState& state);
 

@@ -218,14 +218,9 @@ TEST(ThreadFriction, SelfContactsBeyondTheCapTakeNoImplicitFriction) {
     def.friction_self_contacts = cap;
     def.friction_contacts = 1024;
     const ThreadModel model = MakeThreadModel(def);
-    ThreadState state =
-        MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+    ThreadState state;
+    const std::vector<Collider> colliders = FoldIntoUOverACapsule(model, state);
     ThreadWorkspace ws = MakeThreadWorkspace(model);
-    for (int i = 33; i < model.num_nodes; ++i) {
-      state.x_W.col(i) = Eigen::Vector3d(state.x_W(0, 64 - i), 30e-6, 0.0);
-    }
-    const std::vector<Collider> colliders = {Collider::Capsule(
-        Eigen::Vector3d(0.005, -0.01, -40e-6), Eigen::Vector3d(0.005, 0.01, -40e-6), 20e-6)};
     GraspNode(model, 0, state);
     GraspNode(model, 64, state);
     int capped_steps = 0;

@@ -39,15 +39,9 @@ TEST(ThreadStep, NoAllocationPerStepAfterWarmUp) {
       def.time_step_s = 1e-6;
     }
     const ThreadModel model = MakeThreadModel(def);
-    ThreadState state =
-        MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+    ThreadState state;
+    const std::vector<Collider> colliders = FoldIntoUOverACapsule(model, state);
     ThreadWorkspace ws = MakeThreadWorkspace(model);
-    // Fold the thread into a U so that self-contacts are found, and add a capsule under it.
-    for (int i = 33; i < model.num_nodes; ++i) {
-      state.x_W.col(i) = Eigen::Vector3d(state.x_W(0, 64 - i), 30e-6, 0.0);
-    }
-    const std::vector<Collider> colliders = {Collider::Capsule(
-        Eigen::Vector3d(0.005, -0.01, -40e-6), Eigen::Vector3d(0.005, 0.01, -40e-6), 20e-6)};
     const int a = GraspNode(model, 0, state);
     const int b = GraspNode(model, 64, state);
     for (int k = 0; k < 10; ++k) StepThread(model, colliders, ws, state);
