@@ -120,8 +120,10 @@ struct ThreadWorkspace {
   // (link, collider) pairs the contact projection's first sweep found near (within a diameter
   // of their constraint): the only object constraints its later sweeps visit.
   std::vector<LinkPair> object_candidates;
-  // The last step's contact projection: sweeps run, and its largest remaining deficit (m).
+  // The last step's contact projection: sweeps run (the most in one part, and the sum over its
+  // parts), and its largest remaining deficit (m).
   int projection_sweeps = 0;
+  int projection_sweeps_total = 0;
   double projection_residual_m = 0.0;
   int projection_parts = 0;  // the step's motion was projected in this many parts
   // The contact projection's bookkeeping of what changed: per node the moment (a count of the

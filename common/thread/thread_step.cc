@@ -579,10 +579,11 @@ void ProjectStep(const ThreadModel& model, std::span<const Collider> colliders, 
   ContactProjection total;
   if (parts == 1) {
     total = ProjectContacts(model, colliders, strain_limit, w.x_prev_W, w, state);
+    w.projection_sweeps_total = w.projection_sweeps;
   } else {
     w.x_end_W = state.x_W;
     w.x_part_W = w.x_prev_W;
-    int sweeps = 0;
+    int sweeps = 0, sweeps_total = 0;
     for (int k = 1; k <= parts; ++k) {
       state.x_W = w.x_part_W;
       FindPairStarts(model, w, state);
@@ -593,9 +594,11 @@ void ProjectStep(const ThreadModel& model, std::span<const Collider> colliders, 
       total.contact_corrections += p.contact_corrections;
       total.strain_corrections += p.strain_corrections;
       sweeps = std::max(sweeps, w.projection_sweeps);
+      sweeps_total += w.projection_sweeps;
       w.x_part_W = state.x_W;
     }
     w.projection_sweeps = sweeps;
+    w.projection_sweeps_total = sweeps_total;
   }
   state.status.guard_corrections += total.contact_corrections;
   state.status.strain_corrections += total.strain_corrections;

@@ -233,11 +233,14 @@ knot::KnotAnalysis AnalyzeThread(const ThreadModel& model, const ThreadState& st
 struct PhaseMeter {
   std::vector<double> step_us;
   TiePhaseReport report;
-  std::int64_t pair_tests_seen = 0;  // the state's count at the last step measured
-  std::int64_t pair_tests = 0;       // in this phase
+  std::int64_t pair_tests_seen = 0;    // the state's count at the last step measured
+  std::int64_t pair_tests = 0;         // in this phase
+  std::int64_t parts = 0, sweeps = 0;  // the projection's, in this phase
   void Start(int throw_index, const char* phase) {
     step_us.clear();
     pair_tests = 0;
+    parts = 0;
+    sweeps = 0;
     report = TiePhaseReport{};
     report.throw_index = throw_index;
     report.phase = phase;
@@ -254,6 +257,10 @@ struct PhaseMeter {
     report.max_self_contacts = std::max(report.max_self_contacts, state.status.num_self_contacts);
     if (ws != nullptr) {
       report.max_projection_sweeps = std::max(report.max_projection_sweeps, ws->projection_sweeps);
+      parts += ws->projection_parts;
+      sweeps += ws->projection_sweeps_total;
+      report.projection_parts_per_step = static_cast<double>(parts) / report.steps;
+      report.projection_sweeps_per_step = static_cast<double>(sweeps) / report.steps;
       report.max_projection_residual_over_d =
           std::max(report.max_projection_residual_over_d, ws->projection_residual_m);
     }

@@ -75,8 +75,11 @@ struct TiePhaseReport {
   double steps_per_s = 0.0;          // 1 / median step time
   double tick_p99_us = 0.0;          // 99th percentile step time
   int max_self_contacts = 0;
-  int max_projection_sweeps = 0;     // contact projection (ProjectContacts)
+  int max_projection_sweeps = 0;     // contact projection (ProjectContacts), in one part
   double pair_tests_per_step = 0.0;  // its link-pair distance tests, mean over the phase
+  // Its parts per step and sweeps per step (summed over the parts), means over the phase.
+  double projection_parts_per_step = 0.0;
+  double projection_sweeps_per_step = 0.0;
   double max_projection_residual_over_d = 0.0;
   double f_standing_max_N = 0.0;
   double f_driver_max_N = 0.0;

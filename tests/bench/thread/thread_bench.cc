@@ -469,6 +469,8 @@ std::string PhaseJson(const TiePhaseReport& r) {
     << ", \"f_driver_max_N\": " << Num(r.f_driver_max_N)
     << ", \"max_projection_sweeps\": " << r.max_projection_sweeps
     << ", \"pair_tests_per_step\": " << Num(r.pair_tests_per_step)
+    << ", \"projection_parts_per_step\": " << Num(r.projection_parts_per_step)
+    << ", \"projection_sweeps_per_step\": " << Num(r.projection_sweeps_per_step)
     << ", \"max_projection_residual_over_d\": " << Num(r.max_projection_residual_over_d) << "}";
   return o.str();
 }
@@ -495,11 +497,12 @@ void PrintPhase(const TiePhaseReport& r) {
   std::printf(
       "  %s %-5s %5d steps: knot %-16s min dist %.3f d, %6.0f steps/s (median), tick p99 %5.0f "
       "us, self contacts max %3d, f max %.3g / %.3g N, projection sweeps max %d residual %.3f d, "
-      "%.0f pair tests/step\n",
+      "%.0f pair tests/step, %.2f parts and %.1f sweeps/step\n",
       r.throw_index > 0 ? ("throw " + std::to_string(r.throw_index)).c_str() : "       ",
       r.phase.c_str(), r.steps, r.knot.c_str(), r.min_distance_over_d, r.steps_per_s, r.tick_p99_us,
       r.max_self_contacts, r.f_standing_max_N, r.f_driver_max_N, r.max_projection_sweeps,
-      r.max_projection_residual_over_d, r.pair_tests_per_step);
+      r.max_projection_residual_over_d, r.pair_tests_per_step, r.projection_parts_per_step,
+      r.projection_sweeps_per_step);
   std::fflush(stdout);
 }
 

@@ -74,6 +74,12 @@ TEST(ThreadBench, TieJsonShape) {
     EXPECT_GT(phase["min_distance_over_d"].as<double>(), 0.0);
     EXPECT_GT(phase["steps_per_s"].as<double>(), 0.0);
     EXPECT_GT(phase["tick_p99_us"].as<double>(), 0.0);
+    // Every step projects its motion in at least one part, each of at least one sweep.
+    const double parts = phase["projection_parts_per_step"].as<double>();
+    EXPECT_GE(parts, 1.0);
+    EXPECT_GE(phase["projection_sweeps_per_step"].as<double>(), parts);
+    EXPECT_LE(phase["projection_sweeps_per_step"].as<double>(),
+              parts * phase["max_projection_sweeps"].as<double>() + 1e-9);
   }
   EXPECT_EQ(root["phases"][root["phases"].size() - 1]["phase"].as<std::string>(), "hold");
 }
