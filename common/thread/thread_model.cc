@@ -55,6 +55,7 @@ ThreadModel MakeThreadModel(const ThreadDef& def) {
   m.friction_capacity = def.friction_coefficient > 0.0 || def.object_friction_coefficient > 0.0
                             ? std::min(def.friction_contacts, 2 * m.contact_capacity)
                             : 0;
+  m.friction_self_capacity = std::min(m.friction_capacity, def.friction_self_contacts);
   return m;
 }
 

@@ -30,10 +30,11 @@ struct ThreadModel {
   // Leaf spheres grow by this: thread radius plus contact cutoff plus a motion margin, so
   // pairs that may touch before the next step are already candidates.
   double bvh_inflate_m = 0.0;
-  int contact_capacity = 0;     // self pairs and object contacts, each
-  int half_bandwidth = 8;       // of the 3N x 3N implicit matrix
-  int exact_pair_capacity = 0;  // self contacts coupled exactly in the implicit step
-  int friction_capacity = 0;    // contacts with friction per step
+  int contact_capacity = 0;        // self pairs and object contacts, each
+  int half_bandwidth = 8;          // of the 3N x 3N implicit matrix
+  int exact_pair_capacity = 0;     // self contacts coupled exactly in the implicit step
+  int friction_capacity = 0;       // contacts with friction per step
+  int friction_self_capacity = 0;  // of those, self contacts at most
 };
 
 // Builds the model; throws std::invalid_argument (from ThreadDef::Validate) on a bad def.

@@ -48,7 +48,7 @@ NodeColumn MakeSolveColumn(const PairTerm& t, const Eigen::Vector3d& dir,
 void SortSelfContactsByDepth(const ThreadModel& model, ThreadWorkspace& w) {
   const int n = w.num_self_contacts;
   const int exact = model.exact_pair_capacity;
-  const int friction = std::min(model.friction_capacity, model.def.friction_self_contacts);
+  const int friction = model.friction_self_capacity;
   if (!((exact > 0 && n > exact) || (friction > 0 && n > friction))) return;
   std::sort(w.self_contacts.begin(), w.self_contacts.begin() + n,
             [](const SelfContact& a, const SelfContact& b) { return a.gap_m < b.gap_m; });
@@ -81,7 +81,7 @@ void PrepareFrictionContacts(const ThreadModel& model, double h, ThreadWorkspace
     ++nf;
   };
   if (def.friction_coefficient > 0.0) {
-    const int self = std::min(w.num_self_contacts, def.friction_self_contacts);
+    const int self = std::min(w.num_self_contacts, model.friction_self_capacity);
     for (int c = 0; c < self; ++c) {
       const PairTerm t = MakePairTerm(w.self_contacts[c]);
       add(t.node, t.g, 4, t.n,
