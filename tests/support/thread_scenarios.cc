@@ -300,7 +300,7 @@ double CapstanBound_N(const TiePhaseReport& exit, double friction) {
 
 TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
                      KnotHoldOptions hold, void (*on_phase)(const TiePhaseReport&),
-                     const KnotStitchDef* stitch) {
+                     const KnotStitchDef* stitch, double next_offset_m) {
   using Clock = std::chrono::steady_clock;
   const ThreadModel model = MakeThreadModel(def);
   ThreadState state = stitch != nullptr ? stitch->Lay(model)
@@ -366,11 +366,11 @@ TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
     out.pulled_tight = out.pulled_tight && std::min(state.grasps[hands.standing_slot].f_T_W.norm(),
                                                     state.grasps[hands.driver_slot].f_T_W.norm()) >=
                                                throws[t].pull_tension_N;
-    // The next throw is tied by the other hand, 3 mm beyond this knot on its side.
+    // The next throw is tied by the other hand, next_offset_m beyond this knot on its side.
     const knot::KnotAnalysis a = AnalyzeThread(model, state, true);
     std::swap(hands.standing_slot, hands.driver_slot);
     const double side = state.grasps[hands.driver_slot].p_WT.x() >= knot_x ? 1.0 : -1.0;
-    knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * 3.0e-3;
+    knot_x = (a.located ? a.p_core_W.x() : knot_x) + side * next_offset_m;
   }
   const knot::KnotAnalysis before = AnalyzeThread(model, state, true);
   out.knot_after_pull = std::string(knot::KnotName(before.type));

@@ -124,9 +124,9 @@ inline constexpr double kTieMatrixPullTension_N = 15e-3;
 // The knot is recognised at every phase change. on_phase, when given, is called after each
 // phase with its report (progress output).
 // With `stitch`, the thread is laid through it (KnotStitchDef) and its rods stay for every
-// throw and the hold.
+// throw and the hold. next_offset_m: how far beyond the knot the next throw's jig is placed.
 TieReport RunKnotTie(const ThreadDef& def, std::vector<KnotThrowOptions> throws,
                      KnotHoldOptions hold, void (*on_phase)(const TiePhaseReport&) = nullptr,
-                     const KnotStitchDef* stitch = nullptr);
+                     const KnotStitchDef* stitch = nullptr, double next_offset_m = 3e-3);
 
 }  // namespace microdex::thread

@@ -11,6 +11,8 @@
 //                         --stitch: around a stitch (an 18 mm thread through three rods);
 //                         --stitch-geometry X,DEPTH,OFFSET,ROD_R,GUIDE_R,START,LENGTH (mm)
 //                         --force-limited-pull: each hand limits its pull to the pull tension;
+//                         --next-throw-offset MM: the next throw's jig this far beyond the
+//                         knot (default 3 mm);
 //                         --obj with --stitch: in the tissue's frame (the knot quiz's shapes)
 //   microdex-bench thread --tie-matrix [--json FILE] [--markdown FILE]
 //                         five knots x 129..513 nodes x mu 0.1..0.3 (README table), the same
@@ -510,8 +512,8 @@ void PrintPhase(const TiePhaseReport& r) {
 // granny, "2r,1l" surgeon's), pulls, holds 20 mN for 2 s, and reports per phase.
 // With `stitch`: around it (KnotStitchDef), a thread of stitch_length_m.
 int RunTie(const std::string& spec, int nodes, bool force_limited_pull, double pull_tension_N,
-           const KnotStitchDef* stitch, double stitch_length_m, const std::string& obj,
-           const std::string& json, const ContactOverrides& contact) {
+           const KnotStitchDef* stitch, double stitch_length_m, double next_offset_m,
+           const std::string& obj, const std::string& json, const ContactOverrides& contact) {
   ThreadDef def = contact.Apply(KnotTyingDef(nodes));
   if (stitch != nullptr) def.length_m = stitch_length_m;
   std::printf(
@@ -524,7 +526,7 @@ int RunTie(const std::string& spec, int nodes, bool force_limited_pull, double p
     t.force_limited_pull = force_limited_pull;
     t.pull_tension_N = pull_tension_N;
   }
-  const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{}, PrintPhase, stitch);
+  const TieReport r = RunKnotTie(def, throws, KnotHoldOptions{}, PrintPhase, stitch, next_offset_m);
   std::printf(
       "knot %s (after the pull %s), min distance %.3f d, held %s (knot moved %.3g mm along the "
       "thread), %.0f steps/s (median), tick p99 %.0f us, rolled back %lld, max strain %.4f (hold "
@@ -746,6 +748,7 @@ int Main(int argc, char** argv) {
   bool force_limited_pull = false;
   KnotStitchDef stitch_def;
   double stitch_length_m = 18e-3;
+  double next_offset_m = 3e-3;
   std::int64_t steps = 1000000;
   int nodes = 257;
   bool tie_matrix = false;
@@ -792,6 +795,11 @@ int Main(int argc, char** argv) {
       stitch_def.Validate();
       stitch_length_m = v[6];
       stitch = true;
+    } else if (arg == "--next-throw-offset") {
+      next_offset_m = std::atof(value("--next-throw-offset").c_str()) * 1e-3;
+      if (!(next_offset_m > 0.0 && next_offset_m < 20e-3)) {
+        throw std::invalid_argument("--next-throw-offset: expected a distance in (0, 20) mm");
+      }
     } else if (arg == "--tie-matrix") {
       tie_matrix = true;
     } else if (arg == "--only") {
@@ -836,7 +844,8 @@ int Main(int argc, char** argv) {
       std::printf(
           "microdex-bench thread [--stability [--plot FILE.png] | --accuracy | --adversarial "
           "[--steps N] | --tie THROWS "
-          "[--nodes N] [--stitch] [--obj FILE] | --tie-matrix [--only SPEC;SPEC] [--markdown "
+          "[--nodes N] [--stitch] [--next-throw-offset MM (default 3)] [--obj FILE] | --tie-matrix "
+          "[--only SPEC;SPEC] [--markdown "
           "FILE]] [--pull-tension N (default 0.015)] "
           "[--friction MU] "
           "[--object-friction MU] [--exact-pairs N] [--friction-contacts N] "
@@ -849,7 +858,7 @@ int Main(int argc, char** argv) {
   }
   if (!tie.empty()) {
     return RunTie(tie, nodes, force_limited_pull, pull_tension_N, stitch ? &stitch_def : nullptr,
-                  stitch_length_m, obj, json, contact);
+                  stitch_length_m, next_offset_m, obj, json, contact);
   }
   if (tie_matrix) return RunTieMatrix(quick, only, pull_tension_N, json, markdown, contact);
   if (stability) return RunStability(quick, json, plot);
