@@ -204,6 +204,14 @@ void Thread(S& m, V& v) {
     v("thread.grasps[].roll_rad", &g.roll_rad, 1);
     Matrix("thread.grasps[].f_T_W", g.f_T_W, v);
   });
+  v("thread.carry_contact_forces", &t.carry_contact_forces, 1);
+  v("thread.num_carried", &t.num_carried, 1);
+  Counted(t.carried, t.num_carried, [&](auto& c) {
+    v("thread.carried[].link_a", &c.link_a, 1);
+    v("thread.carried[].link_b", &c.link_b, 1);
+    Matrix("thread.carried[].n_W", c.n_W, v);
+    v("thread.carried[].force_N", &c.force_N, 1);
+  });
   auto& s = t.status;
   v("thread.status.steps", &s.steps, 1);
   v("thread.status.nonfinite_resets", &s.nonfinite_resets, 1);

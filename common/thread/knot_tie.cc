@@ -178,6 +178,8 @@ bool KnotThrowScript::Step(const ThreadModel& model, ThreadWorkspace& ws, Thread
                            const KnotHandOffsets& offsets, double advance_m) {
   if (phase_ == Phase::kDone) return false;
   const double h = model.def.time_step_s;
+  // A throw moves the strands about each other: no contact force is carried across steps.
+  state.carry_contact_forces = false;
   const Grasp& standing = state.grasps[hands_.standing_slot];
   const Grasp& driver = state.grasps[hands_.driver_slot];
   const std::span<const Collider> colliders = this->colliders();
@@ -281,6 +283,8 @@ bool KnotHoldScript::Step(const ThreadModel& model, ThreadWorkspace& ws, ThreadS
                           const KnotHandOffsets& offsets) {
   if (steps_left_ <= 0) return false;
   const double h = model.def.time_step_s;
+  // The knot is held still: its contacts keep their forces from step to step.
+  state.carry_contact_forces = true;
   for (const int slot : {hands_.standing_slot, hands_.driver_slot}) {
     const bool is_standing = slot == hands_.standing_slot;
     Eigen::Vector3d& plan = is_standing ? plan_standing_W_ : plan_driver_W_;

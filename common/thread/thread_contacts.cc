@@ -159,7 +159,9 @@ void AddContactForces(const ThreadModel& model, ThreadWorkspace& w, Eigen::Matri
   };
   for (int c = 0; c < w.num_self_contacts; ++c) {
     const SelfContact& sc = w.self_contacts[c];
-    const double f = ContactForceMagnitude(def, sc.gap_m);  // (5.9) along the pair normal
+    // (5.9) along the pair normal, plus a force carried from the last step (a held knot).
+    const double f =
+        ContactForceMagnitude(def, sc.gap_m) + (c < w.num_self_carried ? w.self_carried_N[c] : 0.0);
     const double k = ContactStiffness(def, sc.gap_m);
     // Weights g = (1-s, s, -(1-t), -t) map node motion to gap change; g g^T <= 2 diag(|g|)
     // because sum |g| = 2, hence the factor 2 in the diagonal bound. A pair coupled exactly

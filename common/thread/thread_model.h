@@ -4,6 +4,7 @@
 // rate; links L_i between N_i and N_{i+1} (0-based) with rest lengths.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -58,6 +59,17 @@ struct SelfContact {
   double gap_m = 0.0;
   Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();  // unit, from link b to link a
 };
+
+// A self contact's normal force carried from one step to the next while a knot is held
+// (ThreadState::carry_contact_forces; README, "Carried contact forces in a held knot"),
+// found again by its pair of links.
+struct CarriedContact {
+  int link_a = -1;
+  int link_b = -1;
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();  // the contact's normal when it was stored
+  double force_N = 0.0;
+};
+inline constexpr int kMaxCarriedContacts = 16;
 
 // A candidate pair's closest points at the start of the step (ProjectContacts).
 struct PairStart {
@@ -146,6 +158,12 @@ struct ThreadWorkspace {
   std::vector<ObjectContact> object_contacts;
   int num_self_contacts = 0;
   int num_object_contacts = 0;
+  // Carried forces: the force each of the first num_self_carried self contacts takes from the
+  // state's list this step, and the list the step hands on (committed when the step succeeds).
+  std::array<double, kMaxCarriedContacts> self_carried_N{};
+  int num_self_carried = 0;
+  std::array<CarriedContact, kMaxCarriedContacts> carried_next{};
+  int num_carried_next = 0;
   BandedSpd system;        // 3N x 3N, half bandwidth 8
   BandedSpd twist_system;  // N x N, tridiagonal
   Eigen::VectorXd rhs;
@@ -176,6 +194,12 @@ struct ThreadState {
   Eigen::VectorXd q_rad;           // torsion angles q_i
   Eigen::VectorXd qdot_rad_per_s;  // torsion rates
   std::vector<Grasp> grasps;       // max_grasps slots
+  // While set (a knot held still: KnotHoldScript sets it, KnotThrowScript clears it), the
+  // deepest self contacts keep a normal force from step to step, updated from the gap each
+  // step's implicit motion reaches (README, "Carried contact forces in a held knot").
+  bool carry_contact_forces = false;
+  int num_carried = 0;
+  std::array<CarriedContact, kMaxCarriedContacts> carried{};
   ThreadStatus status;
 };
 

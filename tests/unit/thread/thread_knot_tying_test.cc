@@ -13,6 +13,7 @@
 // README lists every case of the matrix, its strains and where the capstan bound is exceeded.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 #include <string>
@@ -52,6 +53,13 @@ TEST_P(KnotTying, TiesAndHoldsWithoutInterpenetration) {
   EXPECT_GE(r.min_distance_over_d, 0.95);
   EXPECT_EQ(r.rollbacks, 0);
   EXPECT_LT(r.max_strain, 0.1);  // up to the end of the pull (the hold's is reported by the bench)
+  // The held knot rests on its carried contact forces: the step no longer presses its strands
+  // past the guard and the projection does not have to put them back (without carried forces,
+  // two parts and ~37 sweeps per step in a tight hold at 129 nodes).
+  const TiePhaseReport& hold = r.phases.back();
+  EXPECT_EQ(hold.phase, "hold");
+  EXPECT_LT(hold.projection_parts_per_step, 1.05);
+  EXPECT_LT(hold.projection_sweeps_per_step, 15.0);
   // The capstan bound on the second throw's exit (CapstanBound_N).
   const TiePhaseReport* exit = SecondThrowExit(r);
   if (exit == nullptr) return;
@@ -75,6 +83,56 @@ INSTANTIATE_TEST_SUITE_P(
       return "T" + name + "_" + std::to_string(param_info.param.nodes) + "_mu" +
              std::to_string(static_cast<int>(std::lround(10 * param_info.param.friction)));
     });
+
+// A held knot carries its deepest contacts' normal forces from step to step (README, "Carried
+// contact forces in a held knot"); a throw carries none. Tied by hand here (one overhand at 129
+// nodes) so that the state can be read between the steps.
+TEST(CarriedContactForces, OnlyWhileTheKnotIsHeld) {
+  const ThreadModel model = MakeThreadModel(KnotTyingDef(129));
+  ThreadState state =
+      MakeStraightThreadState(model, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  const KnotTyingHands hands = SetUpKnotTying(model, state);
+  ThreadWorkspace ws = MakeThreadWorkspace(model);
+  KnotThrowOptions options = ParseKnotThrows("1r").front();
+  options.pull_tension_N = kTieMatrixPullTension_N;
+  KnotThrowScript script(model, state, hands, options);
+  int throw_steps = 0;
+  while (script.Step(model, ws, state)) {
+    ++throw_steps;
+    ASSERT_FALSE(state.carry_contact_forces);
+    ASSERT_EQ(state.num_carried, 0) << "step " << throw_steps;
+  }
+  ASSERT_GT(state.status.num_self_contacts, 0);  // the pulled knot's strands touch
+  KnotHoldScript hold(model, state, hands, KnotHoldOptions{});
+  const double cap = 10.0 * model.def.contact_force_N;
+  int held_steps = 0, steps_with_forces = 0;
+  double largest_N = 0.0;
+  while (hold.Step(model, ws, state)) {
+    ++held_steps;
+    ASSERT_TRUE(state.carry_contact_forces);
+    ASSERT_LE(state.num_carried, kMaxCarriedContacts);
+    ASSERT_LE(state.num_carried,
+              std::min(state.status.num_self_contacts, model.friction_self_capacity));
+    for (int k = 0; k < state.num_carried; ++k) {
+      const CarriedContact& c = state.carried[static_cast<std::size_t>(k)];
+      ASSERT_GT(c.force_N, 0.0);
+      ASSERT_LE(c.force_N, cap);
+      ASSERT_NEAR(c.n_W.norm(), 1.0, 1e-12);
+      ASSERT_LT(c.link_a, c.link_b);
+      largest_N = std::max(largest_N, c.force_N);
+    }
+    steps_with_forces += state.num_carried > 0 ? 1 : 0;
+  }
+  // The knot held at 20 mN needs more than the contact law gives at the guard: forces are
+  // carried in nearly every step, some up to the cap's order.
+  EXPECT_GT(steps_with_forces, held_steps * 9 / 10);
+  EXPECT_GT(largest_N, 0.2 * cap);
+  // The next throw starts from no carried force.
+  KnotThrowScript next(model, state, hands, options);
+  next.Step(model, ws, state);
+  EXPECT_FALSE(state.carry_contact_forces);
+  EXPECT_EQ(state.num_carried, 0);
+}
 
 // The same script around a stitch (KnotStitchDef: the thread under a rod between two guide
 // rods, the jig on the standing part before the first guide, so the stitch is inside the first
