@@ -62,6 +62,10 @@ struct BusyState {
       trainee.WriteForce(s.tool.f_T_W);
     }
     NextRandom(s);
+    // A contact force carried by a held knot (no scene here holds one after 400 steps).
+    s.thread->thread.carry_contact_forces = true;
+    s.thread->thread.num_carried = 1;
+    s.thread->thread.carried[0] = {3, 40, Eigen::Vector3d::UnitY(), 4e-3};
   }
   scene::SceneModel scene;
   StationState s;
@@ -133,7 +137,8 @@ TEST(StateHash, ChangingAnyFieldAnywhereChangesHashAndEquality) {
        {"step", "rng", "tool.X_WT", "cues.pending[].apply_at_step", "cues.acks[].cue_id",
         "score.contacts", "needle.X_WN", "tremor.mean_square_m2", "thread.x_W",
         "thread.grasps[].p_WT", "tissue.field_w_m", "tissue.leaves[].ci", "tissue.contact_force_N",
-        "second_tool.X_WT", "second_tool.f_T_W", "thread.f_T2_W", "tool.tau_T_W"}) {
+        "second_tool.X_WT", "second_tool.f_T_W", "thread.f_T2_W", "tool.tau_T_W",
+        "thread.carry_contact_forces", "thread.carried[].force_N"}) {
     EXPECT_TRUE(p.names.count(field)) << field;
   }
   EXPECT_GT(p.elements, 500u);
