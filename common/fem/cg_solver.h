@@ -1,7 +1,7 @@
 #pragma once
 // Conjugate gradient on a symmetric positive definite CSR matrix: the thesis's plain CG and
-// preconditioned variants (Jacobi, incomplete Cholesky IC(0)). Allocation-free after
-// MakeCgWorkspace.
+// preconditioned variants (Jacobi, incomplete Cholesky IC(0), diagonal incomplete Cholesky
+// with Eisenstat's trick). Allocation-free after MakeCgWorkspace.
 
 #include <cstdint>
 #include <vector>
@@ -20,7 +20,12 @@ struct CsrView {
 // y = A x.
 void Multiply(const CsrView& a, const double* x, double* y);
 
-enum class Preconditioner : std::uint8_t { kNone, kJacobi, kIc0 };
+// kDic: the diagonal incomplete Cholesky factor M = (D + L) D⁻¹ (D + Lᵀ), L the strict lower
+// triangle of A itself and D chosen so that diag(M) = diag(A). Because M's off-diagonal part is
+// A's own, CG runs on the split-preconditioned system with Eisenstat's trick (Eisenstat 1981):
+// one product with the preconditioned matrix costs one backward and one forward substitution
+// over L, and no product with A.
+enum class Preconditioner : std::uint8_t { kNone, kJacobi, kIc0, kDic };
 
 struct CgWorkspace {
   std::vector<double> r, z, p, q;  // [max_n]
@@ -32,12 +37,25 @@ struct CgWorkspace {
   std::vector<int> l_ptr;     // [max_n + 1]
   std::vector<int> l_cols;    // [max_nnz]
   std::vector<float> l_vals;  // [max_nnz]
+  // DIC (kDic): L̃ = D^-1/2 L D^-1/2 packed row by row (double: the scaled system is A itself,
+  // so these must be A's entries to the last bit), √d_i, and k_i = 2 − a_ii / d_i.
+  std::vector<double> dic_vals;    // [max_nnz]
+  std::vector<double> dic_sqrt_d;  // [max_n]
+  std::vector<double> dic_k;       // [max_n]
+  std::vector<double> u, y;        // [max_n] Eisenstat scratch and the transformed iterate
+  std::vector<int> lt_ptr, lt_next;  // [max_n + 1], [max_n] L̃ by columns (CSC)
+  std::vector<int> lt_rows;          // [max_nnz]
+  std::vector<double> lt_vals;       // [max_nnz]
 };
 CgWorkspace MakeCgWorkspace(int max_n, int max_nnz);
 
 // IC(0): L Lᵀ ≈ A with L on the pattern of A's lower triangle (rows' entries up to the
 // diagonal). Returns false on breakdown (a non-positive pivot).
 bool FactorIc0(const CsrView& a, CgWorkspace& ws);
+// DIC: d_i = a_ii − Σ_{j<i} a_ij² / d_j on A's lower pattern. Returns false on breakdown (a
+// non-positive d_i; the matrix is SPD but not an M-matrix: the tool points' springs add
+// positive off-diagonal entries).
+bool FactorDic(const CsrView& a, CgWorkspace& ws);
 // Jacobi: 1 / diag. Returns false on a non-positive diagonal.
 bool FactorJacobi(const CsrView& a, CgWorkspace& ws);
 

@@ -24,6 +24,8 @@ const char* ToString(SolverKind kind) {
       return "pcg_jacobi";
     case SolverKind::kPcgIc:
       return "pcg_ic";
+    case SolverKind::kPcgDic:
+      return "pcg_dic";
     case SolverKind::kCholmod:
       return "cholmod";
   }
@@ -52,11 +54,12 @@ MeshKind ParseMeshKind(const std::string& text) {
 }
 
 SolverKind ParseSolverKind(const std::string& text) {
-  for (SolverKind kind :
-       {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc, SolverKind::kCholmod}) {
+  for (SolverKind kind : {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc,
+                          SolverKind::kPcgDic, SolverKind::kCholmod}) {
     if (text == ToString(kind)) return kind;
   }
-  throw std::invalid_argument("solver '" + text + "': expected cg, pcg_jacobi, pcg_ic or cholmod");
+  throw std::invalid_argument("solver '" + text +
+                              "': expected cg, pcg_jacobi, pcg_ic, pcg_dic or cholmod");
 }
 
 Ordering ParseOrdering(const std::string& text) {

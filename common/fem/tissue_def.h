@@ -21,6 +21,9 @@ enum class SolverKind : std::uint8_t {
   kCg,         // the thesis's conjugate gradient: no preconditioner, cold start
   kPcgJacobi,  // diagonal preconditioner, warm-started from the previous step
   kPcgIc,      // incomplete Cholesky IC(0) preconditioner, warm-started
+  // diagonal incomplete Cholesky, CG through Eisenstat's trick (no product with K per
+  // iteration), warm-started; falls back to IC(0) on a pattern whose DIC breaks down
+  kPcgDic,
   kCholmod,    // sparse direct LDLᵀ (SuiteSparse CHOLMOD), symbolic analysis cached
 };
 
@@ -46,7 +49,7 @@ const char* ToString(MeshKind kind);
 const char* ToString(SolverKind kind);
 const char* ToString(Ordering ordering);
 const char* ToString(ToolConstraint constraint);
-// Parses "fine"/"multiscale", "cg"/"pcg_jacobi"/"pcg_ic"/"cholmod" and
+// Parses "fine"/"multiscale", "cg"/"pcg_jacobi"/"pcg_ic"/"pcg_dic"/"cholmod" and
 // "nested_dissection"/"amd"; throws std::invalid_argument naming the text otherwise.
 MeshKind ParseMeshKind(const std::string& text);
 SolverKind ParseSolverKind(const std::string& text);
@@ -107,7 +110,7 @@ struct TissueDef {
   // The default is the one a station can run: CHOLMOD's analysis and factorisation allocate
   // whenever the mesh selection changes (almost every tick under a moving tool), IC(0) CG
   // allocates nothing. Benches and reference studies choose cholmod explicitly.
-  SolverKind solver = SolverKind::kPcgIc;
+  SolverKind solver = SolverKind::kPcgDic;
   Ordering ordering = Ordering::kNestedDissection;
   double cg_relative_tolerance = 1e-8;  // ‖b − K u‖ / ‖b‖ at which CG stops
   int cg_max_iterations = 20000;

@@ -617,25 +617,42 @@ void StartFromLastField(const TissueModel& model, const TissueState& state, cons
   }
 }
 
-// Solve with CG, Jacobi-PCG or IC(0)-PCG; the preconditioner is factored once per key.
+// Solve with CG, Jacobi-PCG, IC(0)-PCG or DIC-PCG (Eisenstat); the preconditioner is factored
+// once per key.
 TissueStatus SolveIterative(const TissueModel& model, const TissueState& state,
                             const ToolContact& tool, TissueWorkspace& ws, const CsrView& a,
                             std::uint64_t key, TissueStepStats& stats) {
   const TissueDef& def = model.def;
   StartFromLastField(model, state, tool, ws, a.n);
-  Preconditioner preconditioner = Preconditioner::kNone;
   if (def.solver != SolverKind::kCg) {
-    preconditioner =
-        def.solver == SolverKind::kPcgIc ? Preconditioner::kIc0 : Preconditioner::kJacobi;
     stats.factor_reused = ws.ic_valid && ws.ic_key == key;
     if (!stats.factor_reused) {
-      const bool factored =
-          preconditioner == Preconditioner::kIc0 ? FactorIc0(a, ws.cg) : FactorJacobi(a, ws.cg);
+      bool factored = false;
+      switch (def.solver) {
+        case SolverKind::kPcgJacobi:
+          ws.ic_kind = Preconditioner::kJacobi;
+          factored = FactorJacobi(a, ws.cg);
+          break;
+        case SolverKind::kPcgDic:
+          // DIC exists for M-matrices; the tool points' springs can make K_ff something else,
+          // and then IC(0) (its own pivots) is tried before the step is given up.
+          ws.ic_kind = Preconditioner::kDic;
+          factored = FactorDic(a, ws.cg);
+          if (factored) break;
+          [[fallthrough]];
+        default:
+          ws.ic_kind = Preconditioner::kIc0;
+          factored = FactorIc0(a, ws.cg);
+          break;
+      }
       ws.ic_valid = factored;
       ws.ic_key = key;
       if (!factored) return TissueStatus::kFactorisationFailed;
     }
   }
+  const Preconditioner preconditioner =
+      def.solver == SolverKind::kCg ? Preconditioner::kNone : ws.ic_kind;
+  stats.preconditioner = preconditioner;
   const CgResult cg = SolveCg(a, ws.rhs.data(), ws.x.data(), preconditioner,
                               def.cg_relative_tolerance, def.cg_max_iterations, ws.cg);
   stats.iterations = cg.iterations;

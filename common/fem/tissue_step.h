@@ -39,6 +39,7 @@ struct TissueStepStats {
   int triangles = 0;
   int leaves = 0;
   int iterations = 0;            // CG iterations (0 for CHOLMOD)
+  Preconditioner preconditioner = Preconditioner::kNone;  // the one used (pcg_dic may fall back)
   double relative_residual = 0;  // ‖b − K_ff u_f‖ / ‖b‖, recomputed after the solve
   bool pattern_reused = false;   // the selection's sparsity pattern was in the cache
   bool factor_reused = false;    // ... and its values and factor were reused unchanged
@@ -127,8 +128,9 @@ struct TissueWorkspace {
   std::vector<double> rhs, x, residual;     // [max_mesh_nodes]
   std::vector<PatternEntry> patterns;
   std::uint64_t use_clock = 0;
-  std::uint64_t ic_key = 0;  // key whose IC(0)/Jacobi factor is in cg
+  std::uint64_t ic_key = 0;  // key whose IC(0)/DIC/Jacobi factor is in cg
   bool ic_valid = false;
+  Preconditioner ic_kind = Preconditioner::kNone;  // which one it is
   CgWorkspace cg;
   std::unique_ptr<CholmodSolver> cholmod;
   // The state's field scattered on the grid for the warm start (a cache of the state).

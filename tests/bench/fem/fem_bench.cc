@@ -210,8 +210,8 @@ int RunFem(int argc, char** argv) {
           "[--grading G] [--end-resolution R] [--moving-only] [--two-level-probe] "
           "[--continuity-probe]\n"
           "  the thesis §3.3 study: force along the bar, RMS error and CPU time by level,\n"
-          "  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, cholmod\n"
-          "  --moving-only: only the moving-tool rows of pcg_jacobi and pcg_ic\n"
+          "  fine vs multi-scale mesh, solvers cg, pcg_jacobi, pcg_ic, pcg_dic, cholmod\n"
+          "  --moving-only: only the moving-tool rows of pcg_jacobi, pcg_ic and pcg_dic\n"
           "  --two-level-probe: PCG iterations of IC(0) against two-level preconditioners\n"
           "  --continuity-probe: step changes of the continuity motions, same / changed mesh\n");
       return 0;
@@ -235,7 +235,7 @@ int RunFem(int argc, char** argv) {
     return RunTwoLevelProbe(model, tools);
   }
   const SolverKind solvers[] = {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc,
-                                SolverKind::kCholmod};
+                                SolverKind::kPcgDic, SolverKind::kCholmod};
   const NavierDomain domain{kDomain_m, kDomain_m, 1 * kPascalPerNewtonPerCm2, 1 * kMetrePerCm};
   std::vector<Run> runs;
   std::vector<Distribution> distributions;
@@ -351,6 +351,7 @@ int RunFem(int argc, char** argv) {
       {SolverKind::kCg, Ordering::kNestedDissection},
       {SolverKind::kPcgJacobi, Ordering::kNestedDissection},
       {SolverKind::kPcgIc, Ordering::kNestedDissection},
+      {SolverKind::kPcgDic, Ordering::kNestedDissection},
       {SolverKind::kPcgIc, Ordering::kNestedDissection, ToolConstraint::kNearestNodes},
       {SolverKind::kCholmod, Ordering::kAmd},
       {SolverKind::kCholmod, Ordering::kNestedDissection}};
@@ -501,10 +502,10 @@ int RunFem(int argc, char** argv) {
              ", \"static_step_us_same_solver\": " + Num(static_of_best) +
              ", \"best_moving_solver\": \"" + best_moving_solver +
              "\", \"goal_moving_500us_met\": " + (best_moving <= 500 ? "true" : "false");
-    // What a station runs: pcg_ic, penalty points, a new mesh every step.
+    // What a station runs: pcg_dic, penalty points, a new mesh every step.
     auto station = [&](int level) -> const Moving* {
       for (const Moving& m : moving) {
-        if (m.level == level && m.solver == "pcg_ic" && m.constraint == "penalty_points") return &m;
+        if (m.level == level && m.solver == "pcg_dic" && m.constraint == "penalty_points") return &m;
       }
       return nullptr;
     };
@@ -529,7 +530,7 @@ int RunFem(int argc, char** argv) {
 
   // The fair comparisons beside the level-for-level speed-up: the multi-scale mesh against the
   // coarsest fine mesh that is at least as accurate (resultant against Navier), same solver;
-  // and, at the same mesh, the station's pcg_ic against CHOLMOD.
+  // and, at the same mesh, the station's pcg_dic against CHOLMOD.
   std::string fair = "[";
   std::fprintf(stderr,
                "equal accuracy (G1, resultant error vs Navier): multi-scale level L "

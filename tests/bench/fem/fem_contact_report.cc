@@ -234,7 +234,7 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
   // few steps, interpolated) and turning at 1 rad/s about its centre (Richardson reference of
   // fine meshes at a few poses), with the station's solver.
   const int level = std::min(7, top);
-  const SolverKind solver = SolverKind::kPcgIc;
+  const SolverKind solver = SolverKind::kPcgDic;
   Motion motions[2];
   motions[0].name = "translate";
   motions[1].name = "rotate";

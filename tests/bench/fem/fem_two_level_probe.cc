@@ -153,7 +153,7 @@ int RunTwoLevelProbe(const TissueModel& model, const std::vector<ToolContact>& t
 }
 
 int RunContinuityProbe() {
-  // The continuity motions of the report (level 7, pcg_ic, 400 steps at 1 kHz: translation at
+  // The continuity motions of the report (level 7, pcg_dic, 400 steps at 1 kHz: translation at
   // 20 mm/s heading 0.5 rad, rotation at 1 rad/s about the centre), split into steps whose
   // multi-scale mesh is the previous one's and steps where it changed, for a few settings of
   // the tool points.
@@ -175,7 +175,7 @@ int RunContinuityProbe() {
     def.thickness_m = 0.01;
     def.max_level = 9;
     def.level = 7;
-    def.solver = SolverKind::kPcgIc;
+    def.solver = SolverKind::kPcgDic;
     def.cg_max_iterations = 100000;
     def.tool_point_spacing = v.spacing;
     def.tool_kink_factor = v.kink_factor;

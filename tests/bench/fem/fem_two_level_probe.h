@@ -14,7 +14,7 @@ namespace microdex::fem {
 // Steps the tools in order and prints the mean iterations of each method from a zero start.
 int RunTwoLevelProbe(const TissueModel& model, const std::vector<ToolContact>& tools);
 
-// The continuity motions (level 7, pcg_ic) split into steps on the same mesh and steps where
+// The continuity motions (level 7, pcg_dic) split into steps on the same mesh and steps where
 // the multi-scale mesh changed, for a few tool-point settings; prints the largest changes.
 int RunContinuityProbe();
 

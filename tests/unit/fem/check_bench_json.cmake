@@ -5,9 +5,9 @@ if(NOT rc EQUAL 0)
 endif()
 file(READ ${OUT} json)
 string(JSON n LENGTH "${json}" runs)
-# 3 cases × 5 levels × 2 meshes × 4 solvers in quick mode
-if(NOT n EQUAL 120)
-  message(FATAL_ERROR "expected 120 runs, got ${n}")
+# 3 cases × 5 levels × 2 meshes × 5 solvers in quick mode
+if(NOT n EQUAL 150)
+  message(FATAL_ERROR "expected 150 runs, got ${n}")
 endif()
 math(EXPR last "${n} - 1")
 foreach(i RANGE ${last})

@@ -89,7 +89,8 @@ class AllocationTest : public ::testing::Test {
 };
 
 TEST_F(AllocationTest, StaticToolAllocatesNothing) {
-  for (SolverKind solver : {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc}) {
+  for (SolverKind solver :
+       {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc, SolverKind::kPcgDic}) {
     for (bool reuse : {false, true}) {
       const Counts c = CountSteps(solver, /*moving=*/false, reuse);
       EXPECT_EQ(c.news, 0) << ToString(solver);
@@ -109,7 +110,7 @@ TEST_F(AllocationTest, StaticToolAllocatesNothing) {
 // With the selection changing every step, our side still allocates nothing; CHOLMOD's
 // symbolic analysis of each new pattern allocates inside CHOLMOD (recorded, not hidden).
 TEST_F(AllocationTest, MovingToolAllocatesOnlyInsideCholmodAnalysis) {
-  for (SolverKind solver : {SolverKind::kCg, SolverKind::kPcgIc}) {
+  for (SolverKind solver : {SolverKind::kCg, SolverKind::kPcgIc, SolverKind::kPcgDic}) {
     const Counts c = CountSteps(solver, /*moving=*/true, false);
     EXPECT_EQ(c.news, 0) << ToString(solver);
     EXPECT_EQ(c.cholmod, 0) << ToString(solver);

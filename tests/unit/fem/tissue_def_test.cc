@@ -49,13 +49,13 @@ TEST(TissueDefFile, SceneFilesLoadInSiUnits) {
 
   const TissueDef fat = LoadTissueDef(SourceDir() + "/assets/scenes/tissue_soft_fat.yaml");
   EXPECT_DOUBLE_EQ(fat.shear_modulus_Pa, 1.0e3);
-  EXPECT_EQ(fat.solver, SolverKind::kPcgIc);
+  EXPECT_EQ(fat.solver, SolverKind::kPcgDic);
   EXPECT_EQ(fat.max_contact_nodes, 2048);
   const TissueDef skin = LoadTissueDef(SourceDir() + "/assets/scenes/tissue_skin_patch.yaml");
   EXPECT_DOUBLE_EQ(skin.length_x_m, 0.02);
   EXPECT_DOUBLE_EQ(skin.thickness_m, 0.002);
-  EXPECT_EQ(skin.solver, SolverKind::kPcgIc);
-  EXPECT_EQ(TissueDef{}.solver, SolverKind::kPcgIc) << "the default is the station's solver";
+  EXPECT_EQ(skin.solver, SolverKind::kPcgDic);
+  EXPECT_EQ(TissueDef{}.solver, SolverKind::kPcgDic) << "the default is the station's solver";
   for (const TissueDef& def : {study, fat, skin}) EXPECT_NO_THROW(BuildTissueModel(def));
 }
 
@@ -86,7 +86,7 @@ TEST(TissueDefFile, BadFilesNameFileLineAndField) {
       {"tissue_unknown.yaml", "tissue:\n  level: 5\n  youngs_modulus_Pa: 1e4\n",
        "3: tissue.youngs_modulus_Pa: unknown key"},
       {"tissue_bad_solver.yaml", "tissue:\n  solver: lu\n",
-       "2: tissue.solver: solver 'lu': expected cg, pcg_jacobi, pcg_ic or cholmod"},
+       "2: tissue.solver: solver 'lu': expected cg, pcg_jacobi, pcg_ic, pcg_dic or cholmod"},
       {"tissue_bad_mesh.yaml", "tissue:\n  mesh: coarse\n",
        "2: tissue.mesh: mesh kind 'coarse': expected fine or multiscale"},
       {"tissue_bad_ordering.yaml", "tissue:\n  ordering: metis\n",

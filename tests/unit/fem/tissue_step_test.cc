@@ -111,7 +111,8 @@ TEST(TissueStep, SolversAgreeOnFineAndMultiscaleMeshes) {
   for (MeshKind mesh : {MeshKind::kFine, MeshKind::kMultiscale}) {
     const double reference = Step(Model(5, mesh, SolverKind::kCholmod), G1Bar(kPress_m)).force_N;
     EXPECT_GT(reference, 0);  // pressed down, the tissue pushes the tool up
-    for (SolverKind solver : {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc}) {
+    for (SolverKind solver :
+         {SolverKind::kCg, SolverKind::kPcgJacobi, SolverKind::kPcgIc, SolverKind::kPcgDic}) {
       const Result r = Step(Model(5, mesh, solver), G1Bar(kPress_m));
       ASSERT_EQ(r.status, TissueStatus::kOk);
       EXPECT_NEAR(r.force_N, reference, kSolverAgreementTol * reference) << ToString(solver);
@@ -129,7 +130,8 @@ TEST(TissueStep, SolversAgreeOnFineAndMultiscaleMeshes) {
 TEST(TissueStep, StiffnessAndDisplacementSweepsStayLinearAndFinite) {
   const double base =
       Step(Model(5, MeshKind::kMultiscale, SolverKind::kCholmod), G1Bar(kPress_m)).force_N / 1e4;
-  for (SolverKind solver : {SolverKind::kCholmod, SolverKind::kPcgIc, SolverKind::kCg}) {
+  for (SolverKind solver :
+       {SolverKind::kCholmod, SolverKind::kPcgIc, SolverKind::kPcgDic, SolverKind::kCg}) {
     for (double g : {1e-3, 1.0, 1e4, 1e6, 1e9}) {
       const Result r = Step(Model(5, MeshKind::kMultiscale, solver, g), G1Bar(kPress_m));
       ASSERT_EQ(r.status, TissueStatus::kOk) << g;
@@ -279,7 +281,9 @@ TEST(TissueStep, TorqueOfATiltedBarAndReferencePoint) {
 // change every step, nothing fails, solvers agree step by step.
 TEST(TissueStep, FastMovingToolNeverFails) {
   const TissueModel direct = Model(7, MeshKind::kMultiscale, SolverKind::kCholmod);
-  const TissueModel iterative = Model(7, MeshKind::kMultiscale, SolverKind::kPcgIc);
+  for (SolverKind solver : {SolverKind::kPcgIc, SolverKind::kPcgDic}) {
+  SCOPED_TRACE(ToString(solver));
+  const TissueModel iterative = Model(7, MeshKind::kMultiscale, solver);
   TissueWorkspace ws_d(direct), ws_i(iterative);
   TissueState sd = MakeTissueState(direct), si = MakeTissueState(iterative);
   for (int k = 0; k < 120; ++k) {
@@ -294,6 +298,11 @@ TEST(TissueStep, FastMovingToolNeverFails) {
     ASSERT_EQ(si.status, TissueStatus::kOk) << k;
     ASSERT_TRUE(sd.f_T_S.allFinite() && sd.tau_T_S.allFinite());
     EXPECT_NEAR(si.f_T_S.z(), sd.f_T_S.z(), 1e-5 * sd.f_T_S.z()) << k;
+    // pcg_dic keeps DIC on these systems (no fall-back to IC(0) needed).
+    if (solver == SolverKind::kPcgDic) {
+      EXPECT_EQ(ws_i.stats.preconditioner, Preconditioner::kDic) << k;
+    }
+  }
   }
 }
 
@@ -446,6 +455,44 @@ TEST(TissueStep, BarLiftedOutOfTheTissue) {
   }
   EXPECT_EQ(state.status, TissueStatus::kNoContact);
   EXPECT_EQ(state.f_T_S.z(), 0.0);
+}
+
+// DIC exists for M-matrices; the tool points' springs (k λλᵀ, up to tool_penalty · G t) add
+// positive off-diagonal entries. Over the whole range of tool_penalty and tool_kink_factor that
+// TissueDef accepts, a bar moving and turning across the patch keeps DIC (no fall-back to
+// IC(0)) and agrees with CHOLMOD step by step. With springs 1e8 G t the system's condition
+// makes the residual test a loose bound on the force (IC(0)-PCG is 2 % off there, DIC 0.03 %).
+TEST(TissueStep, DicPreconditionerHoldsOverThePenaltyRange) {
+  for (double penalty : {1.0, 1e3, 1e8}) {
+    for (double kink : {0.25, 1.2, 4.0}) {
+      SCOPED_TRACE(testing::Message() << "tool_penalty " << penalty << " kink " << kink);
+      TissueDef def;
+      def.level = 5;
+      def.max_level = 7;
+      def.tool_penalty = penalty;
+      def.tool_kink_factor = kink;
+      def.solver = SolverKind::kPcgDic;
+      const TissueModel dic = BuildTissueModel(def);
+      def.solver = SolverKind::kCholmod;
+      const TissueModel direct = BuildTissueModel(def);
+      TissueWorkspace ws_dic(dic), ws_direct(direct);
+      TissueState s_dic = MakeTissueState(dic), s_direct = MakeTissueState(direct);
+      const double tol = penalty > 1e3 ? 1e-3 : 1e-5;
+      for (int k = 0; k < 60; ++k) {
+        const double t = 1e-3 * k, a = 3.0 * t;
+        const double cx = 0.04 + 0.5 * t, cy = 0.1 + 4e-4 * k;
+        const ToolContact bar =
+            MakeBarTool({cx - 0.03 * std::cos(a), cy - 0.03 * std::sin(a), -kPress_m},
+                        {cx + 0.03 * std::cos(a), cy + 0.03 * std::sin(a), -kPress_m});
+        StepTissue(dic, bar, ws_dic, s_dic);
+        StepTissue(direct, bar, ws_direct, s_direct);
+        ASSERT_EQ(s_dic.status, TissueStatus::kOk) << k;
+        ASSERT_EQ(ws_dic.stats.preconditioner, Preconditioner::kDic) << k;
+        EXPECT_NEAR(s_dic.f_T_S.z(), s_direct.f_T_S.z(), tol * s_direct.f_T_S.z()) << k;
+        EXPECT_LE(ws_dic.stats.relative_residual, 1.5 * def.cg_relative_tolerance) << k;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -138,7 +138,7 @@ TEST(Scene, ShippedThreadAndTissueScenesLoad) {
   ASSERT_TRUE(p.tissue.has_value());
   EXPECT_FALSE(p.thread.has_value());
   EXPECT_EQ(p.tissue->def.level, 6);  // the scene's override of the parameter file
-  EXPECT_EQ(p.tissue->def.solver, fem::SolverKind::kPcgIc);
+  EXPECT_EQ(p.tissue->def.solver, fem::SolverKind::kPcgDic);
   EXPECT_EQ(p.tissue->tool, TissueToolKind::kBar);
   const SceneModel both = LoadScene(SceneDir() + "/suture_on_tissue.yaml");
   EXPECT_TRUE(both.thread && both.tissue);
@@ -202,7 +202,7 @@ TEST(Scene, ThreadAndTissueSectionsAreChecked) {
       error_of("name: t\nmodules: [tissue]\n"
                "tissue: {params: tissue_skin_patch.yaml, solver: magic}\n" +
                line),
-      origin + ":3: tissue.solver: solver 'magic': expected cg, pcg_jacobi, pcg_ic or cholmod");
+      origin + ":3: tissue.solver: solver 'magic': expected cg, pcg_jacobi, pcg_ic, pcg_dic or cholmod");
   // The scene's overrides are checked with the parameter file's other values.
   EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n"
                      "tissue:\n  params: tissue_skin_patch.yaml\n  level: 0\n" +
