@@ -39,10 +39,10 @@ struct CgWorkspace {
   std::vector<float> l_vals;  // [max_nnz]
   // DIC (kDic): L̃ = D^-1/2 L D^-1/2 packed row by row (double: the scaled system is A itself,
   // so these must be A's entries to the last bit), √d_i, and k_i = 2 − a_ii / d_i.
-  std::vector<double> dic_vals;    // [max_nnz]
-  std::vector<double> dic_sqrt_d;  // [max_n]
-  std::vector<double> dic_k;       // [max_n]
-  std::vector<double> u, y;        // [max_n] Eisenstat scratch and the transformed iterate
+  std::vector<double> dic_vals;      // [max_nnz]
+  std::vector<double> dic_sqrt_d;    // [max_n]
+  std::vector<double> dic_k;         // [max_n]
+  std::vector<double> u, y;          // [max_n] Eisenstat scratch and the transformed iterate
   std::vector<int> lt_ptr, lt_next;  // [max_n + 1], [max_n] L̃ by columns (CSC)
   std::vector<int> lt_rows;          // [max_nnz]
   std::vector<double> lt_vals;       // [max_nnz]

@@ -24,7 +24,7 @@ enum class SolverKind : std::uint8_t {
   // diagonal incomplete Cholesky, CG through Eisenstat's trick (no product with K per
   // iteration), warm-started; falls back to IC(0) on a pattern whose DIC breaks down
   kPcgDic,
-  kCholmod,    // sparse direct LDLᵀ (SuiteSparse CHOLMOD), symbolic analysis cached
+  kCholmod,  // sparse direct LDLᵀ (SuiteSparse CHOLMOD), symbolic analysis cached
 };
 
 // Fill-reducing ordering of the free unknowns for CHOLMOD.

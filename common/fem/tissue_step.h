@@ -38,7 +38,7 @@ struct TissueStepStats {
   int active_nodes = 0;
   int triangles = 0;
   int leaves = 0;
-  int iterations = 0;            // CG iterations (0 for CHOLMOD)
+  int iterations = 0;                                     // CG iterations (0 for CHOLMOD)
   Preconditioner preconditioner = Preconditioner::kNone;  // the one used (pcg_dic may fall back)
   double relative_residual = 0;  // ‖b − K_ff u_f‖ / ‖b‖, recomputed after the solve
   bool pattern_reused = false;   // the selection's sparsity pattern was in the cache

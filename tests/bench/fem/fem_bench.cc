@@ -505,7 +505,8 @@ int RunFem(int argc, char** argv) {
     // What a station runs: pcg_dic, penalty points, a new mesh every step.
     auto station = [&](int level) -> const Moving* {
       for (const Moving& m : moving) {
-        if (m.level == level && m.solver == "pcg_dic" && m.constraint == "penalty_points") return &m;
+        if (m.level == level && m.solver == "pcg_dic" && m.constraint == "penalty_points")
+          return &m;
       }
       return nullptr;
     };

@@ -43,7 +43,9 @@ Csr ToCsr(const Eigen::MatrixXd& a) {
 Eigen::MatrixXd Stiffness(int side, double spring, std::mt19937& rng) {
   const int n = side * side;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-  auto id = [side](int x, int y) { return (x < 0 || y < 0 || x >= side || y >= side) ? -1 : y * side + x; };
+  auto id = [side](int x, int y) {
+    return (x < 0 || y < 0 || x >= side || y >= side) ? -1 : y * side + x;
+  };
   const double k[3][3] = {{1, -0.5, -0.5}, {-0.5, 0.5, 0}, {-0.5, 0, 0.5}};  // right angle first
   for (int y = -1; y < side; ++y) {
     for (int x = -1; x < side; ++x) {
@@ -150,7 +152,8 @@ TEST(CgSolver, EisenstatDicTakesNoMoreIterationsThanJacobi) {
       SolveCg(csr.View(), b.data(), x.data(), Preconditioner::kJacobi, 1e-8, 10 * n, ws).iterations;
   x.setZero();
   ASSERT_TRUE(FactorDic(csr.View(), ws));
-  const CgResult dic = SolveCg(csr.View(), b.data(), x.data(), Preconditioner::kDic, 1e-8, 10 * n, ws);
+  const CgResult dic =
+      SolveCg(csr.View(), b.data(), x.data(), Preconditioner::kDic, 1e-8, 10 * n, ws);
   EXPECT_TRUE(dic.converged);
   EXPECT_LT(dic.iterations, jacobi / 2 + 1) << dic.iterations << " vs Jacobi " << jacobi;
 }
@@ -180,7 +183,8 @@ TEST(CgSolver, ExactWarmStartTakesNoIterationAndZeroRightHandSideGivesZero) {
   EXPECT_EQ(r.iterations, 0);
   EXPECT_EQ(x, before);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
-  const CgResult z = SolveCg(csr.View(), zero.data(), x.data(), Preconditioner::kDic, 1e-8, 100, ws);
+  const CgResult z =
+      SolveCg(csr.View(), zero.data(), x.data(), Preconditioner::kDic, 1e-8, 100, ws);
   EXPECT_TRUE(z.converged);
   EXPECT_EQ(x.norm(), 0.0);
 }

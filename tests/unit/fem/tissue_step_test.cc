@@ -282,27 +282,27 @@ TEST(TissueStep, TorqueOfATiltedBarAndReferencePoint) {
 TEST(TissueStep, FastMovingToolNeverFails) {
   const TissueModel direct = Model(7, MeshKind::kMultiscale, SolverKind::kCholmod);
   for (SolverKind solver : {SolverKind::kPcgIc, SolverKind::kPcgDic}) {
-  SCOPED_TRACE(ToString(solver));
-  const TissueModel iterative = Model(7, MeshKind::kMultiscale, solver);
-  TissueWorkspace ws_d(direct), ws_i(iterative);
-  TissueState sd = MakeTissueState(direct), si = MakeTissueState(iterative);
-  for (int k = 0; k < 120; ++k) {
-    const double t = 1e-3 * k, a = 3.0 * t;
-    const double cx = 0.04 + 1.0 * t, cy = 0.1;
-    const ToolContact bar =
-        MakeBarTool({cx - 0.03 * std::cos(a), cy - 0.03 * std::sin(a), -kPress_m},
-                    {cx + 0.03 * std::cos(a), cy + 0.03 * std::sin(a), -kPress_m});
-    StepTissue(direct, bar, ws_d, sd);
-    StepTissue(iterative, bar, ws_i, si);
-    ASSERT_EQ(sd.status, TissueStatus::kOk) << k;
-    ASSERT_EQ(si.status, TissueStatus::kOk) << k;
-    ASSERT_TRUE(sd.f_T_S.allFinite() && sd.tau_T_S.allFinite());
-    EXPECT_NEAR(si.f_T_S.z(), sd.f_T_S.z(), 1e-5 * sd.f_T_S.z()) << k;
-    // pcg_dic keeps DIC on these systems (no fall-back to IC(0) needed).
-    if (solver == SolverKind::kPcgDic) {
-      EXPECT_EQ(ws_i.stats.preconditioner, Preconditioner::kDic) << k;
+    SCOPED_TRACE(ToString(solver));
+    const TissueModel iterative = Model(7, MeshKind::kMultiscale, solver);
+    TissueWorkspace ws_d(direct), ws_i(iterative);
+    TissueState sd = MakeTissueState(direct), si = MakeTissueState(iterative);
+    for (int k = 0; k < 120; ++k) {
+      const double t = 1e-3 * k, a = 3.0 * t;
+      const double cx = 0.04 + 1.0 * t, cy = 0.1;
+      const ToolContact bar =
+          MakeBarTool({cx - 0.03 * std::cos(a), cy - 0.03 * std::sin(a), -kPress_m},
+                      {cx + 0.03 * std::cos(a), cy + 0.03 * std::sin(a), -kPress_m});
+      StepTissue(direct, bar, ws_d, sd);
+      StepTissue(iterative, bar, ws_i, si);
+      ASSERT_EQ(sd.status, TissueStatus::kOk) << k;
+      ASSERT_EQ(si.status, TissueStatus::kOk) << k;
+      ASSERT_TRUE(sd.f_T_S.allFinite() && sd.tau_T_S.allFinite());
+      EXPECT_NEAR(si.f_T_S.z(), sd.f_T_S.z(), 1e-5 * sd.f_T_S.z()) << k;
+      // pcg_dic keeps DIC on these systems (no fall-back to IC(0) needed).
+      if (solver == SolverKind::kPcgDic) {
+        EXPECT_EQ(ws_i.stats.preconditioner, Preconditioner::kDic) << k;
+      }
     }
-  }
   }
 }
 

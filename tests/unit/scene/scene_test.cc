@@ -202,7 +202,8 @@ TEST(Scene, ThreadAndTissueSectionsAreChecked) {
       error_of("name: t\nmodules: [tissue]\n"
                "tissue: {params: tissue_skin_patch.yaml, solver: magic}\n" +
                line),
-      origin + ":3: tissue.solver: solver 'magic': expected cg, pcg_jacobi, pcg_ic, pcg_dic or cholmod");
+      origin +
+          ":3: tissue.solver: solver 'magic': expected cg, pcg_jacobi, pcg_ic, pcg_dic or cholmod");
   // The scene's overrides are checked with the parameter file's other values.
   EXPECT_EQ(error_of("name: t\nmodules: [tissue]\n"
                      "tissue:\n  params: tissue_skin_patch.yaml\n  level: 0\n" +
