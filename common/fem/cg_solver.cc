@@ -100,10 +100,11 @@ void ApplyPreconditioner(const CsrView& a, Preconditioner preconditioner, const 
   }
 }
 
-// q = Â v with Â = (I + L̃)⁻¹ Ã (I + L̃ᵀ)⁻¹, Ã = D^-1/2 A D^-1/2 = (I + L̃) + (I + L̃ᵀ) − diag(k):
+// First v ← r + β v (CG's new direction, in the same pass), then q = Â v with
+// Â = (I + L̃)⁻¹ Ã (I + L̃ᵀ)⁻¹, Ã = D^-1/2 A D^-1/2 = (I + L̃) + (I + L̃ᵀ) − diag(k):
 // Â v = t + (I + L̃)⁻¹ (v − k∘t), t = (I + L̃ᵀ)⁻¹ v. Returns vᵀ q. t and u are scratch.
-double MultiplyEisenstat(int n, const CgWorkspace& ws, const double* v, double* t, double* u,
-                         double* q) {
+double MultiplyEisenstat(int n, const CgWorkspace& ws, const double* r, double beta, double* v,
+                         double* t, double* u, double* q) {
   const int* ptr = ws.l_ptr.data();
   const int* cols = ws.l_cols.data();
   const double* l = ws.dic_vals.data();
@@ -112,6 +113,7 @@ double MultiplyEisenstat(int n, const CgWorkspace& ws, const double* v, double* 
   const int* t_rows = ws.lt_rows.data();
   const double* lt = ws.lt_vals.data();
   for (int i = n - 1; i >= 0; --i) {  // row i of L̃ᵀ is column i of L̃
+    v[i] = r[i] + beta * v[i];
     double s = v[i];
     for (int e = t_ptr[i]; e < t_ptr[i + 1]; ++e) s -= lt[e] * t[t_rows[e]];
     t[i] = s;
@@ -208,9 +210,10 @@ CgResult SolveCgEisenstat(const CsrView& a, const double* b, double* x, double r
   }
   double rho = Dot(n, r, r);
   double target_hat = target * std::sqrt(rho) / r_norm;
-  for (int i = 0; i < n; ++i) p[i] = r[i];
+  double beta = 0;  // the first direction is r̂ itself
+  for (int i = 0; i < n; ++i) p[i] = 0;
   while (result.iterations < max_iterations) {
-    const double pq = MultiplyEisenstat(n, ws, p, t, u, q);
+    const double pq = MultiplyEisenstat(n, ws, r, beta, p, t, u, q);
     if (!(pq > 0)) break;  // breakdown: not positive definite or NaN
     const double alpha = rho / pq;
     const double rho_next = UpdateSolution(n, alpha, p, q, y, r);
@@ -222,9 +225,8 @@ CgResult SolveCgEisenstat(const CsrView& a, const double* b, double* x, double r
       if (r_norm <= target) break;
       target_hat = target * r_hat_norm / r_norm;
     }
-    const double beta = rho_next / rho;
+    beta = rho_next / rho;
     rho = rho_next;
-    for (int i = 0; i < n; ++i) p[i] = r[i] + beta * p[i];
   }
   if (!(r_norm <= target)) r_norm = OriginalResidualNorm(n, ws, r);
   // x = D^-1/2 (I + L̃ᵀ)⁻¹ ŷ.
