@@ -320,7 +320,7 @@ bool FactorIc0(const CsrView& a, CgWorkspace& ws) {
   return true;
 }
 
-bool FactorDic(const CsrView& a, CgWorkspace& ws) {
+bool FactorDic(const CsrView& a, CgWorkspace& ws, double relaxation) {
   // inv_diag holds 1/√d (the scaling); d_j itself is √d_j².
   for (int i = 0; i < a.n; ++i) {
     const double a_ii = a.vals[a.diag[i]];
@@ -333,7 +333,13 @@ bool FactorDic(const CsrView& a, CgWorkspace& ws) {
     if (!(d > 0) || !std::isfinite(d)) return false;
     ws.dic_sqrt_d[i] = std::sqrt(d);
     ws.inv_diag[i] = 1.0 / ws.dic_sqrt_d[i];
-    ws.dic_k[i] = 2.0 - a_ii / d;
+  }
+  // The pivots of plain DIC, then scaled (an SPD M for any positive D).
+  const double sqrt_relaxation = std::sqrt(relaxation);
+  for (int i = 0; i < a.n; ++i) {
+    ws.dic_sqrt_d[i] *= sqrt_relaxation;
+    ws.inv_diag[i] = 1.0 / ws.dic_sqrt_d[i];
+    ws.dic_k[i] = 2.0 - a.vals[a.diag[i]] * ws.inv_diag[i] * ws.inv_diag[i];
   }
   int packed = 0;
   for (int i = 0; i < a.n; ++i) {

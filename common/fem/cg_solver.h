@@ -52,10 +52,11 @@ CgWorkspace MakeCgWorkspace(int max_n, int max_nnz);
 // IC(0): L Lᵀ ≈ A with L on the pattern of A's lower triangle (rows' entries up to the
 // diagonal). Returns false on breakdown (a non-positive pivot).
 bool FactorIc0(const CsrView& a, CgWorkspace& ws);
-// DIC: d_i = a_ii − Σ_{j<i} a_ij² / d_j on A's lower pattern. Returns false on breakdown (a
-// non-positive d_i; the matrix is SPD but not an M-matrix: the tool points' springs add
-// positive off-diagonal entries).
-bool FactorDic(const CsrView& a, CgWorkspace& ws);
+// DIC: the pivots d_i = a_ii − Σ_{j<i} a_ij² / d_j on A's lower pattern (diag M = diag A), then
+// D = ω diag(d), ω = `relaxation` (1: plain DIC; any positive D gives an SPD M and the same
+// Eisenstat form). Returns false on breakdown (a non-positive d_i; the matrix is SPD but not an
+// M-matrix: the tool points' springs add positive off-diagonal entries).
+bool FactorDic(const CsrView& a, CgWorkspace& ws, double relaxation = 1.0);
 // Jacobi: 1 / diag. Returns false on a non-positive diagonal.
 bool FactorJacobi(const CsrView& a, CgWorkspace& ws);
 

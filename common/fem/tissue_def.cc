@@ -95,6 +95,8 @@ void TissueDef::Validate() const {
   Require(std::isfinite(cg_relative_tolerance) && cg_relative_tolerance > 0 &&
               cg_relative_tolerance < 1,
           "cg_relative_tolerance", "a value in (0, 1)");
+  Require(std::isfinite(dic_relaxation) && dic_relaxation >= 0.5 && dic_relaxation <= 1,
+          "dic_relaxation", "a factor in [0.5, 1]");
   Require(cg_max_iterations >= 1, "cg_max_iterations", "a positive count");
   Require(max_contact_nodes >= 1, "max_contact_nodes", "a positive count");
   Require(pattern_cache_entries >= 1 && pattern_cache_entries <= 16, "pattern_cache_entries",
@@ -135,6 +137,7 @@ TissueDef LoadTissueDef(const std::string& path) {
                              "solver",
                              "ordering",
                              "cg_relative_tolerance",
+                             "dic_relaxation",
                              "cg_max_iterations",
                              "max_contact_nodes",
                              "pattern_cache_entries"});
@@ -162,6 +165,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   def.ordering = ReadEnum(tissue, "ordering", &ParseOrdering, def.ordering);
   def.cg_relative_tolerance =
       tissue.FiniteDouble("cg_relative_tolerance", def.cg_relative_tolerance);
+  def.dic_relaxation = tissue.FiniteDouble("dic_relaxation", def.dic_relaxation);
   def.cg_max_iterations = tissue.Int("cg_max_iterations", def.cg_max_iterations);
   def.max_contact_nodes = tissue.Int("max_contact_nodes", def.max_contact_nodes);
   def.pattern_cache_entries = tissue.Int("pattern_cache_entries", def.pattern_cache_entries);

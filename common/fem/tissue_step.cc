@@ -637,7 +637,7 @@ TissueStatus SolveIterative(const TissueModel& model, const TissueState& state,
           // DIC exists for M-matrices; the tool points' springs can make K_ff something else,
           // and then IC(0) (its own pivots) is tried before the step is given up.
           ws.ic_kind = Preconditioner::kDic;
-          factored = FactorDic(a, ws.cg);
+          factored = FactorDic(a, ws.cg, def.dic_relaxation);
           if (factored) break;
           [[fallthrough]];
         default:

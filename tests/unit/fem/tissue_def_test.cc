@@ -103,6 +103,8 @@ TEST(TissueDefFile, BadFilesNameFileLineAndField) {
        "2: tissue.end_resolution: expected 0 (off) or end-zone cells per tool length in (0, 1e4]"},
       {"tissue_end_levels.yaml", "tissue:\n  end_levels: 9\n",
        "2: tissue.end_levels: expected an integer in [0, 6]"},
+      {"tissue_dic_relaxation.yaml", "tissue:\n  solver: pcg_dic\n  dic_relaxation: 0.3\n",
+       "3: tissue.dic_relaxation: expected a factor in [0.5, 1]"},
   };
   for (const Bad& bad : cases) {
     const std::string path = Write(bad.file, bad.text);
