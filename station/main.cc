@@ -66,6 +66,9 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                  "--device dds: all (default), none, or a comma list of shm (shared-memory "
                  "participant profile), rt (the bridge's DDS threads SCHED_FIFO), cpu (a 0 us "
                  "PM QoS CPU latency request while running; --no-realtime: rt and cpu off)");
+  app.add_option("--spin-us", o.spin_us,
+                 "the haptic loop sleeps until this many µs before each deadline and polls the "
+                 "clock for the rest (0: sleeps to the deadline; 0..500)");
   app.add_flag("--no-realtime", no_realtime, "do not try SCHED_FIFO and mlockall");
   app.add_flag("--unpaced", o.unpaced,
                "step as fast as possible in simulated time (same results as paced)");

@@ -172,6 +172,9 @@ DeviceMappingDef DdsDeviceMapping(const scene::SceneModel& scene, const std::str
 
 std::string StationOptions::Validate() const {
   if (scene_path.empty()) return "--scene: required";
+  if (!(spin_us >= 0 && spin_us <= 500)) {
+    return "--spin-us: expected 0..500 µs (got " + std::to_string(spin_us) + ")";
+  }
   if (device == "playback") {
     if (device_file.empty()) return "--device playback: expected a FILE (CSV)";
   } else if (device == "dds") {
@@ -299,7 +302,7 @@ int RunStation(const StationOptions& o, const std::atomic<bool>& stop) {
   StationRings rings;
   // Paced: absolute 1 kHz deadlines on the monotonic clock. Unpaced: a clock that jumps to each
   // deadline, so the loop runs as fast as it can in simulated time.
-  rt::MonotonicClock wall_clock;
+  rt::MonotonicClock wall_clock(static_cast<std::int64_t>(o.spin_us * 1e3));
   rt::ManualClock unpaced_clock(wall_clock.NowNs());
   rt::Clock& clock = o.unpaced ? static_cast<rt::Clock&>(unpaced_clock) : wall_clock;
   // The modules write their large frames once per mirror period.

@@ -27,6 +27,10 @@ struct StationOptions {
   std::string score_out;  // JSON file written at the end ("" none)
   double mirror_rate_hz = 60;
   bool realtime = true;  // try SCHED_FIFO + mlockall
+  // The haptic loop's pacing: it sleeps until this long before each deadline, then polls the
+  // clock until it (rt/clock.h): a halted core's wake-up is paid before the deadline.
+  // 0: sleep to the deadline. Not with --unpaced.
+  double spin_us = 0;
   // --cue KIND[:PARAM|:off]: cues switched on (off) at the first step, as the instructor's
   // command would (common/cues/cue_kind.h).
   std::vector<std::string> cues;

@@ -3,6 +3,11 @@
 // (time is a dependency like any other). MonotonicClock is the real one: absolute deadlines on
 // CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME), source stamps from CLOCK_REALTIME. Neither
 // allocates.
+//
+// A MonotonicClock with a spin tail sleeps until `spin_ns` before the deadline and then polls
+// the clock (vDSO, no system call) until it: the wake-up latency of a halted virtual CPU
+// (tens of µs on these VMs, station/README.md "Pacing") is paid before the deadline instead of
+// after it, at the cost of `spin_ns` of CPU per period.
 
 #include <cstdint>
 
@@ -18,9 +23,14 @@ class Clock {
 
 class MonotonicClock final : public Clock {
  public:
+  explicit MonotonicClock(std::int64_t spin_ns = 0) : spin_ns_(spin_ns) {}
   std::int64_t NowNs() override;
   void SleepUntilNs(std::int64_t deadline_ns) override;
   std::int64_t RealtimeNs() override;
+  std::int64_t spin_ns() const { return spin_ns_; }
+
+ private:
+  std::int64_t spin_ns_;
 };
 
 // A clock that jumps to every deadline (plus an optional fixed lateness): the loop runs as

@@ -74,11 +74,14 @@ std::int64_t MonotonicClock::NowNs() {
 }
 
 void MonotonicClock::SleepUntilNs(std::int64_t deadline_ns) {
+  const std::int64_t wake_ns = deadline_ns - spin_ns_;
   timespec ts;
-  ts.tv_sec = deadline_ns / 1'000'000'000;
-  ts.tv_nsec = deadline_ns % 1'000'000'000;
-  // EINTR: a signal arrived; sleep again until the same absolute deadline.
+  ts.tv_sec = wake_ns / 1'000'000'000;
+  ts.tv_nsec = wake_ns % 1'000'000'000;
+  // EINTR: a signal arrived; sleep again until the same absolute time.
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+  while (spin_ns_ > 0 && NowNs() < deadline_ns) {
   }
 }
 

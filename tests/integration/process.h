@@ -30,6 +30,14 @@ inline std::string SourceDir() {
   return env ? env : MICRODEX_TEST_SOURCE_DIR;
 }
 
+// The fault tests' stations are paced as a station on a machine of its own is: the service
+// unit's `--spin-us 100` (deploy/systemd/microdex-station@.service, station/README.md
+// "Pacing"). MICRODEX_STATION_SPIN_US overrides it, for comparisons.
+inline std::string StationSpinUs() {
+  const char* env = std::getenv("MICRODEX_STATION_SPIN_US");
+  return env ? env : "100";
+}
+
 // Starts BinDir()/binary with args; stdout and stderr go to log_path (appended).
 inline pid_t Spawn(const std::string& binary, const std::vector<std::string>& args,
                    const std::string& log_path) {
