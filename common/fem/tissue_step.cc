@@ -562,12 +562,12 @@ void StartFromLastField(const TissueModel& model, const TissueState& state, cons
       ws.grid_stamp[node] = ws.field_stamp;
     }
   }
-  const ToolPose now = PoseOf(tool), then = ws.field_tool_pose;
+  const ToolPose now = PoseOf(tool), then = state.field_tool_pose;
   const double turn = now.angle_rad - then.angle_rad;
   // Below a nanometre the carried field is the last one (a tool held still keeps its values).
   constexpr double kStill_m = 1e-9;
   const bool moved =
-      warm && ws.field_tool_pose_valid &&
+      warm && state.field_tool_pose_valid &&
       (std::abs(now.x_m - then.x_m) > kStill_m || std::abs(now.y_m - then.y_m) > kStill_m ||
        std::abs(turn) * model.def.length_x_m > kStill_m);
   if (moved) {
@@ -883,8 +883,8 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   }
   if (!f_T_S.allFinite() || !tau_T_S.allFinite()) return fail(TissueStatus::kNonFinite);
   Commit(ws, f_T_S, tau_T_S, status, state);
-  ws.field_tool_pose = PoseOf(tool);
-  ws.field_tool_pose_valid = true;
+  state.field_tool_pose = PoseOf(tool);
+  state.field_tool_pose_valid = true;
   const Clock::time_point t_end = Clock::now();
   stats.forces_us = Microseconds(t_solved, t_end);
   stats.total_us = Microseconds(t_begin, t_end);

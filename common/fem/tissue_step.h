@@ -54,6 +54,13 @@ struct TissueStepStats {
 // writes into them. The field is kept on the last good mesh only (its vertices in the mesh's
 // first-use order): nothing else of the grid is ever read again, so the state stays the size
 // of the mesh (a few thousand nodes), not of the finest grid.
+// A tool's planar pose: its first vertex and the direction to its second.
+struct ToolPose {
+  double x_m = 0;
+  double y_m = 0;
+  double angle_rad = 0;
+};
+
 struct TissueState {
   std::vector<std::int32_t> field_nodes;  // [max_mesh_nodes] grid nodes of the last good mesh
   std::vector<double> field_w_m;          // [max_mesh_nodes] displacement (z) at each, m
@@ -68,6 +75,11 @@ struct TissueState {
   Eigen::Vector3d tau_T_S = Eigen::Vector3d::Zero();  // its torque about tool.p_ST, N·m (z = 0)
   TissueStatus status = TissueStatus::kNoContact;     // of the latest step
   std::uint32_t num_failed_steps = 0;
+  // The tool's planar pose when the field was solved: the next step's (P)CG starts from the
+  // field carried along with the tool's motion since. State, not cache: two states stepped
+  // through one workspace each start from their own field's pose.
+  ToolPose field_tool_pose;
+  bool field_tool_pose_valid = false;
 };
 TissueState MakeTissueState(const TissueModel& model);
 
@@ -94,12 +106,6 @@ struct PatternEntry {
 
 inline constexpr int kMaxRowEntries = 16;
 
-// A tool's planar pose: its first vertex and the direction to its second.
-struct ToolPose {
-  double x_m = 0;
-  double y_m = 0;
-  double angle_rad = 0;
-};
 
 // Scratch of the step: buffers, pattern cache, solver state. Not copyable; one per model.
 struct TissueWorkspace {
@@ -137,10 +143,6 @@ struct TissueWorkspace {
   std::vector<double> grid_w_m;           // [num_grid_nodes]
   std::vector<std::uint64_t> grid_stamp;  // [num_grid_nodes] == field_stamp: grid_w_m valid
   std::uint64_t field_stamp = 0;
-  // The tool's planar pose (first vertex, direction to the second) at the state's last good
-  // step: the warm start carries that field along with the tool's motion since.
-  ToolPose field_tool_pose;
-  bool field_tool_pose_valid = false;
   // The last step's cost and solver report (wall-clock timings: telemetry, not state).
   TissueStepStats stats;
   // When false every step re-assembles the values and re-factorises even if the pattern is

@@ -282,6 +282,10 @@ void Tissue(S& m, V& v) {
   Matrix("tissue.tau_T_S", t.tau_T_S, v);
   Enum("tissue.status", t.status, v);
   v("tissue.num_failed_steps", &t.num_failed_steps, 1);
+  v("tissue.field_tool_pose.x_m", &t.field_tool_pose.x_m, 1);
+  v("tissue.field_tool_pose.y_m", &t.field_tool_pose.y_m, 1);
+  v("tissue.field_tool_pose.angle_rad", &t.field_tool_pose.angle_rad, 1);
+  v("tissue.field_tool_pose_valid", &t.field_tool_pose_valid, 1);
   Matrix("tissue.f_T_W", m.f_T_W, v);
   // The needle through the tissue (tissue.tool: needle; untouched otherwise).
   auto& p = m.puncture;

@@ -4,6 +4,7 @@
 // CLOCK_REALTIME on this machine) at p50 / p99. Writes a JSON report and prints a table.
 // node measure_view.mjs --bin BUILD/bin --out DIR [--seconds S] [--stations N] [--limit S]
 //   [--only station|console] [--replay 0|1] [--instructor_args "ARGS"] (e.g. "--inputs")
+//   [--station_args "ARGS"] (the console's stations, e.g. "--mirror-rate 30")
 //   [--trace FILE] (a Chrome trace of the live console's measured window, for chrome://tracing
 //   or Perfetto)
 // Bounded: every wait has its own time-out and the whole run stops after --limit seconds
@@ -24,7 +25,7 @@ const here = dirname(fileURLToPath(import.meta.url));
 const a = args({ web: join(sourceDir, 'build/web'), bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/report'),
                  seconds: '10', stations: '8', scene: 'needle_tube', realtime: '0',
                  width: '1280', height: '720', only: '', query: '', limit: '300', replay: '1',
-                 console_query: '', instructor_args: '', trace: '' });
+                 console_query: '', instructor_args: '', station_args: '', trace: '' });
 const seconds = Number(a.seconds);
 const t0 = Date.now();
 const progress = (what) => process.stderr.write(`[${((Date.now() - t0) / 1000).toFixed(0).padStart(4)} s] ${what}\n`);
@@ -126,6 +127,7 @@ try {
     stations.push(await startProcess(join(a.bin, 'microdex-station'), [
       '--scene', join(sourceDir, `assets/scenes/${scenes[i % scenes.length]}.yaml`),
       '--station-id', `m${i}`, ...rt, '--duration', String(seconds + 60), ...dds,
+      ...a.station_args.split(' ').filter(Boolean),
     ], /station|info/));
   }
   const cpage = await context.newPage();

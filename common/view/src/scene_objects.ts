@@ -303,12 +303,14 @@ export class SceneView {
     }
     if (scene.stitch) {
       // The rods the suture passes over and under, and the tissue as a translucent slab
-      // below the surface, so the bite under it shows through.
+      // below the surface, so the bite under it shows through (when the scene has no FEM
+      // tissue; with one, that patch is drawn translucent instead: applyTissue).
       for (const r of scene.stitch.rods) {
         this.root.add(new THREE.Mesh(
             new THREE.TubeGeometry(polylineCurve([r.a, r.b]), 4, r.radius, d.radial),
             material(0xd88080)));
       }
+      if (!scene.tissue) {
       const xs = scene.stitch.rods.flatMap((r) => [r.a[0], r.b[0]]);
       const x0 = Math.min(...xs) - 12e-3;
       const x1 = Math.max(...xs) + 10e-3;
@@ -319,6 +321,7 @@ export class SceneView {
                                     depthWrite: false }));
       slab.position.set((x0 + x1) / 2, scene.stitch.surface_y - depth / 2, 0);
       this.root.add(slab);
+      }
     }
     if (scene.grasp) {
       const g = scene.grasp;
@@ -557,7 +560,11 @@ export class SceneView {
       geom.setAttribute('color',
                         new THREE.BufferAttribute(new Float32Array(size.nx * size.ny * 3), 3));
       geom.setIndex(new THREE.BufferAttribute(gridIndices(size.nx, size.ny), 1));
-      const m = material(0xffffff, { side: THREE.DoubleSide });
+      // Over a stitch the patch is translucent: the suture's bite under it shows through.
+      const m = this.scene.stitch
+        ? material(0xffffff, { side: THREE.DoubleSide, transparent: true, opacity: 0.55,
+                               depthWrite: false })
+        : material(0xffffff, { side: THREE.DoubleSide });
       m.vertexColors = true;
       this.tissue = new THREE.Mesh(geom, m);
       this.tissue.frustumCulled = false;

@@ -2,7 +2,9 @@
 // expert alternates the throws and the thread module ties a square knot around the stitch,
 // which the stitch-knot recogniser names at the end (knot_wrong 0); a novice repeats the
 // hand and ties a granny (knot_wrong 1). Both runs end by themselves within the time limit.
-// Buttons that choose no throw are ignored, and a scene section out of range is named.
+// Buttons that choose no throw are ignored, and a scene section out of range is named. The
+// skin patch under the stitch is the FEM tissue: an instrument pressing it is pushed back along
+// the surface's normal (+y), as hard as on the same patch laid flat.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,6 +19,7 @@
 #include "station/scene_run.h"
 #include "station/score.h"
 #include "station/station_step.h"
+#include "station/tissue_module.h"
 
 namespace microdex::station {
 namespace {
@@ -113,6 +116,48 @@ TEST(KnotTyingScene, ButtonsChooseTheThrows) {
     std::printf("%u, %u: hold tension error %.4f\n", c.first, c.second, rms);
     EXPECT_LT(rms, 0.005);
   }
+}
+
+// The needle holder's tip pressed into the patch beside the stitch, 0.4 and 0.8 mm under the
+// surface (y = −0.35 mm): the reaction is along +y, linear in the depth, and equals that of the
+// same patch laid flat (z up, the same local point); above the surface, nothing.
+TEST(KnotTyingScene, TheTissuePushesAnInstrumentBackAlongItsNormal) {
+  const scene::SceneModel scene = scene::LoadScene(ScenePath());
+  ASSERT_TRUE(scene.HasModule("tissue"));
+  ASSERT_TRUE(scene.tissue.has_value());
+  scene::SceneModel flat = scene;
+  // The patch's corner at the origin, its normal +z: world = local.
+  flat.tissue->X_WS = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d p_S(13e-3, 8e-3, 0);  // beside the stitch (x 6.5..11.5 mm in world)
+  auto press = [](const scene::SceneModel& sc, const Eigen::Vector3d& p_WT) {
+    TissueModule m(sc);
+    state::StationState s;
+    m.InitState(s);
+    ToolInput in;
+    in.X_WT = Eigen::Isometry3d::Identity();
+    in.X_WT.translation() = p_WT;
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      f.setZero();
+      in.step = static_cast<std::uint64_t>(k);
+      m.Step(in, s, f);
+    }
+    return f;
+  };
+  const Eigen::Isometry3d& X_WS = scene.tissue->X_WS;
+  for (const double depth_m : {0.4e-3, 0.8e-3}) {
+    const Eigen::Vector3d p_W = X_WS * (p_S - Eigen::Vector3d(0, 0, depth_m));
+    EXPECT_NEAR(p_W.y(), -0.35e-3 - depth_m, 1e-12) << "the patch's surface is y = -0.35 mm";
+    const Eigen::Vector3d f = press(scene, p_W);
+    const Eigen::Vector3d f_flat = press(flat, p_S - Eigen::Vector3d(0, 0, depth_m));
+    std::printf("depth %.1f mm: f = (%.3g, %.4g, %.3g) N, flat %.4g N\n", depth_m * 1e3, f.x(),
+                f.y(), f.z(), f_flat.z());
+    EXPECT_GT(f.y(), 0.01) << "pushed back out of the tissue";
+    EXPECT_NEAR(f.y(), f_flat.z(), 1e-9 * f_flat.z());
+    EXPECT_NEAR(std::hypot(f.x(), f.z()), 0, 1e-9 * f.y());
+  }
+  const Eigen::Vector3d above = press(scene, X_WS * (p_S + Eigen::Vector3d(0, 0, 0.1e-3)));
+  EXPECT_EQ(above, Eigen::Vector3d::Zero());
 }
 
 // A bad value in the knot_tying section is named with the file, its line and the field.
