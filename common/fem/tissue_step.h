@@ -106,7 +106,6 @@ struct PatternEntry {
 
 inline constexpr int kMaxRowEntries = 16;
 
-
 // Scratch of the step: buffers, pattern cache, solver state. Not copyable; one per model.
 struct TissueWorkspace {
   explicit TissueWorkspace(const TissueModel& model);

@@ -32,12 +32,12 @@ std::int64_t RealtimeNowNs() {
 class FaultTest : public ::testing::Test {
  protected:
   pid_t StartStation(const std::string& id, int domain) {
-    const pid_t pid = Spawn("microdex-station",
-                            {"--scene", testing::SourceDir() + "/assets/scenes/needle_tube.yaml",
-                             "--station-id", id, "--domain", std::to_string(domain),
-                             "--wait-for-recorder", "10", "--score-out", dir_ + "/" + id + ".json",
-                             "--spin-us", testing::StationSpinUs()},
-                            dir_ + "/" + id + ".log");
+    const pid_t pid =
+        Spawn("microdex-station",
+              {"--scene", testing::SourceDir() + "/assets/scenes/needle_tube.yaml", "--station-id",
+               id, "--domain", std::to_string(domain), "--wait-for-recorder", "10", "--score-out",
+               dir_ + "/" + id + ".json", "--spin-us", testing::StationSpinUs()},
+              dir_ + "/" + id + ".log");
     pids_.push_back(pid);
     return pid;
   }

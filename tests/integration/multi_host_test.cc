@@ -57,13 +57,12 @@ class VirtualNetworkTest : public ::testing::Test {
   }
 
   pid_t StartStation(const std::string& ns, const std::string& id) {
-    const pid_t pid =
-        testing::SpawnIn(ns, testing::BinDir() + "/microdex-station",
-                         {"--scene", testing::SourceDir() + kScene, "--station-id", id, "--trainee",
-                          "t " + id, "--dds-profile", dir_ + "/station.xml", "--domain", "0",
-                          "--wait-for-recorder", "15", "--score-out", dir_ + "/" + id + ".json",
-                          "--spin-us", testing::StationSpinUs()},
-                         dir_ + "/" + id + ".log");
+    const pid_t pid = testing::SpawnIn(
+        ns, testing::BinDir() + "/microdex-station",
+        {"--scene", testing::SourceDir() + kScene, "--station-id", id, "--trainee", "t " + id,
+         "--dds-profile", dir_ + "/station.xml", "--domain", "0", "--wait-for-recorder", "15",
+         "--score-out", dir_ + "/" + id + ".json", "--spin-us", testing::StationSpinUs()},
+        dir_ + "/" + id + ".log");
     pids_.push_back(pid);
     return pid;
   }

@@ -1,12 +1,12 @@
 // MonotonicClock's pacing: SleepUntilNs never returns before the deadline, with or without the
 // spin tail, and with the tail the thread is not asleep at the deadline (it polls the clock
 // for the last spin_ns).
+#include "station/rt/clock.h"
+
 #include <gtest/gtest.h>
 #include <time.h>
 
 #include <cstdint>
-
-#include "station/rt/clock.h"
 
 namespace microdex::rt {
 namespace {
