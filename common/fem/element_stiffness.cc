@@ -25,6 +25,15 @@ const std::array<std::array<TemplateVertex, 3>, kNumShapes> kTemplateTriangles =
 
 bool CalcElementMatrix(const std::array<double, 3>& x_m, const std::array<double, 3>& y_m,
                        double shear_modulus_Pa, double thickness_m, ElementMatrix& k_N_per_m) {
+  ElementMatrix k_xx{}, k_yy{};
+  if (!CalcElementMatrixParts(x_m, y_m, shear_modulus_Pa, thickness_m, k_xx, k_yy)) return false;
+  for (int ij = 0; ij < 9; ++ij) k_N_per_m[ij] = k_xx[ij] + k_yy[ij];
+  return true;
+}
+
+bool CalcElementMatrixParts(const std::array<double, 3>& x_m, const std::array<double, 3>& y_m,
+                            double shear_modulus_Pa, double thickness_m, ElementMatrix& k_xx,
+                            ElementMatrix& k_yy) {
   std::array<double, 3> b{}, c{};
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3, k = (i + 2) % 3;
@@ -35,7 +44,10 @@ bool CalcElementMatrix(const std::array<double, 3>& x_m, const std::array<double
   if (!(twice_area_m2 > 0)) return false;
   const double scale = shear_modulus_Pa * thickness_m / (2.0 * twice_area_m2);
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) k_N_per_m[3 * i + j] = scale * (b[i] * b[j] + c[i] * c[j]);
+    for (int j = 0; j < 3; ++j) {
+      k_xx[3 * i + j] = scale * b[i] * b[j];
+      k_yy[3 * i + j] = scale * c[i] * c[j];
+    }
   }
   return true;
 }

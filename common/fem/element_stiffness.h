@@ -14,6 +14,12 @@ using ElementMatrix = std::array<double, 9>;
 bool CalcElementMatrix(const std::array<double, 3>& x_m, const std::array<double, 3>& y_m,
                        double shear_modulus_Pa, double thickness_m, ElementMatrix& k_N_per_m);
 
+// The two parts of that matrix, K = K_xx + K_yy: G·t·b_i b_j / (4A) (the x-derivatives) and
+// G·t·c_i c_j / (4A). Scaling x by s_x and y by s_y gives (s_y / s_x) K_xx + (s_x / s_y) K_yy.
+bool CalcElementMatrixParts(const std::array<double, 3>& x_m, const std::array<double, 3>& y_m,
+                            double shear_modulus_Pa, double thickness_m, ElementMatrix& k_xx,
+                            ElementMatrix& k_yy);
+
 // Template triangles of a cell, vertices in half-cell units from the cell's lower-left corner
 // (u, v ∈ {0, 1, 2}). Shapes 0–1: the two halves of an unrefined cell (diagonal BL–TR).
 // Shapes 2–5: fan triangle (centre, side start, side end) for sides bottom, right, top, left.

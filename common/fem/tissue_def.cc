@@ -139,6 +139,7 @@ TissueDef LoadTissueDef(const std::string& path) {
                              "cg_relative_tolerance",
                              "dic_relaxation",
                              "cg_max_iterations",
+                             "attached_mesh",
                              "max_contact_nodes",
                              "pattern_cache_entries"});
   TissueDef def;
@@ -167,6 +168,7 @@ TissueDef LoadTissueDef(const std::string& path) {
       tissue.FiniteDouble("cg_relative_tolerance", def.cg_relative_tolerance);
   def.dic_relaxation = tissue.FiniteDouble("dic_relaxation", def.dic_relaxation);
   def.cg_max_iterations = tissue.Int("cg_max_iterations", def.cg_max_iterations);
+  def.attached_mesh = tissue.Bool("attached_mesh", def.attached_mesh);
   def.max_contact_nodes = tissue.Int("max_contact_nodes", def.max_contact_nodes);
   def.pattern_cache_entries = tissue.Int("pattern_cache_entries", def.pattern_cache_entries);
   try {

@@ -117,6 +117,10 @@ struct TissueDef {
   // (common/fem/README.md): 0.8 takes 19 / 20 iterations at levels 7 / 8 against 24 / 26.
   double dic_relaxation = 0.8;
   int cg_max_iterations = 20000;
+  // The mesh attached to the tissue under the tool (mesh_map.h): while the tool presses, its
+  // planar translation since contact began moves the mesh's nodes instead of the tool over
+  // the grid, so the force is a smooth function of the motion (README, "Attached mesh").
+  bool attached_mesh = true;
   int max_contact_nodes = 4096;   // capacity of the contact list (pre-sized)
   int pattern_cache_entries = 2;  // sparsity patterns (and CHOLMOD analyses) kept
   // Throws std::invalid_argument for the first bad field, whose message starts with the field

@@ -46,6 +46,8 @@ TissueModel BuildTissueModel(const TissueDef& def) {
   model.h_x_m = def.length_x_m / model.cells_per_side;
   model.h_y_m = def.length_y_m / model.cells_per_side;
   model.element_matrices.resize(def.max_level + 1);
+  model.element_matrices_xx.resize(def.max_level + 1);
+  model.element_matrices_yy.resize(def.max_level + 1);
   for (int level = 0; level <= def.max_level; ++level) {
     const double half_x_m = 0.5 * model.CellSizeX_m(level);
     const double half_y_m = 0.5 * model.CellSizeY_m(level);
@@ -58,6 +60,10 @@ TissueModel BuildTissueModel(const TissueDef& def) {
       const bool ok = CalcElementMatrix(x_m, y_m, def.shear_modulus_Pa, def.thickness_m,
                                         model.element_matrices[level][shape]);
       MICRODEX_CHECK(ok);
+      const bool parts_ok = CalcElementMatrixParts(x_m, y_m, def.shear_modulus_Pa, def.thickness_m,
+                                                   model.element_matrices_xx[level][shape],
+                                                   model.element_matrices_yy[level][shape]);
+      MICRODEX_CHECK(parts_ok);
     }
   }
   model.nd_rank.assign(model.num_grid_nodes, -1);

@@ -20,6 +20,9 @@ struct TissueModel {
   double h_y_m = 0;
   // element_matrices[level][shape] for level 0..max_level (kTemplateTriangles order).
   std::vector<std::array<ElementMatrix, kNumShapes>> element_matrices;
+  // Their parts of x- and y-derivatives (CalcElementMatrixParts), for the attached mesh's map.
+  std::vector<std::array<ElementMatrix, kNumShapes>> element_matrices_xx;
+  std::vector<std::array<ElementMatrix, kNumShapes>> element_matrices_yy;
   // Nested-dissection rank of every grid node (interior nodes 0.., boundary −1): the
   // domain's interior is split at the middle grid line of its longer side, recursively; both
   // halves are ranked before the line. Cuts are dyadic, so they follow quadtree cell sides and

@@ -71,6 +71,54 @@ std::uint64_t MixKey(std::uint64_t h, std::uint64_t v) {
   return h * 1099511628211ull;
 }
 
+// The element matrices of the step's mesh under its map (ws.map): per leaf, the slopes of the
+// map on the leaf's x and y ranges scale its templates' K_xx and K_yy; a leaf across a
+// breakpoint has its triangles computed from their mapped vertices.
+void MapTriangles(const TissueModel& model, TissueWorkspace& ws) {
+  const MeshSelection& mesh = ws.mesh;
+  const TissueDef& def = model.def;
+  int e = 0, general = 0;
+  for (int k = 0; k < mesh.num_leaves; ++k) {
+    const Leaf& leaf = mesh.leaves[k];
+    const int count = leaf.hanging_mask == 0 ? 2 : 4 + std::popcount(leaf.hanging_mask);
+    const double lx = model.CellSizeX_m(leaf.level), ly = model.CellSizeY_m(leaf.level);
+    const double x0 = leaf.ci * lx, y0 = leaf.cj * ly;
+    const double sx = ws.map.x.Slope(x0, x0 + lx), sy = ws.map.y.Slope(y0, y0 + ly);
+    for (int t = 0; t < count; ++t, ++e) {
+      if (sx > 0 && sy > 0) {
+        ws.tri_coef[e] = {sy / sx, sx / sy};
+        ws.tri_general[e] = -1;
+        continue;
+      }
+      const Triangle& tri = mesh.triangles[e];
+      std::array<double, 3> xs{}, ys{};
+      for (int v = 0; v < 3; ++v) {
+        const TemplateVertex& tv = kTemplateTriangles[tri.shape][v];
+        xs[v] = ws.map.x.ToPhysical(x0 + 0.5 * tv.u * lx);
+        ys[v] = ws.map.y.ToPhysical(y0 + 0.5 * tv.v * ly);
+      }
+      const bool ok =
+          CalcElementMatrix(xs, ys, def.shear_modulus_Pa, def.thickness_m, ws.general_k[general]);
+      MICRODEX_CHECK(ok);  // a monotone map on each axis keeps every triangle positive
+      ws.tri_general[e] = general++;
+    }
+  }
+  MICRODEX_CHECK(e == mesh.num_triangles);
+}
+
+// Triangle e's element matrix on this step's mesh; `scratch` holds it when it is scaled.
+const ElementMatrix& TriangleMatrix(const TissueModel& model, const TissueWorkspace& ws, int e,
+                                    ElementMatrix& scratch) {
+  const Triangle& t = ws.mesh.triangles[e];
+  if (!ws.mapped) return model.element_matrices[t.level][t.shape];
+  if (ws.tri_general[e] >= 0) return ws.general_k[ws.tri_general[e]];
+  const ElementMatrix& kxx = model.element_matrices_xx[t.level][t.shape];
+  const ElementMatrix& kyy = model.element_matrices_yy[t.level][t.shape];
+  const double cx = ws.tri_coef[e][0], cy = ws.tri_coef[e][1];
+  for (int ab = 0; ab < 9; ++ab) scratch[ab] = cx * kxx[ab] + cy * kyy[ab];
+  return scratch;
+}
+
 class ContactFinder {
  public:
   ContactFinder(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws)
@@ -250,17 +298,19 @@ void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
   entry.factor_valid = false;
 }
 
-void AssembleValues(const TissueModel& model, const MeshSelection& mesh, PatternEntry& entry) {
+void AssembleValues(const TissueModel& model, const TissueWorkspace& ws, PatternEntry& entry) {
+  const MeshSelection& mesh = ws.mesh;
   std::fill_n(entry.vals.begin(), entry.row_ptr[entry.num_dofs], 0.0);
+  ElementMatrix scratch;
   for (int e = 0; e < mesh.num_triangles; ++e) {
-    const Triangle& t = mesh.triangles[e];
-    const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+    const ElementMatrix& k = TriangleMatrix(model, ws, e, scratch);
     const int* slots = &entry.scatter[9 * e];
     for (int ab = 0; ab < 9; ++ab) {
       if (slots[ab] >= 0) entry.vals[slots[ab]] += k[ab];
     }
   }
   entry.values_valid = true;
+  entry.values_map_hash = ws.mapped ? ws.map.Hash() : 0;
   entry.factor_valid = false;
 }
 
@@ -268,11 +318,11 @@ void AssembleValues(const TissueModel& model, const MeshSelection& mesh, Pattern
 void AssembleRhs(const TissueModel& model, TissueWorkspace& ws, int n) {
   std::fill_n(ws.rhs.begin(), n, 0.0);
   const MeshSelection& mesh = ws.mesh;
+  ElementMatrix scratch;
   for (int e = 0; e < mesh.num_triangles; ++e) {
-    const Triangle& t = mesh.triangles[e];
     const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
     if (d[0] > -2 && d[1] > -2 && d[2] > -2) continue;  // no contact node in this element
-    const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+    const ElementMatrix& k = TriangleMatrix(model, ws, e, scratch);
     for (int a = 0; a < 3; ++a) {
       if (d[a] < 0) continue;
       for (int b = 0; b < 3; ++b) {
@@ -414,6 +464,11 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   order_keys.resize(n);
   order_scratch.resize(n);
   tri_dof.resize(3 * static_cast<size_t>(model.max_triangles));
+  tri_coef.resize(model.max_triangles);
+  tri_general.resize(model.max_triangles);
+  general_k.resize(model.max_triangles);
+  map.x = AxisMap{0, model.def.length_x_m, model.def.length_x_m, 0};
+  map.y = AxisMap{0, model.def.length_y_m, model.def.length_y_m, 0};
   contact_nodes.resize(model.def.max_contact_nodes);
   contact_w_m.resize(model.def.max_contact_nodes);
   contact_f_N.resize(model.def.max_contact_nodes);
@@ -700,11 +755,11 @@ void CalcReactions(const TissueModel& model, const ToolContact& tool, TissueWork
                    Eigen::Vector3d* f_T_S, Eigen::Vector3d* tau_T_S) {
   const MeshSelection& mesh = ws.mesh;
   std::fill_n(ws.contact_f_N.begin(), ws.num_contacts, 0.0);
+  ElementMatrix scratch;
   for (int e = 0; e < mesh.num_triangles; ++e) {
-    const Triangle& t = mesh.triangles[e];
     const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
     if (d[0] > -2 && d[1] > -2 && d[2] > -2) continue;
-    const ElementMatrix& k = model.element_matrices[t.level][t.shape];
+    const ElementMatrix& k = TriangleMatrix(model, ws, e, scratch);
     for (int a_local = 0; a_local < 3; ++a_local) {
       if (d[a_local] > -2) continue;
       double f = 0;
@@ -717,8 +772,8 @@ void CalcReactions(const TissueModel& model, const ToolContact& tool, TissueWork
   for (int c = 0; c < ws.num_contacts; ++c) {
     const int node = ws.contact_nodes[c];
     const double fz_on_tool_N = -ws.contact_f_N[c];  // the tissue pushes back on the tool
-    const double rx = model.NodeX_m(node) - tool.p_ST.x();
-    const double ry = model.NodeY_m(node) - tool.p_ST.y();
+    const double rx = ws.map.x.ToPhysical(model.NodeX_m(node)) - tool.p_ST.x();
+    const double ry = ws.map.y.ToPhysical(model.NodeY_m(node)) - tool.p_ST.y();
     f_T_S->z() += fz_on_tool_N;
     tau_T_S->x() += ry * fz_on_tool_N;  // r × (0, 0, f)
     tau_T_S->y() -= rx * fz_on_tool_N;
@@ -754,13 +809,14 @@ void CalcToolPointReactions(const TissueModel& model, const ToolContact& tool, T
         ws.contact_f_N[ws.contact_index[node]] += p.lambda[a] * f_on_tissue_N;
     }
   }
+  ElementMatrix scratch;
   for (int e = 0; e < mesh.num_triangles; ++e) {
     const Triangle& t = mesh.triangles[e];
     const int* d = &ws.tri_dof[3 * static_cast<size_t>(e)];
     const ElementMatrix* k = nullptr;
     for (int a = 0; a < 3; ++a) {
       if (d[a] < 0 || ws.contact_stamp[t.node[a]] != mark) continue;
-      if (k == nullptr) k = &model.element_matrices[t.level][t.shape];
+      if (k == nullptr) k = &TriangleMatrix(model, ws, e, scratch);
       double f = 0;
       for (int b = 0; b < 3; ++b) f += (*k)[3 * a + b] * NodeValue(ws, d[b]);
       ws.contact_f_N[ws.contact_index[t.node[a]]] += f;
@@ -772,8 +828,10 @@ void CalcToolPointReactions(const TissueModel& model, const ToolContact& tool, T
     const int node = ws.contact_nodes[c];
     const double fz_on_tool_N = -ws.contact_f_N[c];
     f_T_S->z() += fz_on_tool_N;
-    tau_T_S->x() += (model.NodeY_m(node) - tool.p_ST.y()) * fz_on_tool_N;  // r × (0, 0, f)
-    tau_T_S->y() -= (model.NodeX_m(node) - tool.p_ST.x()) * fz_on_tool_N;
+    const double rx = ws.map.x.ToPhysical(model.NodeX_m(node)) - tool.p_ST.x();
+    const double ry = ws.map.y.ToPhysical(model.NodeY_m(node)) - tool.p_ST.y();
+    tau_T_S->x() += ry * fz_on_tool_N;  // r × (0, 0, f)
+    tau_T_S->y() -= rx * fz_on_tool_N;
   }
 }
 
@@ -800,7 +858,7 @@ void Commit(const TissueWorkspace& ws, const Eigen::Vector3d& f_T_S, const Eigen
 
 }  // namespace
 
-void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspace& ws,
+void StepTissue(const TissueModel& model, const ToolContact& tool_S, TissueWorkspace& ws,
                 TissueState& state) {
   const Clock::time_point t_begin = Clock::now();
   TissueStepStats stats;
@@ -810,10 +868,23 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
     ws.stats = stats;
     Fail(state, status);
   };
-  if (!ToolIsFinite(tool)) return fail(TissueStatus::kBadInput);
+  if (!ToolIsFinite(tool_S)) return fail(TissueStatus::kBadInput);
+
+  // 0. The attached mesh: the map of this step and the tool in its reference plane, where the
+  // mesh is chosen, the tool points placed and the system solved.
+  MeshAnchor anchor = state.mesh_anchor;
+  ws.map.x = AxisMap{0, model.def.length_x_m, model.def.length_x_m, 0};
+  ws.map.y = AxisMap{0, model.def.length_y_m, model.def.length_y_m, 0};
+  if (model.def.attached_mesh) ws.map = AttachMesh(model, tool_S, anchor, &stats.mesh_reattached);
+  ws.mapped = ws.map.Active();
+  stats.mesh_mapped = ws.mapped;
+  ToolContact tool_ref;
+  if (ws.mapped) tool_ref = ToReference(ws.map, anchor, tool_S);
+  const ToolContact& tool = ws.mapped ? tool_ref : tool_S;
 
   // 1. Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
   SelectMesh(model, model.def.level, model.def.mesh, tool, ws.mesh);
+  if (ws.mapped) MapTriangles(model, ws);
   const MeshSelection& mesh = ws.mesh;
   ws.use_tool_points = model.def.tool_constraint == ToolConstraint::kPenaltyPoints &&
                        tool.num_points >= 2 && tool.contact_radius_m == 0;
@@ -841,8 +912,10 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   PatternEntry& entry = ws.patterns[slot];
   entry.last_used = ++ws.use_clock;
   stats.pattern_reused = !new_pattern;
-  const bool assembled = !entry.values_valid || !ws.reuse_values;
-  if (assembled) AssembleValues(model, mesh, entry);
+  const std::uint64_t map_hash = ws.mapped ? ws.map.Hash() : 0;
+  const bool assembled =
+      !entry.values_valid || !ws.reuse_values || entry.values_map_hash != map_hash;
+  if (assembled) AssembleValues(model, ws, entry);
   const double* vals = entry.vals.data();
   bool values_changed = assembled;
   if (ws.use_tool_points) {
@@ -877,14 +950,17 @@ void StepTissue(const TissueModel& model, const ToolContact& tool, TissueWorkspa
   // 4. Forces, 5. commit.
   Eigen::Vector3d f_T_S, tau_T_S;
   if (ws.use_tool_points) {
-    CalcToolPointReactions(model, tool, ws, &f_T_S, &tau_T_S);
+    CalcToolPointReactions(model, tool_S, ws, &f_T_S, &tau_T_S);
   } else {
-    CalcReactions(model, tool, ws, &f_T_S, &tau_T_S);
+    CalcReactions(model, tool_S, ws, &f_T_S, &tau_T_S);
   }
   if (!f_T_S.allFinite() || !tau_T_S.allFinite()) return fail(TissueStatus::kNonFinite);
   Commit(ws, f_T_S, tau_T_S, status, state);
   state.field_tool_pose = PoseOf(tool);
   state.field_tool_pose_valid = true;
+  // Out of contact the mesh comes loose: the next contact attaches it where it begins.
+  state.mesh_anchor = status == TissueStatus::kNoContact ? MeshAnchor{} : anchor;
+  state.field_map = ws.map;
   const Clock::time_point t_end = Clock::now();
   stats.forces_us = Microseconds(t_solved, t_end);
   stats.total_us = Microseconds(t_begin, t_end);
@@ -906,19 +982,22 @@ void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, in
   const int side = cells + 1;
   out_m.assign(static_cast<size_t>(side) * side, 0.0);
   const double hx = model.CellSizeX_m(level), hy = model.CellSizeY_m(level);
+  const MeshMap& map = state.field_map;
   std::array<Triangle, 8> tris;
   for (int k = 0; k < state.num_leaves; ++k) {
     const Leaf& leaf = state.leaves[k];
     const double lx = model.CellSizeX_m(leaf.level), ly = model.CellSizeY_m(leaf.level);
     const double x0 = leaf.ci * lx, y0 = leaf.cj * ly;
     const int count = LeafTriangles(model, leaf, tris);
-    const int i0 = static_cast<int>(std::ceil(x0 / hx - 1e-9));
-    const int i1 = static_cast<int>(std::floor((x0 + lx) / hx + 1e-9));
-    const int j0 = static_cast<int>(std::ceil(y0 / hy - 1e-9));
-    const int j1 = static_cast<int>(std::floor((y0 + ly) / hy + 1e-9));
+    // The display nodes in the leaf's image under the field's map (monotone on each axis),
+    // interpolated at their reference points.
+    const int i0 = static_cast<int>(std::ceil(map.x.ToPhysical(x0) / hx - 1e-9));
+    const int i1 = static_cast<int>(std::floor(map.x.ToPhysical(x0 + lx) / hx + 1e-9));
+    const int j0 = static_cast<int>(std::ceil(map.y.ToPhysical(y0) / hy - 1e-9));
+    const int j1 = static_cast<int>(std::floor(map.y.ToPhysical(y0 + ly) / hy + 1e-9));
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i) {
-        const double px = i * hx, py = j * hy;
+        const double px = map.x.ToReference(i * hx), py = map.y.ToReference(j * hy);
         for (int t = 0; t < count; ++t) {
           const auto& nd = tris[t].node;
           const double xa = model.NodeX_m(nd[0]), ya = model.NodeY_m(nd[0]);

@@ -10,6 +10,7 @@
 
 #include "common/fem/cg_solver.h"
 #include "common/fem/cholmod_solver.h"
+#include "common/fem/mesh_map.h"
 #include "common/fem/multiscale_mesh.h"
 #include "common/fem/tissue_model.h"
 #include "common/fem/tool_contact.h"
@@ -43,6 +44,8 @@ struct TissueStepStats {
   double relative_residual = 0;  // ‖b − K_ff u_f‖ / ‖b‖, recomputed after the solve
   bool pattern_reused = false;   // the selection's sparsity pattern was in the cache
   bool factor_reused = false;    // ... and its values and factor were reused unchanged
+  bool mesh_mapped = false;      // the attached mesh's map is not the identity
+  bool mesh_reattached = false;  // the mesh was attached afresh while in contact (a jump)
   double select_us = 0;          // mesh selection and contact detection
   double assemble_us = 0;        // pattern (if new) and values
   double solve_us = 0;           // factorisation (if any) and solve
@@ -80,6 +83,10 @@ struct TissueState {
   // through one workspace each start from their own field's pose.
   ToolPose field_tool_pose;
   bool field_tool_pose_valid = false;
+  // The attached mesh (TissueDef::attached_mesh): where it was attached, and the map of the
+  // field's step (its nodes are in the reference plane; the map places them).
+  MeshAnchor mesh_anchor;
+  MeshMap field_map;
 };
 TissueState MakeTissueState(const TissueModel& model);
 
@@ -100,6 +107,7 @@ struct PatternEntry {
   std::vector<double> tool_vals;  // [kMaxRowEntries · max_mesh_nodes]
   std::uint64_t tool_hash = 0;
   bool tool_vals_valid = false;
+  std::uint64_t values_map_hash = 0;  // the mesh map the values were assembled on
   std::vector<int> scatter;  // [9 · max_triangles] CSR slot of element entry (a, b), or −1
   std::vector<std::int32_t> dof_order;  // [max_mesh_nodes] grid node of each unknown
 };
@@ -115,10 +123,18 @@ struct TissueWorkspace {
   std::vector<std::uint64_t> order_keys;     // [max_mesh_nodes] (rank, node) sort keys
   std::vector<std::uint64_t> order_scratch;  // [max_mesh_nodes]
   std::vector<std::int32_t> tri_dof;         // [3 · max_triangles] node_dof of each vertex
-  std::vector<std::uint32_t> contact_stamp;  // [num_grid_nodes] == mesh.mark: contact node
-  std::vector<std::int32_t> contact_nodes;   // [max_contact_nodes]
-  std::vector<double> contact_w_m;           // [max_contact_nodes] prescribed displacement U
-  std::vector<double> contact_f_N;           // [max_contact_nodes]
+  // The step's mesh map (attached mesh). When active, triangle e's matrix is
+  // tri_coef[e][0] K_xx + tri_coef[e][1] K_yy of its template, or general_k[tri_general[e]]
+  // for a triangle whose leaf spans a breakpoint of the map.
+  MeshMap map;
+  bool mapped = false;
+  std::vector<std::array<double, 2>> tri_coef;  // [max_triangles]
+  std::vector<std::int32_t> tri_general;        // [max_triangles] −1 or index into general_k
+  std::vector<ElementMatrix> general_k;         // [max_triangles]
+  std::vector<std::uint32_t> contact_stamp;     // [num_grid_nodes] == mesh.mark: contact node
+  std::vector<std::int32_t> contact_nodes;      // [max_contact_nodes]
+  std::vector<double> contact_w_m;              // [max_contact_nodes] prescribed displacement U
+  std::vector<double> contact_f_N;              // [max_contact_nodes]
   int num_contacts = 0;
   // Penalty points of the tool (ToolConstraint::kPenaltyPoints), [max_contact_nodes / 3]: each
   // reaches three nodes, whose reactions fill contact_nodes / contact_f_N after the solve.

@@ -286,6 +286,26 @@ void Tissue(S& m, V& v) {
   v("tissue.field_tool_pose.y_m", &t.field_tool_pose.y_m, 1);
   v("tissue.field_tool_pose.angle_rad", &t.field_tool_pose.angle_rad, 1);
   v("tissue.field_tool_pose_valid", &t.field_tool_pose_valid, 1);
+  v("tissue.mesh_anchor.valid", &t.mesh_anchor.valid, 1);
+  v("tissue.mesh_anchor.cx_m", &t.mesh_anchor.cx_m, 1);
+  v("tissue.mesh_anchor.cy_m", &t.mesh_anchor.cy_m, 1);
+  v("tissue.mesh_anchor.x_lo_m", &t.mesh_anchor.x_lo_m, 1);
+  v("tissue.mesh_anchor.x_hi_m", &t.mesh_anchor.x_hi_m, 1);
+  v("tissue.mesh_anchor.y_lo_m", &t.mesh_anchor.y_lo_m, 1);
+  v("tissue.mesh_anchor.y_hi_m", &t.mesh_anchor.y_hi_m, 1);
+  v("tissue.mesh_anchor.slide_x", &t.mesh_anchor.slide_x, 1);
+  v("tissue.mesh_anchor.slide_y", &t.mesh_anchor.slide_y, 1);
+  v("tissue.mesh_anchor.num_points", &t.mesh_anchor.num_points, 1);
+  v("tissue.mesh_anchor.x_m", t.mesh_anchor.x_m.data(), t.mesh_anchor.x_m.size());
+  v("tissue.mesh_anchor.y_m", t.mesh_anchor.y_m.data(), t.mesh_anchor.y_m.size());
+  v("tissue.field_map.x.lo_m", &t.field_map.x.lo_m, 1);
+  v("tissue.field_map.x.hi_m", &t.field_map.x.hi_m, 1);
+  v("tissue.field_map.x.length_m", &t.field_map.x.length_m, 1);
+  v("tissue.field_map.x.shift_m", &t.field_map.x.shift_m, 1);
+  v("tissue.field_map.y.lo_m", &t.field_map.y.lo_m, 1);
+  v("tissue.field_map.y.hi_m", &t.field_map.y.hi_m, 1);
+  v("tissue.field_map.y.length_m", &t.field_map.y.length_m, 1);
+  v("tissue.field_map.y.shift_m", &t.field_map.y.shift_m, 1);
   Matrix("tissue.f_T_W", m.f_T_W, v);
   // The needle through the tissue (tissue.tool: needle; untouched otherwise).
   auto& p = m.puncture;

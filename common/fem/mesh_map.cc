@@ -1,0 +1,125 @@
+#include "common/fem/mesh_map.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+namespace microdex::fem {
+namespace {
+
+std::uint64_t Mix(std::uint64_t h, double v) {
+  h ^= std::bit_cast<std::uint64_t>(v) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h * 1099511628211ull;
+}
+
+// The tool's planar centroid and the radius of the disc about it that holds every vertex.
+void Centroid(const ToolContact& tool, double* cx, double* cy, double* radius) {
+  double sx = 0, sy = 0;
+  for (int k = 0; k < tool.num_points; ++k) {
+    sx += tool.p_SP[k].x();
+    sy += tool.p_SP[k].y();
+  }
+  *cx = sx / tool.num_points;
+  *cy = sy / tool.num_points;
+  double r2 = 0;
+  for (int k = 0; k < tool.num_points; ++k) {
+    const double dx = tool.p_SP[k].x() - *cx, dy = tool.p_SP[k].y() - *cy;
+    r2 = std::max(r2, dx * dx + dy * dy);
+  }
+  *radius = std::sqrt(r2);
+}
+
+// One axis of the map, or nullopt-like false when the shift squeezes or stretches a side of
+// the patch beyond kMaxMeshStretch.
+bool AxisFor(bool slide, double lo, double hi, double length, double shift, AxisMap* out) {
+  *out = AxisMap{0, length, length, 0};
+  if (!slide || shift == 0) return true;
+  const double left = (lo + shift) / lo, right = (length - hi - shift) / (length - hi);
+  const auto ok = [](double s) { return s >= 1 / kMaxMeshStretch && s <= kMaxMeshStretch; };
+  if (!ok(left) || !ok(right)) return false;
+  *out = AxisMap{lo, hi, length, shift};
+  return true;
+}
+
+}  // namespace
+
+std::uint64_t MeshMap::Hash() const {
+  std::uint64_t h = 0x51ed270b27c6a1cbull;
+  for (const AxisMap* a : {&x, &y}) {
+    h = Mix(h, a->lo_m);
+    h = Mix(h, a->hi_m);
+    h = Mix(h, a->shift_m);
+  }
+  return h;
+}
+
+MeshMap AttachMesh(const TissueModel& model, const ToolContact& tool, MeshAnchor& anchor,
+                   bool* reattached) {
+  const TissueDef& def = model.def;
+  const double lx = def.length_x_m, ly = def.length_y_m;
+  double cx = 0, cy = 0, radius = 0;
+  Centroid(tool, &cx, &cy, &radius);
+  // The triangles that hold the tool's points lie within a nominal cell of the tool: with the
+  // box that much wider than the tool they move rigidly with it (exact barycentric coordinates).
+  const double margin =
+      kMeshBoxMarginCells * std::max(model.CellSizeX_m(def.level), model.CellSizeY_m(def.level));
+  *reattached = false;
+  if (anchor.valid) {
+    MeshMap map;
+    const double sx = anchor.slide_x ? cx - anchor.cx_m : 0;
+    const double sy = anchor.slide_y ? cy - anchor.cy_m : 0;
+    // The tool (moved back by the shift) must stay in the box, clear of its sides by half the
+    // margin: a tool that changes shape or drifts along a fixed axis attaches afresh.
+    const double half = 0.5 * margin;
+    bool inside = true;
+    for (int k = 0; k < tool.num_points; ++k) {
+      const double rx = tool.p_SP[k].x() - sx, ry = tool.p_SP[k].y() - sy;
+      inside =
+          inside && (!anchor.slide_x || (rx >= anchor.x_lo_m + half && rx <= anchor.x_hi_m - half));
+      inside =
+          inside && (!anchor.slide_y || (ry >= anchor.y_lo_m + half && ry <= anchor.y_hi_m - half));
+    }
+    if (inside && AxisFor(anchor.slide_x, anchor.x_lo_m, anchor.x_hi_m, lx, sx, &map.x) &&
+        AxisFor(anchor.slide_y, anchor.y_lo_m, anchor.y_hi_m, ly, sy, &map.y))
+      return map;
+  }
+  // Attach here: the box about the tool, each axis sliding only where the box leaves at least
+  // a margin of patch on both sides (room to squeeze).
+  *reattached = anchor.valid;
+  anchor.valid = true;
+  anchor.cx_m = cx;
+  anchor.cy_m = cy;
+  const double reach = radius + margin;
+  anchor.x_lo_m = cx - reach;
+  anchor.x_hi_m = cx + reach;
+  anchor.y_lo_m = cy - reach;
+  anchor.y_hi_m = cy + reach;
+  anchor.slide_x = anchor.x_lo_m >= margin && anchor.x_hi_m <= lx - margin;
+  anchor.slide_y = anchor.y_lo_m >= margin && anchor.y_hi_m <= ly - margin;
+  anchor.num_points = tool.num_points;
+  for (int k = 0; k < tool.num_points; ++k) {
+    anchor.x_m[k] = tool.p_SP[k].x();
+    anchor.y_m[k] = tool.p_SP[k].y();
+  }
+  MeshMap identity;
+  identity.x = AxisMap{0, lx, lx, 0};
+  identity.y = AxisMap{0, ly, ly, 0};
+  return identity;
+}
+
+ToolContact ToReference(const MeshMap& map, const MeshAnchor& anchor, const ToolContact& tool) {
+  ToolContact ref = tool;
+  const bool same_count = anchor.num_points == tool.num_points;
+  for (int k = 0; k < tool.num_points; ++k) {
+    double x = map.x.ToReference(tool.p_SP[k].x()), y = map.y.ToReference(tool.p_SP[k].y());
+    if (same_count && std::abs(x - anchor.x_m[k]) < kReferenceSnap_m) x = anchor.x_m[k];
+    if (same_count && std::abs(y - anchor.y_m[k]) < kReferenceSnap_m) y = anchor.y_m[k];
+    ref.p_SP[k].x() = x;
+    ref.p_SP[k].y() = y;
+  }
+  ref.p_ST.x() = map.x.ToReference(tool.p_ST.x());
+  ref.p_ST.y() = map.y.ToReference(tool.p_ST.y());
+  return ref;
+}
+
+}  // namespace microdex::fem
