@@ -42,7 +42,8 @@ void TissueModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
     arc.sweep_rad = needle_sweep_rad_;
     const std::uint32_t step_before = t.tissue.step;
     puncture::StepPuncture(puncture_->def, model_, arc, ws_, t.tissue, t.puncture);
-    if (t.tissue.step != step_before && !ws_.stats.pattern_reused) ++mesh_revision_;
+    if (t.tissue.step != step_before && (!ws_.stats.pattern_reused || ws_.stats.mesh_moved))
+      ++mesh_revision_;
     t.f_T_W = R_WS_ * t.puncture.f_S;
     if (!t.f_T_W.allFinite()) t.f_T_W.setZero();
     f_T_W += t.f_T_W;
@@ -56,7 +57,8 @@ void TissueModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
     tool_ = fem::MakeBarTool(p_ST - half_bar_m_ * u_S, p_ST + half_bar_m_ * u_S);
   }
   fem::StepTissue(model_, tool_, ws_, t.tissue);
-  if (!ws_.stats.pattern_reused) ++mesh_revision_;
+  // A new selection, or the attached mesh's nodes moved with the tool.
+  if (!ws_.stats.pattern_reused || ws_.stats.mesh_moved) ++mesh_revision_;
   // A failed step keeps the last good field and force (StepTissue), so the force stays
   // continuous; the failure is counted in the state's num_failed_steps.
   t.f_T_W = R_WS_ * t.tissue.f_T_S;

@@ -878,6 +878,7 @@ void StepTissue(const TissueModel& model, const ToolContact& tool_S, TissueWorks
   if (model.def.attached_mesh) ws.map = AttachMesh(model, tool_S, anchor, &stats.mesh_reattached);
   ws.mapped = ws.map.Active();
   stats.mesh_mapped = ws.mapped;
+  stats.mesh_moved = ws.mapped && ws.map.Hash() != state.field_map.Hash();
   ToolContact tool_ref;
   if (ws.mapped) tool_ref = ToReference(ws.map, anchor, tool_S);
   const ToolContact& tool = ws.mapped ? tool_ref : tool_S;

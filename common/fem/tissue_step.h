@@ -45,6 +45,7 @@ struct TissueStepStats {
   bool pattern_reused = false;   // the selection's sparsity pattern was in the cache
   bool factor_reused = false;    // ... and its values and factor were reused unchanged
   bool mesh_mapped = false;      // the attached mesh's map is not the identity
+  bool mesh_moved = false;       // ... and differs from the last step's (the nodes moved)
   bool mesh_reattached = false;  // the mesh was attached afresh while in contact (a jump)
   double select_us = 0;          // mesh selection and contact detection
   double assemble_us = 0;        // pattern (if new) and values

@@ -29,7 +29,11 @@ TEST(PunctureBench, QuickJsonShape) {
   ASSERT_EQ(rows.size(), 2u);  // levels 5 and 6 against 7
   EXPECT_GT(root["pressing"]["reference_stiffness_N_per_m"].as<double>(), 0.0);
   EXPECT_LT(rows[1]["stiffness_error"].as<double>(), rows[0]["stiffness_error"].as<double>());
-  EXPECT_LT(rows[1]["stiffness_error"].as<double>(), 0.1);
+  // The point load's stiffness converges like 1 / ln(1/h): level 6 is 14 % above level 7
+  // (49.1 and 43.3 N/m, one node under the tip at both levels, the mesh attached to the tissue
+  // under the sliding tip). Held to the grid, the level-7 value jumped between 43.3 and
+  // 50.2 N/m as the tip passed between nodes, and the puncture landed on either.
+  EXPECT_LT(rows[1]["stiffness_error"].as<double>(), 0.2);
   EXPECT_EQ(root["pass"]["punctures"].as<int>(), 2);
   EXPECT_GT(root["pass"]["press_median_us"].as<double>(),
             root["pass"]["holes_median_us"].as<double>());
