@@ -32,7 +32,7 @@ void Centroid(const ToolContact& tool, double* cx, double* cy, double* radius) {
 // One axis of the map, or nullopt-like false when the shift squeezes or stretches a side of
 // the patch beyond kMaxMeshStretch.
 bool AxisFor(bool slide, double lo, double hi, double length, double shift, AxisMap* out) {
-  *out = AxisMap{0, length, length, 0};
+  *out = AxisMap{};
   if (!slide || shift == 0) return true;
   const double left = (lo + shift) / lo, right = (length - hi - shift) / (length - hi);
   const auto ok = [](double s) { return s >= 1 / kMaxMeshStretch && s <= kMaxMeshStretch; };
@@ -101,10 +101,7 @@ MeshMap AttachMesh(const TissueModel& model, const ToolContact& tool, MeshAnchor
     anchor.x_m[k] = tool.p_SP[k].x();
     anchor.y_m[k] = tool.p_SP[k].y();
   }
-  MeshMap identity;
-  identity.x = AxisMap{0, lx, lx, 0};
-  identity.y = AxisMap{0, ly, ly, 0};
-  return identity;
+  return MeshMap{};  // the identity where the mesh attaches
 }
 
 ToolContact ToReference(const MeshMap& map, const MeshAnchor& anchor, const ToolContact& tool) {

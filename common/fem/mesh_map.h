@@ -23,7 +23,7 @@
 namespace microdex::fem {
 
 // One axis: reference [0, lo] → [0, lo + shift], [lo, hi] → [lo + shift, hi + shift],
-// [hi, L] → [hi + shift, L], each linear. lo = 0 and hi = L with shift 0: the identity.
+// [hi, L] → [hi + shift, L], each linear. Shift 0 (the default): the identity.
 struct AxisMap {
   double lo_m = 0;
   double hi_m = 0;

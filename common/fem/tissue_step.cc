@@ -298,7 +298,8 @@ void BuildPattern(TissueWorkspace& ws, PatternEntry& entry, int n) {
   entry.factor_valid = false;
 }
 
-void AssembleValues(const TissueModel& model, const TissueWorkspace& ws, PatternEntry& entry) {
+void AssembleValues(const TissueModel& model, const TissueWorkspace& ws, std::uint64_t map_hash,
+                    PatternEntry& entry) {
   const MeshSelection& mesh = ws.mesh;
   std::fill_n(entry.vals.begin(), entry.row_ptr[entry.num_dofs], 0.0);
   ElementMatrix scratch;
@@ -310,7 +311,7 @@ void AssembleValues(const TissueModel& model, const TissueWorkspace& ws, Pattern
     }
   }
   entry.values_valid = true;
-  entry.values_map_hash = ws.mapped ? ws.map.Hash() : 0;
+  entry.values_map_hash = map_hash;
   entry.factor_valid = false;
 }
 
@@ -467,8 +468,6 @@ TissueWorkspace::TissueWorkspace(const TissueModel& model) : mesh(MakeMeshSelect
   tri_coef.resize(model.max_triangles);
   tri_general.resize(model.max_triangles);
   general_k.resize(model.max_triangles);
-  map.x = AxisMap{0, model.def.length_x_m, model.def.length_x_m, 0};
-  map.y = AxisMap{0, model.def.length_y_m, model.def.length_y_m, 0};
   contact_nodes.resize(model.def.max_contact_nodes);
   contact_w_m.resize(model.def.max_contact_nodes);
   contact_f_N.resize(model.def.max_contact_nodes);
@@ -873,12 +872,12 @@ void StepTissue(const TissueModel& model, const ToolContact& tool_S, TissueWorks
   // 0. The attached mesh: the map of this step and the tool in its reference plane, where the
   // mesh is chosen, the tool points placed and the system solved.
   MeshAnchor anchor = state.mesh_anchor;
-  ws.map.x = AxisMap{0, model.def.length_x_m, model.def.length_x_m, 0};
-  ws.map.y = AxisMap{0, model.def.length_y_m, model.def.length_y_m, 0};
-  if (model.def.attached_mesh) ws.map = AttachMesh(model, tool_S, anchor, &stats.mesh_reattached);
+  ws.map = model.def.attached_mesh ? AttachMesh(model, tool_S, anchor, &stats.mesh_reattached)
+                                   : MeshMap{};
   ws.mapped = ws.map.Active();
+  const std::uint64_t map_hash = ws.mapped ? ws.map.Hash() : 0;
   stats.mesh_mapped = ws.mapped;
-  stats.mesh_moved = ws.mapped && ws.map.Hash() != state.field_map.Hash();
+  stats.mesh_moved = ws.mapped && map_hash != state.field_map.Hash();
   ToolContact tool_ref;
   if (ws.mapped) tool_ref = ToReference(ws.map, anchor, tool_S);
   const ToolContact& tool = ws.mapped ? tool_ref : tool_S;
@@ -913,10 +912,9 @@ void StepTissue(const TissueModel& model, const ToolContact& tool_S, TissueWorks
   PatternEntry& entry = ws.patterns[slot];
   entry.last_used = ++ws.use_clock;
   stats.pattern_reused = !new_pattern;
-  const std::uint64_t map_hash = ws.mapped ? ws.map.Hash() : 0;
   const bool assembled =
       !entry.values_valid || !ws.reuse_values || entry.values_map_hash != map_hash;
-  if (assembled) AssembleValues(model, ws, entry);
+  if (assembled) AssembleValues(model, ws, map_hash, entry);
   const double* vals = entry.vals.data();
   bool values_changed = assembled;
   if (ws.use_tool_points) {
