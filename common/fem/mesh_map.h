@@ -13,8 +13,17 @@
 // are stretched or squeezed to keep 0 and L in place. Every cell stays a rectangle, every
 // template triangle a right triangle (scaled per axis), so the element matrices stay those of
 // the templates: K = (s_y / s_x) K_xx + (s_x / s_y) K_yy.
+//
+// A turning tool is absorbed by a twist about the anchor's centroid, applied before the axis
+// maps: the disc of radius r₁ (the box's inscribed disc) turns rigidly with the tool, the
+// annulus out to r₂ (the nearest edge of the patch) by θ ln(r₂/r) / ln(r₂/r₁), the profile of
+// least shear (its shear r dφ/dr = θ / ln(r₂/r₁) is the same everywhere in the annulus), and
+// nothing beyond. Distances to the centre are kept, so the inverse is the twist turned back.
+// The element matrix is invariant under a rotation, so the disc's triangles keep their
+// templates; the annulus's triangles are computed from their mapped vertices.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "common/fem/tissue_model.h"
@@ -53,11 +62,55 @@ struct AxisMap {
   }
 };
 
+// The twist about (cx, cy): rigid within r₁, a log profile out to r₂, the identity beyond.
+// Turn 0 (the default): the identity.
+struct TwistMap {
+  double cx_m = 0;
+  double cy_m = 0;
+  double r1_m = 0;
+  double r2_m = 0;
+  double turn_rad = 0;
+
+  // The angle by which a point at distance r turns.
+  double Angle(double r_m) const {
+    if (r_m <= r1_m) return turn_rad;
+    if (r_m >= r2_m) return 0;
+    return turn_rad * std::log(r2_m / r_m) / std::log(r2_m / r1_m);
+  }
+  void Turn(double sign, double* x_m, double* y_m) const {
+    if (turn_rad == 0) return;
+    const double dx = *x_m - cx_m, dy = *y_m - cy_m;
+    const double a = sign * Angle(std::sqrt(dx * dx + dy * dy));
+    const double c = std::cos(a), s = std::sin(a);
+    *x_m = cx_m + c * dx - s * dy;
+    *y_m = cy_m + s * dx + c * dy;
+  }
+  // How the reference rectangle [x0, x1] × [y0, y1] is moved: 0 not at all (outside r₂),
+  // 1 rigidly (inside r₁), 2 sheared (it meets the annulus).
+  int Classify(double x0, double x1, double y0, double y1) const;
+};
+
 struct MeshMap {
   AxisMap x;
   AxisMap y;
-  bool Active() const { return x.shift_m != 0 || y.shift_m != 0; }
+  TwistMap twist;
+  bool Active() const { return x.shift_m != 0 || y.shift_m != 0 || twist.turn_rad != 0; }
   std::uint64_t Hash() const;  // identifies the element matrices the map gives
+
+  // Reference → tissue plane: the twist, then the axes.
+  void ToPhysical(double rx_m, double ry_m, double* px_m, double* py_m) const {
+    twist.Turn(1, &rx_m, &ry_m);
+    *px_m = x.ToPhysical(rx_m);
+    *py_m = y.ToPhysical(ry_m);
+  }
+  void ToReference(double px_m, double py_m, double* rx_m, double* ry_m) const {
+    *rx_m = x.ToReference(px_m);
+    *ry_m = y.ToReference(py_m);
+    twist.Turn(-1, rx_m, ry_m);
+  }
+  // A box in the tissue plane that holds the image of the reference rectangle.
+  void ImageBox(double x0, double x1, double y0, double y1, double* px0, double* px1, double* py0,
+                double* py1) const;
 };
 
 // Where and how the mesh was attached: the tool's centroid at the first step of contact and
@@ -73,6 +126,10 @@ struct MeshAnchor {
   double y_hi_m = 0;
   bool slide_x = false;  // false: the axis keeps the identity (the box too close to an edge)
   bool slide_y = false;
+  // The twist's radii about (cx, cy); r2 = 0: the tool's turn is not absorbed (the patch's edge
+  // is too near for a twist of useful reach).
+  double twist_r1_m = 0;
+  double twist_r2_m = 0;
   // The tool's planar vertices when attached. A vertex mapped back to within
   // kReferenceSnap_m of its attached place is taken at that place exactly, so that a tool
   // translating rigidly has bit for bit the same reference geometry every step (the rounding of
@@ -88,6 +145,13 @@ inline constexpr double kReferenceSnap_m = 1e-12;
 inline constexpr double kMaxMeshStretch = 4.0;
 // The box carried rigidly with the tool: the tool's disc plus this many nominal cells.
 inline constexpr double kMeshBoxMarginCells = 1.5;
+// The twist's shear r dφ/dr at most this: a right triangle's vertices then move relative to one
+// another by less than the 1/√2 of its size at which it could fold.
+inline constexpr double kMaxTwistShear = 0.65;
+// And its turn at most this (the chords of a large turn would shorten the sheared edges).
+inline constexpr double kMaxTwist_rad = 0.6;
+// A twist needs r₂ ≥ this × r₁ (with less room its turn before attaching afresh is too small).
+inline constexpr double kMinTwistReach = 1.5;
 
 // The map for this tool: from the anchor when it holds the tool (the tool's box in the
 // reference inside the anchor's, neither side of an axis squeezed or stretched by more than

@@ -72,9 +72,11 @@ std::uint64_t MixKey(std::uint64_t h, std::uint64_t v) {
 }
 
 // The element matrices of the step's mesh under its map (ws.map): per leaf, the slopes of the
-// map on the leaf's x and y ranges scale its templates' K_xx and K_yy; a leaf across a
-// breakpoint has its triangles computed from their mapped vertices.
-void MapTriangles(const TissueModel& model, TissueWorkspace& ws) {
+// map on the leaf's x and y ranges scale its templates' K_xx and K_yy (a leaf turned rigidly by
+// the twist keeps them: the matrix is invariant under a rotation); a leaf across a breakpoint or
+// in the twist's annulus has its triangles computed from their mapped vertices. False when a
+// mapped triangle would fold (the map is then not used).
+bool MapTriangles(const TissueModel& model, TissueWorkspace& ws) {
   const MeshSelection& mesh = ws.mesh;
   const TissueDef& def = model.def;
   int e = 0, general = 0;
@@ -84,8 +86,9 @@ void MapTriangles(const TissueModel& model, TissueWorkspace& ws) {
     const double lx = model.CellSizeX_m(leaf.level), ly = model.CellSizeY_m(leaf.level);
     const double x0 = leaf.ci * lx, y0 = leaf.cj * ly;
     const double sx = ws.map.x.Slope(x0, x0 + lx), sy = ws.map.y.Slope(y0, y0 + ly);
+    const bool sheared = ws.map.twist.Classify(x0, x0 + lx, y0, y0 + ly) == 2;
     for (int t = 0; t < count; ++t, ++e) {
-      if (sx > 0 && sy > 0) {
+      if (sx > 0 && sy > 0 && !sheared) {
         ws.tri_coef[e] = {sy / sx, sx / sy};
         ws.tri_general[e] = -1;
         continue;
@@ -94,16 +97,15 @@ void MapTriangles(const TissueModel& model, TissueWorkspace& ws) {
       std::array<double, 3> xs{}, ys{};
       for (int v = 0; v < 3; ++v) {
         const TemplateVertex& tv = kTemplateTriangles[tri.shape][v];
-        xs[v] = ws.map.x.ToPhysical(x0 + 0.5 * tv.u * lx);
-        ys[v] = ws.map.y.ToPhysical(y0 + 0.5 * tv.v * ly);
+        ws.map.ToPhysical(x0 + 0.5 * tv.u * lx, y0 + 0.5 * tv.v * ly, &xs[v], &ys[v]);
       }
-      const bool ok =
-          CalcElementMatrix(xs, ys, def.shear_modulus_Pa, def.thickness_m, ws.general_k[general]);
-      MICRODEX_CHECK(ok);  // a monotone map on each axis keeps every triangle positive
+      if (!CalcElementMatrix(xs, ys, def.shear_modulus_Pa, def.thickness_m, ws.general_k[general]))
+        return false;
       ws.tri_general[e] = general++;
     }
   }
   MICRODEX_CHECK(e == mesh.num_triangles);
+  return true;
 }
 
 // Triangle e's element matrix on this step's mesh; `scratch` holds it when it is scaled.
@@ -771,8 +773,9 @@ void CalcReactions(const TissueModel& model, const ToolContact& tool, TissueWork
   for (int c = 0; c < ws.num_contacts; ++c) {
     const int node = ws.contact_nodes[c];
     const double fz_on_tool_N = -ws.contact_f_N[c];  // the tissue pushes back on the tool
-    const double rx = ws.map.x.ToPhysical(model.NodeX_m(node)) - tool.p_ST.x();
-    const double ry = ws.map.y.ToPhysical(model.NodeY_m(node)) - tool.p_ST.y();
+    double px = 0, py = 0;
+    ws.map.ToPhysical(model.NodeX_m(node), model.NodeY_m(node), &px, &py);
+    const double rx = px - tool.p_ST.x(), ry = py - tool.p_ST.y();
     f_T_S->z() += fz_on_tool_N;
     tau_T_S->x() += ry * fz_on_tool_N;  // r × (0, 0, f)
     tau_T_S->y() -= rx * fz_on_tool_N;
@@ -827,8 +830,9 @@ void CalcToolPointReactions(const TissueModel& model, const ToolContact& tool, T
     const int node = ws.contact_nodes[c];
     const double fz_on_tool_N = -ws.contact_f_N[c];
     f_T_S->z() += fz_on_tool_N;
-    const double rx = ws.map.x.ToPhysical(model.NodeX_m(node)) - tool.p_ST.x();
-    const double ry = ws.map.y.ToPhysical(model.NodeY_m(node)) - tool.p_ST.y();
+    double px = 0, py = 0;
+    ws.map.ToPhysical(model.NodeX_m(node), model.NodeY_m(node), &px, &py);
+    const double rx = px - tool.p_ST.x(), ry = py - tool.p_ST.y();
     tau_T_S->x() += ry * fz_on_tool_N;  // r × (0, 0, f)
     tau_T_S->y() -= rx * fz_on_tool_N;
   }
@@ -875,16 +879,23 @@ void StepTissue(const TissueModel& model, const ToolContact& tool_S, TissueWorks
   ws.map = model.def.attached_mesh ? AttachMesh(model, tool_S, anchor, &stats.mesh_reattached)
                                    : MeshMap{};
   ws.mapped = ws.map.Active();
+  ToolContact tool_ref;
+  if (ws.mapped) tool_ref = ToReference(ws.map, anchor, tool_S);
+
+  // 1. Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
+  SelectMesh(model, model.def.level, model.def.mesh, ws.mapped ? tool_ref : tool_S, ws.mesh);
+  if (ws.mapped && !MapTriangles(model, ws)) {
+    // A mapped triangle would fold: attach afresh at the tool (the identity map).
+    anchor = MeshAnchor{};
+    ws.map = AttachMesh(model, tool_S, anchor, &stats.mesh_reattached);
+    stats.mesh_reattached = true;
+    ws.mapped = false;
+    SelectMesh(model, model.def.level, model.def.mesh, tool_S, ws.mesh);
+  }
   const std::uint64_t map_hash = ws.mapped ? ws.map.Hash() : 0;
   stats.mesh_mapped = ws.mapped;
   stats.mesh_moved = ws.mapped && map_hash != state.field_map.Hash();
-  ToolContact tool_ref;
-  if (ws.mapped) tool_ref = ToReference(ws.map, anchor, tool_S);
   const ToolContact& tool = ws.mapped ? tool_ref : tool_S;
-
-  // 1. Select: the mesh around the tool, the contact nodes, the numbering of the free nodes.
-  SelectMesh(model, model.def.level, model.def.mesh, tool, ws.mesh);
-  if (ws.mapped) MapTriangles(model, ws);
   const MeshSelection& mesh = ws.mesh;
   ws.use_tool_points = model.def.tool_constraint == ToolConstraint::kPenaltyPoints &&
                        tool.num_points >= 2 && tool.contact_radius_m == 0;
@@ -988,15 +999,18 @@ void CalcDisplacementGrid(const TissueModel& model, const TissueState& state, in
     const double lx = model.CellSizeX_m(leaf.level), ly = model.CellSizeY_m(leaf.level);
     const double x0 = leaf.ci * lx, y0 = leaf.cj * ly;
     const int count = LeafTriangles(model, leaf, tris);
-    // The display nodes in the leaf's image under the field's map (monotone on each axis),
-    // interpolated at their reference points.
-    const int i0 = static_cast<int>(std::ceil(map.x.ToPhysical(x0) / hx - 1e-9));
-    const int i1 = static_cast<int>(std::floor(map.x.ToPhysical(x0 + lx) / hx + 1e-9));
-    const int j0 = static_cast<int>(std::ceil(map.y.ToPhysical(y0) / hy - 1e-9));
-    const int j1 = static_cast<int>(std::floor(map.y.ToPhysical(y0 + ly) / hy + 1e-9));
+    // The display nodes in a box holding the leaf's image under the field's map, interpolated
+    // at their reference points (those outside the leaf fall in none of its triangles).
+    double bx0 = 0, bx1 = 0, by0 = 0, by1 = 0;
+    map.ImageBox(x0, x0 + lx, y0, y0 + ly, &bx0, &bx1, &by0, &by1);
+    const int i0 = std::max(0, static_cast<int>(std::ceil(bx0 / hx - 1e-9)));
+    const int i1 = std::min(cells, static_cast<int>(std::floor(bx1 / hx + 1e-9)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil(by0 / hy - 1e-9)));
+    const int j1 = std::min(cells, static_cast<int>(std::floor(by1 / hy + 1e-9)));
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i) {
-        const double px = map.x.ToReference(i * hx), py = map.y.ToReference(j * hy);
+        double px = 0, py = 0;
+        map.ToReference(i * hx, j * hy, &px, &py);
         for (int t = 0; t < count; ++t) {
           const auto& nd = tris[t].node;
           const double xa = model.NodeX_m(nd[0]), ya = model.NodeY_m(nd[0]);

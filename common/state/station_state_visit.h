@@ -295,6 +295,8 @@ void Tissue(S& m, V& v) {
   v("tissue.mesh_anchor.y_hi_m", &t.mesh_anchor.y_hi_m, 1);
   v("tissue.mesh_anchor.slide_x", &t.mesh_anchor.slide_x, 1);
   v("tissue.mesh_anchor.slide_y", &t.mesh_anchor.slide_y, 1);
+  v("tissue.mesh_anchor.twist_r1_m", &t.mesh_anchor.twist_r1_m, 1);
+  v("tissue.mesh_anchor.twist_r2_m", &t.mesh_anchor.twist_r2_m, 1);
   v("tissue.mesh_anchor.num_points", &t.mesh_anchor.num_points, 1);
   v("tissue.mesh_anchor.x_m", t.mesh_anchor.x_m.data(), t.mesh_anchor.x_m.size());
   v("tissue.mesh_anchor.y_m", t.mesh_anchor.y_m.data(), t.mesh_anchor.y_m.size());
@@ -306,6 +308,11 @@ void Tissue(S& m, V& v) {
   v("tissue.field_map.y.hi_m", &t.field_map.y.hi_m, 1);
   v("tissue.field_map.y.length_m", &t.field_map.y.length_m, 1);
   v("tissue.field_map.y.shift_m", &t.field_map.y.shift_m, 1);
+  v("tissue.field_map.twist.cx_m", &t.field_map.twist.cx_m, 1);
+  v("tissue.field_map.twist.cy_m", &t.field_map.twist.cy_m, 1);
+  v("tissue.field_map.twist.r1_m", &t.field_map.twist.r1_m, 1);
+  v("tissue.field_map.twist.r2_m", &t.field_map.twist.r2_m, 1);
+  v("tissue.field_map.twist.turn_rad", &t.field_map.twist.turn_rad, 1);
   Matrix("tissue.f_T_W", m.f_T_W, v);
   // The needle through the tissue (tissue.tool: needle; untouched otherwise).
   auto& p = m.puncture;

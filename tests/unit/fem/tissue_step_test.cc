@@ -286,6 +286,7 @@ TEST(TissueStep, FastMovingToolNeverFails) {
     const TissueModel iterative = Model(7, MeshKind::kMultiscale, solver);
     TissueWorkspace ws_d(direct), ws_i(iterative);
     TissueState sd = MakeTissueState(direct), si = MakeTissueState(iterative);
+    int twisted = 0, reattached = 0;
     for (int k = 0; k < 120; ++k) {
       const double t = 1e-3 * k, a = 3.0 * t;
       const double cx = 0.04 + 1.0 * t, cy = 0.1;
@@ -298,11 +299,16 @@ TEST(TissueStep, FastMovingToolNeverFails) {
       ASSERT_EQ(si.status, TissueStatus::kOk) << k;
       ASSERT_TRUE(sd.f_T_S.allFinite() && sd.tau_T_S.allFinite());
       EXPECT_NEAR(si.f_T_S.z(), sd.f_T_S.z(), 1e-5 * sd.f_T_S.z()) << k;
+      twisted += si.field_map.twist.turn_rad != 0;
+      reattached += ws_i.stats.mesh_reattached;
       // pcg_dic keeps DIC on these systems (no fall-back to IC(0) needed).
       if (solver == SolverKind::kPcgDic) {
         EXPECT_EQ(ws_i.stats.preconditioner, Preconditioner::kDic) << k;
       }
     }
+    // The attached mesh's twist (sheared, obtuse triangles) and its re-attachments are in play.
+    EXPECT_GT(twisted, 60);
+    EXPECT_GT(reattached, 0);
   }
 }
 
