@@ -122,6 +122,8 @@ struct Moving {
   double cpu_median_us, cpu_p99_us;
   double static_median_us;  // same model, tool held still, same run
   double iterations;        // median (P)CG iterations of the moving steps
+  double twisted_fraction;  // steps whose attached mesh was twisted (the tool's turn absorbed)
+  int reattached;           // steps that attached the mesh afresh
 };
 
 struct Options {
@@ -373,7 +375,7 @@ int RunFem(int argc, char** argv) {
       ws_static.reuse_values = false;
       TissueState state = MakeTissueState(model), state_static = MakeTissueState(model);
       std::vector<double> us, us_static, select, assemble, solve, cpu, iterations;
-      int reused = 0, failed = 0;
+      int reused = 0, failed = 0, twisted = 0, reattached = 0;
       double unknowns = 0;
       auto pose = [](int k) {
         const double t = 1e-3 * k;
@@ -402,24 +404,43 @@ int RunFem(int argc, char** argv) {
         solve.push_back(ws.stats.solve_us);
         iterations.push_back(ws.stats.iterations);
         reused += ws.stats.pattern_reused;
+        twisted += ws.map.twist.turn_rad != 0;
+        reattached += ws.stats.mesh_reattached;
         failed += !IsGood(state.status);
         unknowns += ws.stats.unknowns;
       }
-      moving.push_back(
-          {level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint), v.attached,
-           Median(us), Percentile(us, 0.99), *std::max_element(us.begin(), us.end()),
-           static_cast<double>(reused) / us.size(), failed, static_cast<int>(us.size()),
-           unknowns / us.size(), Median(select), Median(assemble), Median(solve), Median(cpu),
-           Percentile(cpu, 0.99), Median(us_static), Median(iterations)});
-      std::fprintf(
-          stderr,
-          "moving L%d %-10s %-17s %-14s %-8s median %7.1f us (select %6.1f assemble %6.1f "
-          "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f  it %.0f\n",
-          level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
-          v.attached ? "attached" : "grid", moving.back().median_us, moving.back().select_us,
-          moving.back().assemble_us, moving.back().solve_us, moving.back().p99_us,
-          moving.back().static_median_us, moving.back().cpu_median_us, moving.back().cpu_p99_us,
-          moving.back().mean_unknowns, moving.back().iterations);
+      moving.push_back({level,
+                        ToString(v.solver),
+                        ToString(v.ordering),
+                        ToString(v.constraint),
+                        v.attached,
+                        Median(us),
+                        Percentile(us, 0.99),
+                        *std::max_element(us.begin(), us.end()),
+                        static_cast<double>(reused) / us.size(),
+                        failed,
+                        static_cast<int>(us.size()),
+                        unknowns / us.size(),
+                        Median(select),
+                        Median(assemble),
+                        Median(solve),
+                        Median(cpu),
+                        Percentile(cpu, 0.99),
+                        Median(us_static),
+                        Median(iterations),
+                        static_cast<double>(twisted) / us.size(),
+                        reattached});
+      std::fprintf(stderr,
+                   "moving L%d %-10s %-17s %-14s %-8s median %7.1f us (select %6.1f assemble %6.1f "
+                   "solve %6.1f) p99 %7.1f  static %7.1f us  cpu %7.1f p99 %7.1f  n=%.0f  it %.0f  "
+                   "twisted %.2f reattached %d\n",
+                   level, ToString(v.solver), ToString(v.ordering), ToString(v.constraint),
+                   v.attached ? "attached" : "grid", moving.back().median_us,
+                   moving.back().select_us, moving.back().assemble_us, moving.back().solve_us,
+                   moving.back().p99_us, moving.back().static_median_us,
+                   moving.back().cpu_median_us, moving.back().cpu_p99_us,
+                   moving.back().mean_unknowns, moving.back().iterations,
+                   moving.back().twisted_fraction, moving.back().reattached);
     }
   }
 
@@ -616,21 +637,23 @@ int RunFem(int argc, char** argv) {
   std::fprintf(out, "  ],\n  \"moving\": [\n");
   for (size_t i = 0; i < moving.size(); ++i) {
     const Moving& m = moving[i];
-    std::fprintf(
-        out,
-        "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", "
-        "\"ordering\": \"%s\", \"tool_constraint\": \"%s\", \"attached_mesh\": %s, "
-        "\"steps\": %d, \"median_us\": %s, \"p99_us\": %s, "
-        "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
-        "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
-        "\"failed_steps\": %d, \"mean_unknowns\": %s, \"cpu_median_us\": %s, "
-        "\"cpu_p99_us\": %s, \"median_iterations\": %s}%s\n",
-        m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(),
-        m.attached ? "true" : "false", m.steps, Num(m.median_us).c_str(), Num(m.p99_us).c_str(),
-        Num(m.max_us).c_str(), Num(m.select_us).c_str(), Num(m.assemble_us).c_str(),
-        Num(m.solve_us).c_str(), Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(),
-        m.failed, Num(m.mean_unknowns).c_str(), Num(m.cpu_median_us).c_str(),
-        Num(m.cpu_p99_us).c_str(), Num(m.iterations).c_str(), i + 1 < moving.size() ? "," : "");
+    std::fprintf(out,
+                 "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", "
+                 "\"ordering\": \"%s\", \"tool_constraint\": \"%s\", \"attached_mesh\": %s, "
+                 "\"steps\": %d, \"median_us\": %s, \"p99_us\": %s, "
+                 "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
+                 "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
+                 "\"failed_steps\": %d, \"mean_unknowns\": %s, \"cpu_median_us\": %s, "
+                 "\"cpu_p99_us\": %s, \"median_iterations\": %s, \"twisted_fraction\": %s, "
+                 "\"reattached_steps\": %d}%s\n",
+                 m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(),
+                 m.attached ? "true" : "false", m.steps, Num(m.median_us).c_str(),
+                 Num(m.p99_us).c_str(), Num(m.max_us).c_str(), Num(m.select_us).c_str(),
+                 Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
+                 Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(), m.failed,
+                 Num(m.mean_unknowns).c_str(), Num(m.cpu_median_us).c_str(),
+                 Num(m.cpu_p99_us).c_str(), Num(m.iterations).c_str(),
+                 Num(m.twisted_fraction).c_str(), m.reattached, i + 1 < moving.size() ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"force_distribution\": [\n");
   for (size_t i = 0; i < distributions.size(); ++i) {
