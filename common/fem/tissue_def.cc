@@ -98,6 +98,8 @@ void TissueDef::Validate() const {
   Require(std::isfinite(dic_relaxation) && dic_relaxation >= 0.5 && dic_relaxation <= 1,
           "dic_relaxation", "a factor in [0.5, 1]");
   Require(cg_max_iterations >= 1, "cg_max_iterations", "a positive count");
+  Require(reattach_blend_steps >= 0 && reattach_blend_steps <= 10000, "reattach_blend_steps",
+          "a count of steps in [0, 10000]");
   Require(max_contact_nodes >= 1, "max_contact_nodes", "a positive count");
   Require(pattern_cache_entries >= 1 && pattern_cache_entries <= 16, "pattern_cache_entries",
           "an integer in [1, 16]");
@@ -140,6 +142,7 @@ TissueDef LoadTissueDef(const std::string& path) {
                              "dic_relaxation",
                              "cg_max_iterations",
                              "attached_mesh",
+                             "reattach_blend_steps",
                              "max_contact_nodes",
                              "pattern_cache_entries"});
   TissueDef def;
@@ -169,6 +172,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   def.dic_relaxation = tissue.FiniteDouble("dic_relaxation", def.dic_relaxation);
   def.cg_max_iterations = tissue.Int("cg_max_iterations", def.cg_max_iterations);
   def.attached_mesh = tissue.Bool("attached_mesh", def.attached_mesh);
+  def.reattach_blend_steps = tissue.Int("reattach_blend_steps", def.reattach_blend_steps);
   def.max_contact_nodes = tissue.Int("max_contact_nodes", def.max_contact_nodes);
   def.pattern_cache_entries = tissue.Int("pattern_cache_entries", def.pattern_cache_entries);
   try {

@@ -121,6 +121,11 @@ struct TissueDef {
   // planar translation since contact began moves the mesh's nodes instead of the tool over
   // the grid, so the force is a smooth function of the motion (README, "Attached mesh").
   bool attached_mesh = true;
+  // Attaching the mesh afresh changes the discretisation, and the force steps by the change of
+  // its error (a few 1e-3 of F at most, README "Attached mesh"). The step is spread over this
+  // many steps (0.1 s at 1 kHz): the reported force goes on from the last report and reaches
+  // the new mesh's solution linearly. 0: not spread.
+  int reattach_blend_steps = 100;
   int max_contact_nodes = 4096;   // capacity of the contact list (pre-sized)
   int pattern_cache_entries = 2;  // sparsity patterns (and CHOLMOD analyses) kept
   // Throws std::invalid_argument for the first bad field, whose message starts with the field

@@ -965,6 +965,28 @@ void StepTissue(const TissueModel& model, const ToolContact& tool_S, TissueWorks
     CalcReactions(model, tool_S, ws, &f_T_S, &tau_T_S);
   }
   if (!f_T_S.allFinite() || !tau_T_S.allFinite()) return fail(TissueStatus::kNonFinite);
+  // A re-attachment's step of the force, spread (TissueDef::reattach_blend_steps): the offset
+  // from this solution to the last report, which shrinks linearly to nothing.
+  const int blend_steps = model.def.reattach_blend_steps;
+  // (Attaching afresh implies the last step was in contact on an attached mesh; state.f_T_S is
+  // what it reported, kept through a failed step.)
+  if (stats.mesh_reattached && blend_steps > 0) {
+    state.blend_f_N = state.f_T_S + state.f_change_N - f_T_S;
+    state.blend_tau_Nm = state.tau_T_S + state.tau_change_Nm - tau_T_S;
+    state.blend_left = blend_steps;
+  }
+  if (status == TissueStatus::kNoContact) state.blend_left = 0;
+  if (state.blend_left > 0) {
+    const double w = static_cast<double>(state.blend_left) / std::max(blend_steps, 1);
+    f_T_S += w * state.blend_f_N;
+    tau_T_S += w * state.blend_tau_Nm;
+    --state.blend_left;
+    stats.force_blended = true;
+  }
+  const bool was_pressing = state.status == TissueStatus::kOk;
+  state.f_change_N = was_pressing ? Eigen::Vector3d(f_T_S - state.f_T_S) : Eigen::Vector3d::Zero();
+  state.tau_change_Nm =
+      was_pressing ? Eigen::Vector3d(tau_T_S - state.tau_T_S) : Eigen::Vector3d::Zero();
   Commit(ws, f_T_S, tau_T_S, status, state);
   state.field_tool_pose = PoseOf(tool);
   state.field_tool_pose_valid = true;

@@ -46,7 +46,8 @@ struct TissueStepStats {
   bool factor_reused = false;    // ... and its values and factor were reused unchanged
   bool mesh_mapped = false;      // the attached mesh's map is not the identity
   bool mesh_moved = false;       // ... and differs from the last step's (the nodes moved)
-  bool mesh_reattached = false;  // the mesh was attached afresh while in contact (a jump)
+  bool mesh_reattached = false;  // the mesh was attached afresh while in contact
+  bool force_blended = false;    // the reported force carries part of a re-attachment's step
   double select_us = 0;          // mesh selection and contact detection
   double assemble_us = 0;        // pattern (if new) and values
   double solve_us = 0;           // factorisation (if any) and solve
@@ -88,6 +89,14 @@ struct TissueState {
   // field's step (its nodes are in the reference plane; the map places them).
   MeshAnchor mesh_anchor;
   MeshMap field_map;
+  // The force's step at a re-attachment, spread (TissueDef::reattach_blend_steps, N): the force
+  // and torque reported are the solution's plus blend_left / N of these offsets (the last
+  // report carried on by its last change, less the new mesh's first solution).
+  Eigen::Vector3d f_change_N = Eigen::Vector3d::Zero();  // the last report's change in a step
+  Eigen::Vector3d tau_change_Nm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d blend_f_N = Eigen::Vector3d::Zero();
+  Eigen::Vector3d blend_tau_Nm = Eigen::Vector3d::Zero();
+  int blend_left = 0;
 };
 TissueState MakeTissueState(const TissueModel& model);
 

@@ -313,6 +313,11 @@ void Tissue(S& m, V& v) {
   v("tissue.field_map.twist.r1_m", &t.field_map.twist.r1_m, 1);
   v("tissue.field_map.twist.r2_m", &t.field_map.twist.r2_m, 1);
   v("tissue.field_map.twist.turn_rad", &t.field_map.twist.turn_rad, 1);
+  Matrix("tissue.blend_f_N", t.blend_f_N, v);
+  Matrix("tissue.blend_tau_Nm", t.blend_tau_Nm, v);
+  Matrix("tissue.f_change_N", t.f_change_N, v);
+  Matrix("tissue.tau_change_Nm", t.tau_change_Nm, v);
+  v("tissue.blend_left", &t.blend_left, 1);
   Matrix("tissue.f_T_W", m.f_T_W, v);
   // The needle through the tissue (tissue.tool: needle; untouched otherwise).
   auto& p = m.puncture;

@@ -253,7 +253,7 @@ TEST(AttachedMesh, SlidesUpToAnEdgeAndAttachesAfresh) {
     const TissueModel model = Model(6, SolverKind::kPcgDic, attached == 1);
     TissueWorkspace ws(model);
     TissueState state = MakeTissueState(model);
-    int reattached = 0, attached_at = 0;
+    int reattached = 0;
     double previous = 0, previous_step = 0;
     const double x1 = 0.085, x2 = 0.115;
     for (int k = 0; k <= 980; ++k) {
@@ -263,12 +263,15 @@ TEST(AttachedMesh, SlidesUpToAnEdgeAndAttachesAfresh) {
       ASSERT_TRUE(std::isfinite(state.f_T_S.z()));
       const double f = state.f_T_S.z();
       reattached += ws.stats.mesh_reattached;
-      if (ws.stats.mesh_reattached) attached_at = k;
       // Until the box about the tool comes within its margin of the edge (y ≈ 2 cm here;
-      // then the axis holds to the grid) the force changes smoothly between attachments: the
-      // change per step itself changes by less than 1e-4 of the force.
+      // then the axis holds to the grid) the force changes smoothly, through the
+      // re-attachments too (their steps spread over reattach_blend_steps): the change per step
+      // itself changes by less than 1e-4 of the force.
       const double step = f - previous;
-      if (k > attached_at + 1 && y > 0.021)
+      if (ws.stats.mesh_reattached) {
+        EXPECT_EQ(state.blend_left, model.def.reattach_blend_steps - 1) << k;
+      }
+      if (k > 1 && y > 0.021)
         largest_ripple[attached] =
             std::max(largest_ripple[attached], std::abs(step - previous_step) / f);
       previous_step = step;
@@ -285,6 +288,58 @@ TEST(AttachedMesh, SlidesUpToAnEdgeAndAttachesAfresh) {
   }
   EXPECT_LT(largest_ripple[1], 1e-4);
   EXPECT_GT(largest_ripple[0], 1e-3);  // held to the grid: +4e-3 and −6e-4 in turn near the edge
+}
+
+// A re-attachment's step of the force is spread: from the step that attaches afresh the
+// reported force goes on from the last report (carried on by its last change) and reaches the
+// new mesh's solution linearly over reattach_blend_steps (N). Beside it the same motion with the
+// blend off gives the solutions themselves: their difference is (1 − j/N) of the step, and the
+// change per step, which the plain force changes by the step (a few 1e-3 of F), changes by at
+// most a hundredth of it.
+TEST(AttachedMesh, ReattachmentStepIsSpread) {
+  const TissueModel model = Model(6, SolverKind::kPcgDic, true);
+  TissueDef plain_def = model.def;
+  plain_def.reattach_blend_steps = 0;
+  const TissueModel plain_model = BuildTissueModel(plain_def);
+  const int blend = model.def.reattach_blend_steps;
+  ASSERT_EQ(blend, 100);
+  TissueWorkspace ws_b(model), ws_p(plain_model);
+  TissueState blended = MakeTissueState(model), plain = MakeTissueState(model);
+  double ripple_b = 0, ripple_p = 0, delta = 0;
+  double previous_b = 0, previous_p = 0, change_b = 0, change_p = 0;
+  int attached_at = -1;
+  for (int k = 0; k <= 800 && (attached_at < 0 || k <= attached_at + blend + 5); ++k) {
+    const double y = 0.100 - 1e-4 * k;
+    const ToolContact bar = MakeBarTool({0.085, y, -kPress_m}, {0.115, y, -kPress_m});
+    StepTissue(model, bar, ws_b, blended);
+    StepTissue(plain_model, bar, ws_p, plain);
+    ASSERT_EQ(blended.status, TissueStatus::kOk) << k;
+    const double fb = blended.f_T_S.z(), fp = plain.f_T_S.z();
+    if (ws_b.stats.mesh_reattached && attached_at < 0) {
+      attached_at = k;
+      delta = previous_b + change_b - fp;
+      EXPECT_NEAR(fb, previous_b + change_b, 1e-13 * fb) << k;
+    }
+    if (attached_at >= 0) {
+      const int j = k - attached_at;
+      const double w = std::max(0, blend - j) / static_cast<double>(blend);
+      EXPECT_NEAR(fb - fp, w * delta, 1e-12 * fb) << k;
+      EXPECT_EQ(ws_b.stats.force_blended, j < blend) << k;
+    } else {
+      EXPECT_EQ(fb, fp) << k;
+    }
+    if (k > 1) {
+      ripple_b = std::max(ripple_b, std::abs(fb - previous_b - change_b) / fb);
+      ripple_p = std::max(ripple_p, std::abs(fp - previous_p - change_p) / fp);
+    }
+    change_b = fb - previous_b;
+    change_p = fp - previous_p;
+    previous_b = fb;
+    previous_p = fp;
+  }
+  ASSERT_GE(attached_at, 0);
+  EXPECT_GT(ripple_p, 1e-3);                    // the step the blend spreads
+  EXPECT_LT(ripple_b, 0.02 * ripple_p + 1e-5);  // a hundredth of it, and the motion's own
 }
 
 // The displayed field follows the tool: slid 1.3 cells across, the deepest row of the display
