@@ -111,6 +111,19 @@ void WriteScoreJson(const std::string& path, const StationOptions& o, const std:
     << ", \"input_published\": " << t.input_published
     << ", \"input_write_failed\": " << t.input_write_failed
     << ", \"realtime\": " << (realtime ? "true" : "false") << "},\n";
+  // The period in windows of PeriodWindow::kTicks ticks, as parallel arrays.
+  const std::vector<PeriodWindow>& windows = pub.period_windows();
+  const auto write_array = [&](const char* key, const auto& value) {
+    f << "  \"" << key << "\": [";
+    for (std::size_t i = 0; i < windows.size(); ++i) f << (i ? ", " : "") << value(windows[i]);
+    f << "],\n";
+  };
+  f << "  \"window_length_ticks\": " << PeriodWindow::kTicks << ",\n";
+  write_array("window_start_ns", [](const PeriodWindow& w) { return w.start_stamp_ns; });
+  write_array("window_ticks", [](const PeriodWindow& w) { return w.ticks; });
+  write_array("window_p99_ms", [](const PeriodWindow& w) { return JsonNumber(w.p99_s * 1e3); });
+  write_array("window_max_ms", [](const PeriodWindow& w) { return JsonNumber(w.max_s * 1e3); });
+  write_array("window_overruns", [](const PeriodWindow& w) { return w.overruns; });
   f << "  \"modules\": [";
   for (std::size_t i = 0; i < scene.modules.size(); ++i) {
     const PeriodStats& m = pub.run_step_times(i);

@@ -365,14 +365,25 @@ void StationPublisher::Drain() {
   TickSnapshot s;
   while (rings_.snapshots.TryPop(s)) {
     ++totals_.snapshots;
+    if (period_windows_.empty() || (period_windows_.back().ticks == PeriodWindow::kTicks &&
+                                    period_windows_.size() < PeriodWindow::kMaxWindows)) {
+      period_windows_.push_back(PeriodWindow{s.stamp_ns});
+      log_periods_.Reset();
+    }
+    PeriodWindow& log = period_windows_.back();
+    const bool logging = log.ticks < PeriodWindow::kTicks;
+    if (logging) ++log.ticks;
     if (have_last_) {  // the first period of a run has no predecessor
       run_periods_.Add(s.period_ns);
       window_periods_.Add(s.period_ns);
+      if (logging) log_periods_.Add(s.period_ns);
     }
     if (s.overrun) {
       ++totals_.overruns;
       ++window_overruns_;
+      if (logging) ++log.overruns;
     }
+    if (logging && log.ticks == PeriodWindow::kTicks) ClosePeriodWindow();
     ++window_ticks_;
     if (s.has_state_hash) {
       totals_.has_state_hash = true;
@@ -670,8 +681,17 @@ void StationPublisher::Run() {
   Goodbye();
 }
 
+void StationPublisher::ClosePeriodWindow() {
+  PeriodWindow& log = period_windows_.back();
+  log.p99_s = log_periods_.Quantile_s(0.99);
+  log.max_s = log_periods_.max_s();
+}
+
 void StationPublisher::Goodbye() {
   Drain();
+  if (!period_windows_.empty() && period_windows_.back().ticks < PeriodWindow::kTicks) {
+    ClosePeriodWindow();  // the partial last window
+  }
   PublishMirror();
   PublishFrames();
   PublishScore(true);

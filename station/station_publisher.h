@@ -67,6 +67,20 @@ struct AppliedCue {
   std::uint64_t step = 0;
 };
 
+// The haptic period over one window of the run (kTicks ticks: 1 s at 1 kHz), for the score
+// file's "loop.windows": what a fault did to the period is judged against the same run's other
+// windows, on a host whose own scheduling noise is then the same for both.
+struct PeriodWindow {
+  static constexpr std::uint32_t kTicks = 1000;
+  // Beyond this many windows (24 h at 1 kHz) the log stops growing; the whole-run figures go on.
+  static constexpr std::size_t kMaxWindows = 86400;
+  std::int64_t start_stamp_ns = 0;  // CLOCK_REALTIME of the window's first tick
+  std::uint32_t ticks = 0;
+  std::uint32_t overruns = 0;
+  double p99_s = 0;
+  double max_s = 0;
+};
+
 struct PublisherTotals {
   std::uint64_t snapshots = 0;
   std::uint64_t input_published = 0;
@@ -113,6 +127,8 @@ class StationPublisher {
   // Step time of module i over the whole run (the "period" is the step's wall time).
   const PeriodStats& run_step_times(std::size_t i) const { return run_step_times_[i]; }
   const PublisherTotals& totals() const { return totals_; }
+  // The run's windows so far, the last one partial (after the final Drain: up to the last tick).
+  const std::vector<PeriodWindow>& period_windows() const { return period_windows_; }
   const TickSnapshot& last() const { return last_; }
   net::Score final_score() const { return final_score_; }
 
@@ -120,6 +136,7 @@ class StationPublisher {
   void HandleCues();
   std::vector<eprosima::fastdds::dds::DataWriter*> RecordedWriters() const;
   void Drain();
+  void ClosePeriodWindow();  // the last PeriodWindow's p99 and max, from log_periods_
   void PublishMirror();
   void EncodeViewFrame();
   void PublishOverlay();
@@ -145,6 +162,8 @@ class StationPublisher {
 
   PeriodStats run_periods_;
   PeriodStats window_periods_;
+  PeriodStats log_periods_;  // the open PeriodWindow's
+  std::vector<PeriodWindow> period_windows_;
   std::vector<PeriodStats> run_step_times_;
   std::uint64_t window_overruns_ = 0;
   std::vector<double> window_step_time_sum_s_, window_step_time_max_s_;
