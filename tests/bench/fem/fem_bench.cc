@@ -130,6 +130,10 @@ struct Options {
   std::string json, plot_dir;
   int max_level = 8;
   int min_steps = 15;
+  // A run also lasts at least min_time_s: 15 steps of a fast mesh are 10 ms, short enough for
+  // one burst of a shared host's noise to move their median (and with it the same-run ratio
+  // against the fine mesh); 0.25 s is hundreds of steps.
+  double min_time_s = 0.25;
   double budget_s = 0.4;
   double grading = 2.0;
   double end_resolution = TissueDef{}.end_resolution;
@@ -158,7 +162,7 @@ void TimeRun(const TissueModel& model, const Case& c, bool reuse_values, const O
     iterations.push_back(ws.stats.iterations);
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (static_cast<int>(total.size()) >= opt.min_steps ||
+    if ((static_cast<int>(total.size()) >= opt.min_steps && elapsed >= opt.min_time_s) ||
         (elapsed > opt.budget_s && total.size() >= 3))
       break;
   }
@@ -190,6 +194,7 @@ int RunFem(int argc, char** argv) {
     } else if (a == "--quick") {
       opt.max_level = 5;
       opt.min_steps = 5;
+      opt.min_time_s = 0;
       opt.budget_s = 0.05;
     } else if (a == "--max-level") {
       opt.max_level = std::stoi(value());
