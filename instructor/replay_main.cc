@@ -1,6 +1,10 @@
 // microdex-replay: replays a recorded session over DDS, re-simulates it and checks its state
 // hashes, or exports it (README.md in this folder, "Replay").
 
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -12,6 +16,8 @@
 
 #include "common/net/app_cli.h"
 #include "common/scores/experiment.h"
+#include "instructor/console_server.h"
+#include "instructor/instructor.h"
 #include "instructor/replay_export.h"
 #include "instructor/replay_player.h"
 #include "instructor/replay_resim.h"
@@ -43,6 +49,85 @@ class RawTerminal {
   termios saved_{};
   bool active_ = false;
 };
+
+// --render: node on instructor/page/render.mjs against the replay's own console, its standard
+// input a pipe (closing it ends the rendering) and its standard output a pipe (its first line
+// says the page is open).
+struct Renderer {
+  pid_t pid = -1;
+  int to_child = -1;
+  int from_child = -1;
+};
+
+Renderer StartRenderer(std::uint16_t port, const std::string& dir, double every_ms, int stations,
+                       double speed) {
+  int in[2], out[2];
+  if (pipe(in) != 0) throw std::runtime_error("--render: cannot make a pipe");
+  if (pipe(out) != 0) {
+    close(in[0]);
+    close(in[1]);
+    throw std::runtime_error("--render: cannot make a pipe");
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+  for (int fd : {in[0], in[1], out[0], out[1]}) posix_spawn_file_actions_addclose(&actions, fd);
+  const std::string script = std::string(MICRODEX_SOURCE_DIR) + "/instructor/page/render.mjs";
+  std::vector<std::string> args = {"node",       script,
+                                   "--url",      "http://127.0.0.1:" + std::to_string(port) + "/",
+                                   "--out",      dir,
+                                   "--every-ms", std::to_string(static_cast<long>(every_ms)),
+                                   "--stations", std::to_string(stations),
+                                   "--speed",    std::to_string(speed)};
+  std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  Renderer r;
+  const int rc = posix_spawnp(&r.pid, "node", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(in[0]);
+  close(out[1]);
+  if (rc != 0) {
+    close(in[1]);
+    close(out[0]);
+    throw std::runtime_error("--render: cannot run node (it draws through Chromium)");
+  }
+  r.to_child = in[1];
+  r.from_child = out[0];
+  return r;
+}
+
+// Waits up to timeout_s for the renderer's first line; false if it exits or says nothing.
+bool AwaitRendererReady(const Renderer& r, double timeout_s) {
+  std::string line;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < end) {
+    pollfd p{r.from_child, POLLIN, 0};
+    if (poll(&p, 1, 100) <= 0) continue;
+    char c = 0;
+    if (read(r.from_child, &c, 1) != 1) return false;
+    if (c == '\n') return line.find("page open") != std::string::npos;
+    line += c;
+  }
+  return false;
+}
+
+// Closes the renderer's input (the replay is over), relays what it prints and returns its
+// exit status.
+int FinishRenderer(Renderer& r) {
+  close(r.to_child);
+  char buf[512];
+  ssize_t n = 0;
+  while ((n = read(r.from_child, buf, sizeof buf)) > 0) {
+    std::fwrite(buf, 1, static_cast<std::size_t>(n), stdout);
+  }
+  close(r.from_child);
+  int status = 0;
+  if (waitpid(r.pid, &status, 0) != r.pid) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
 
 // Prints "PROGRAM: first problem (and N more)" and returns 2, or 0 without problems.
 int ReportProblems(const microdex::record::SessionReader& reader) {
@@ -99,15 +184,30 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                "state hash of every step; exit 0 when all match, 1 naming the station and the "
                "first divergent step");
   app.add_option("--scene-dir", scene_dir,
-                 "--resimulate: folder to look for a scene whose recorded path does not exist");
+                 "folder to look for a scene whose recorded path does not exist (by its file "
+                 "name): --resimulate runs it; a replay sends it to the consoles, which then "
+                 "need none of the scene's files");
   app.add_option("--export-csv", export_dir, "write one CSV per topic into this folder");
   app.add_option("--summary", summary_file, "write the session summary (Markdown) to this file");
+  std::string render_dir;
+  double render_every_s = 1.0;
+  app.add_option("--render", render_dir,
+                 "while replaying, draw the session through the console page in headless "
+                 "Chromium into this folder: the whole console every --render-every seconds of "
+                 "the session (console_NNNNN.png, index.csv), then each station's view "
+                 "enlarged at the end (station_ID.png)");
+  app.add_option("--render-every", render_every_s,
+                 "--render: seconds of the session between console pictures (default 1)");
   net::AddDdsOptions(app, dds);
   if (const std::optional<int> status = net::ParseCommandLine(app, argc, argv, "microdex-replay")) {
     return *status;
   }
   if (!(wait_console_s >= 0 && wait_console_s <= 600)) {
     std::fprintf(stderr, "microdex-replay: --wait-for-console: expected 0..600 s\n");
+    return 2;
+  }
+  if (!(render_every_s >= 0.05 && render_every_s <= 3600)) {
+    std::fprintf(stderr, "microdex-replay: --render-every: expected 0.05..3600 s\n");
     return 2;
   }
   if (!(speed > 0) || speed > 1024) {
@@ -236,6 +336,45 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     po.from_s = from_s;
     po.to_s = to_s;
     po.wait_for_console_s = wait_console_s;
+    po.scene_dir = scene_dir;
+    // --render: a console of the replay's own (the instructor's registry and page server on
+    // loopback, subscribed like any console) and a headless browser drawing its page.
+    std::unique_ptr<instructor::Instructor> render_console;
+    std::unique_ptr<instructor::ConsoleServer> render_server;
+    Renderer renderer;
+    if (!render_dir.empty()) {
+      const std::size_t stations = reader.Stations().size();
+      if (stations == 0) {
+        std::fprintf(stderr, "microdex-replay: %s: --render: no station in the recording\n",
+                     file.c_str());
+        return 2;
+      }
+      if (const auto missing = instructor::MissingRecordedScenes(reader, scene_dir);
+          !missing.empty()) {
+        std::fprintf(stderr, "microdex-replay: %s: --render: station %s\n", file.c_str(),
+                     missing.front().c_str());
+        return 2;
+      }
+      instructor::InstructorOptions io;
+      io.dds = dds;
+      io.dds.participant_name = "microdex-replay-render";
+      io.issuer = "microdex-replay --render";
+      io.receive_inputs = true;  // so that every replayed writer finds its reader at once
+      render_console = std::make_unique<instructor::Instructor>(io);
+      render_server = std::make_unique<instructor::ConsoleServer>(*render_console, "127.0.0.1", 0,
+                                                                  instructor::DefaultWebDir(),
+                                                                  instructor::ConsoleSecurity{});
+      renderer = StartRenderer(render_server->port(), render_dir, render_every_s * 1e3 / speed,
+                               static_cast<int>(stations), speed);
+      if (!AwaitRendererReady(renderer, 60)) {
+        const int rc = FinishRenderer(renderer);
+        std::fprintf(stderr, "microdex-replay: --render %s: the console page did not open (%d)\n",
+                     render_dir.c_str(), rc);
+        return 2;
+      }
+      std::printf("rendering into %s: the console every %g s of the session\n", render_dir.c_str(),
+                  render_every_s);
+    }
     std::printf(
         "replaying %s: %.1f s at %gx on domain %d (keys: space pause, n step 0.1 s, "
         "+/- speed, q quit)\n",
@@ -277,7 +416,19 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     keys.join();
     std::printf("replayed %llu samples, %.1f s of the session\n",
                 static_cast<unsigned long long>(stats.published), stats.session_s);
+    for (const std::string& m : stats.scenes_missing) {
+      std::printf("scene not sent: station %s\n", m.c_str());
+    }
     std::fflush(stdout);
+    if (renderer.pid > 0) {
+      const int rc = FinishRenderer(renderer);
+      std::fflush(stdout);
+      if (rc != 0) {
+        std::fprintf(stderr, "microdex-replay: --render %s: the browser failed (exit %d)\n",
+                     render_dir.c_str(), rc);
+        return 2;
+      }
+    }
     if (stats.undecodable > 0) {
       std::fprintf(stderr, "microdex-replay: %s: %llu samples do not decode (skipped)\n",
                    file.c_str(), static_cast<unsigned long long>(stats.undecodable));

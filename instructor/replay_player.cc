@@ -4,15 +4,20 @@
 
 #include <algorithm>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <filesystem>
 #include <map>
+#include <set>
 #include <thread>
 
 #include "common/record/recorded_topics.h"
+#include "common/scene/scene.h"
+#include "common/view/scene_files.h"
 #include "cue_commandPubSubTypes.h"
 #include "cue_overlayPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "instructor/recorded_sample.h"
 #include "needle_statePubSubTypes.h"
+#include "scene_descriptionPubSubTypes.h"
 #include "scorePubSubTypes.h"
 #include "station_infoPubSubTypes.h"
 #include "task_eventPubSubTypes.h"
@@ -33,12 +38,40 @@ std::int64_t MonoNowNs() {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
+// The files of a recorded station's scene found here (FindRecordedScene) that hash to its
+// recorded scene_hash; nullopt with the reason otherwise.
+std::optional<view::SceneFiles> RecordedSceneFiles(const msg::StationInfo& s,
+                                                   const std::string& scene_dir, std::string* why) {
+  const std::string recorded = s.scene().to_string();
+  const std::string path = FindRecordedScene(recorded, scene_dir);
+  if (path.empty()) {
+    *why =
+        "scene '" + recorded + "' not found" +
+        (scene_dir.empty() ? " (give its folder with --scene-dir)" : " here nor in " + scene_dir);
+    return std::nullopt;
+  }
+  try {
+    view::SceneFiles files = view::CollectSceneFiles(scene::LoadScene(path));
+    if (files.hash != s.scene_hash()) {
+      *why = path + " is not the recorded scene (its files hash to " + view::HashHex(files.hash) +
+             ", the recording's to " + view::HashHex(s.scene_hash()) + ")";
+      return std::nullopt;
+    }
+    return files;
+  } catch (const std::exception& e) {
+    *why = path + ": " + e.what();
+    return std::nullopt;
+  }
+}
+
 // One writer per recorded topic; Publish decodes a recorded sample and writes it.
 class Publishers {
  public:
   // `stations`: one DeviceInput writer each (the profile's writer holds one instance, as a
   // station's does).
-  Publishers(net::DdsContext& context, const std::vector<std::string>& stations) {
+  Publishers(net::DdsContext& context, const std::vector<std::string>& stations,
+             std::string scene_dir)
+      : dds_(context), scene_dir_(std::move(scene_dir)) {
     net::DdsContext& dds = context;
     for (const auto& s : stations) {
       inputs_[s] = dds.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
@@ -70,6 +103,7 @@ class Publishers {
       case TopicIndex::kStationInfo: {
         msg::StationInfo s;
         if (!DecodeSample<msg::StationInfoPubSubType>(m.cdr, s)) return false;
+        Describe(s);
         info_->write(&s);
         stations_[s.station_id().to_string()] = s;
         return true;
@@ -127,6 +161,38 @@ class Publishers {
     }
   }
 
+  // Once per station, before its first StationInfo: its scene's files, when found here with
+  // the recorded hash.
+  void Describe(const msg::StationInfo& s) {
+    const std::string id = s.station_id().to_string();
+    if (s.scene_hash() == 0 || !described_.insert(id).second) return;
+    std::string why;
+    const std::optional<view::SceneFiles> files = RecordedSceneFiles(s, scene_dir_, &why);
+    if (!files) {
+      scenes_missing_.push_back(id + ": " + why);
+      return;
+    }
+    msg::SceneDescription d;
+    d.station_id(id);
+    d.session_id(s.session_id());
+    d.step(0);
+    d.stamp_ns(s.stamp_ns());
+    d.scene_path(files->scene_path);
+    d.hash(files->hash);
+    d.files().resize(files->files.size());
+    for (std::size_t i = 0; i < files->files.size(); ++i) {
+      d.files()[i].path(files->files[i].path);
+      d.files()[i].bytes().assign(files->files[i].bytes.begin(), files->files[i].bytes.end());
+    }
+    if (scene_ == nullptr) {
+      scene_ = dds_.CreateWriter<msg::SceneDescriptionPubSubType>(net::kSceneDescriptionTopic);
+    }
+    scene_->write(&d);
+    scenes_sent_.push_back(id);
+  }
+  const std::vector<std::string>& scenes_sent() const { return scenes_sent_; }
+  const std::vector<std::string>& scenes_missing() const { return scenes_missing_; }
+
   // The replayed stations leave: their StationInfo instances are disposed.
   void DisposeStations() {
     for (auto& [id, s] : stations_) info_->dispose(&s, info_->lookup_instance(&s));
@@ -145,9 +211,47 @@ class Publishers {
   std::map<TopicIndex, dds::DataWriter*> writers_;
   std::map<std::string, dds::DataWriter*> inputs_;  // by station
   std::map<std::string, msg::StationInfo> stations_;
+  net::DdsContext& dds_;
+  std::string scene_dir_;
+  dds::DataWriter* scene_ = nullptr;  // SceneDescription, once a scene is found
+  std::set<std::string> described_;
+  std::vector<std::string> scenes_sent_, scenes_missing_;
 };
 
 }  // namespace
+
+std::string FindRecordedScene(const std::string& recorded_path, const std::string& scene_dir) {
+  std::error_code ec;
+  if (!recorded_path.empty() && std::filesystem::is_regular_file(recorded_path, ec)) {
+    return recorded_path;
+  }
+  if (scene_dir.empty() || recorded_path.empty()) return "";
+  const std::string there =
+      (std::filesystem::path(scene_dir) / std::filesystem::path(recorded_path).filename()).string();
+  return std::filesystem::is_regular_file(there, ec) ? there : "";
+}
+
+std::vector<std::string> MissingRecordedScenes(record::SessionReader& reader,
+                                               const std::string& scene_dir) {
+  std::vector<std::string> out;
+  std::set<std::string> seen;
+  record::MessageFilter f;
+  f.topic = static_cast<int>(TopicIndex::kStationInfo);
+  reader.ForEach(f, [&](const record::MessageView& m) {
+    msg::StationInfo s;
+    if (!DecodeSample<msg::StationInfoPubSubType>(m.cdr, s)) return true;
+    const std::string id = s.station_id().to_string();
+    if (!seen.insert(id).second) return true;
+    std::string why;
+    if (s.scene_hash() == 0) {
+      out.push_back(id + ": the recording names no scene files");
+    } else if (!RecordedSceneFiles(s, scene_dir, &why)) {
+      out.push_back(id + ": " + why);
+    }
+    return true;
+  });
+  return out;
+}
 
 PlayerClock::PlayerClock(std::int64_t session_start_ns, double speed, NowFn now)
     : now_(now ? now : &MonoNowNs),
@@ -219,7 +323,7 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
       first_ns + (o.from_s ? static_cast<std::int64_t>(*o.from_s * 1e9) : 0);
   const std::int64_t to_ns = o.to_s ? first_ns + static_cast<std::int64_t>(*o.to_s * 1e9) : last_ns;
   net::DdsContext context(dds);
-  Publishers pub(context, reader.Stations());
+  Publishers pub(context, reader.Stations(), o.scene_dir);
   PlayStats stats;
   // A console that is listening gets the session from its start: wait for it to match (up to
   // wait_for_console_s), then restart the clock.
@@ -264,6 +368,8 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
     return true;
   });
   stats.session_s = static_cast<double>(reached - from_ns) * 1e-9;
+  stats.scenes_sent = pub.scenes_sent();
+  stats.scenes_missing = pub.scenes_missing();
   pub.DisposeStations();
   // Let reliable samples reach the readers before the participant goes.
   std::this_thread::sleep_for(std::chrono::milliseconds(200));

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/net/dds_context.h"
 #include "common/record/session_reader.h"
@@ -46,8 +47,21 @@ class PlayerClock {
   bool paused_ = false;
 };
 
+// Where a recorded station's scene is on this machine: its recorded path if that is a file,
+// else the file of the same name in scene_dir (when given); "" when neither is.
+std::string FindRecordedScene(const std::string& recorded_path, const std::string& scene_dir);
+
+// The recorded stations whose scene FindRecordedScene does not find with the recorded hash
+// (so that a console without the files could not draw it), "STATION: why" each.
+std::vector<std::string> MissingRecordedScenes(record::SessionReader& reader,
+                                               const std::string& scene_dir);
+
 struct PlayOptions {
   double speed = 1;
+  // Each station's scene is sent on SceneDescription (before its first StationInfo) when it is
+  // found here (FindRecordedScene) and its files hash to the recorded scene_hash, so that a
+  // console without the files draws it (a recording holds no scene files).
+  std::string scene_dir;
   std::optional<double> from_s, to_s;  // seconds from the session's first message
   bool republish_cues = false;         // the recorded cue commands are not sent again
   // Before playing, wait up to this long for every topic to have a reader (a console).
@@ -59,6 +73,9 @@ struct PlayStats {
   std::uint64_t undecodable = 0;
   double session_s = 0;  // session time covered
   bool console_found = false;
+  // Stations whose scene was sent, and those whose scene was not found here or differs from
+  // the recorded one ("STATION: why").
+  std::vector<std::string> scenes_sent, scenes_missing;
 };
 
 // Plays the recording until its end, `stop`, or to_s. Throws std::runtime_error for DDS

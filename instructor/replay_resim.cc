@@ -1,7 +1,5 @@
 #include "instructor/replay_resim.h"
 
-#include <sys/stat.h>
-
 #include <cstdio>
 #include <map>
 
@@ -10,6 +8,7 @@
 #include "common/state/state_hash.h"
 #include "device_inputPubSubTypes.h"
 #include "instructor/recorded_sample.h"
+#include "instructor/replay_player.h"
 #include "station/station_step.h"
 #include "station_infoPubSubTypes.h"
 #include "task_eventPubSubTypes.h"
@@ -21,11 +20,6 @@ namespace {
 using record::TopicIndex;
 
 int Index(TopicIndex t) { return static_cast<int>(t); }
-
-bool FileExists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
-}
 
 struct Run {
   std::string station, session;
@@ -103,13 +97,8 @@ void ResimulateRun(record::SessionReader& reader, const Run& run, const ResimOpt
     out.problem = "no DeviceInput recorded";
     return;
   }
-  std::string scene_path = run.scene;
-  if (!FileExists(scene_path) && !options.scene_dir.empty()) {
-    std::string name = run.scene;
-    if (const auto slash = name.rfind('/'); slash != std::string::npos) name.erase(0, slash + 1);
-    scene_path = options.scene_dir + "/" + name;
-  }
-  if (!FileExists(scene_path)) {
+  const std::string scene_path = FindRecordedScene(run.scene, options.scene_dir);
+  if (scene_path.empty()) {
     out.problem = "scene '" + run.scene + "': not found (give its folder with --scene-dir)";
     return;
   }

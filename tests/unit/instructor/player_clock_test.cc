@@ -1,7 +1,12 @@
 // The replay's PlayerClock on an injected wall clock: session time runs at the speed, stands
 // still while paused, steps only while paused, keeps its place when the speed changes, and
-// WallTimeOf answers when a session time is reached (never while paused and ahead).
+// WallTimeOf answers when a session time is reached (never while paused and ahead). And where
+// a replay finds a recorded scene (FindRecordedScene).
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "instructor/replay_player.h"
 
@@ -49,6 +54,30 @@ TEST(PlayerClock, RunsAtItsSpeedPausesStepsAndChangesSpeedInPlace) {
   c.Restart();  // the wall clock restarts; session time stays
   g_now_ns += 64 * kMs;
   EXPECT_EQ(c.SessionNowNs(), kStart + 451 * kMs);
+}
+
+// Where a replay looks for a recorded station's scene: the recorded path if it is a file, else
+// the file of that name in the scene folder; nothing for a folder, a missing file, or no path.
+TEST(FindRecordedScene, RecordedPathFirstThenByNameInTheSceneFolder) {
+  namespace fs = std::filesystem;
+  const fs::path root =
+      fs::temp_directory_path() / ("microdex-find-scene-" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "here" / "assets");
+  fs::create_directories(root / "scenes" / "a.yaml");  // a folder of that name is no scene
+  std::ofstream(root / "here" / "assets" / "a.yaml") << "name: a\n";
+  std::ofstream(root / "scenes" / "b.yaml") << "name: b\n";
+  const std::string here = (root / "here" / "assets" / "a.yaml").string();
+  const std::string dir = (root / "scenes").string();
+  EXPECT_EQ(FindRecordedScene(here, dir), here);
+  EXPECT_EQ(FindRecordedScene(here, ""), here);
+  EXPECT_EQ(FindRecordedScene("elsewhere/assets/b.yaml", dir),
+            (root / "scenes" / "b.yaml").string());
+  EXPECT_EQ(FindRecordedScene("elsewhere/assets/b.yaml", ""), "");
+  EXPECT_EQ(FindRecordedScene("elsewhere/a.yaml", dir), "");  // scenes/a.yaml is a folder
+  EXPECT_EQ(FindRecordedScene("elsewhere/c.yaml", dir), "");
+  EXPECT_EQ(FindRecordedScene("", dir), "");
+  fs::remove_all(root);
 }
 
 }  // namespace
