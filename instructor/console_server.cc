@@ -181,13 +181,24 @@ std::string ConsoleServer::HandleMessage(const std::string& message) {
   const cues::CueKind kind = cue.kind;
   const double param = cue.param;
   const bool off = cue.off;
-  if (!instructor_.Station(station)) {
+  const bool all = station == net::kAllStations;
+  if (!all && !instructor_.Station(station)) {
     throw std::invalid_argument("cue: no station '" + station.substr(0, 64) + "'");
   }
+  // One command; to every station for "all" (each acknowledges it, shown in its tile).
   const std::uint64_t id = instructor_.SendCue(station, kind, param, 0, off);
-  std::vector<SentCue>& sent = sent_[station];
-  sent.push_back({id, cues::CueKindName(kind), param, off, RealtimeNowNs()});
-  if (sent.size() > kCuesShown) sent.erase(sent.begin());
+  std::vector<std::string> targets;
+  if (all) {
+    instructor_.VisitStations(
+        [&](const StationView& v) { targets.push_back(v.info.header.station_id); });
+  } else {
+    targets.push_back(station);
+  }
+  for (const std::string& t : targets) {
+    std::vector<SentCue>& sent = sent_[t];
+    sent.push_back({id, cues::CueKindName(kind), param, off, RealtimeNowNs()});
+    if (sent.size() > kCuesShown) sent.erase(sent.begin());
+  }
   next_status_ns_ = 0;  // show it at once
   return "{\"type\":\"cue_sent\",\"station\":" + view::JsonQuote(station) +
          ",\"cue_id\":" + std::to_string(id) +

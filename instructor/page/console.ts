@@ -1,7 +1,7 @@
 // The instructor's live console: one tile per mirrored station (up to 8 drawn; click to
 // enlarge), drawn with the shared scene objects (common/view/src) at the tiles' level of
 // detail, each into a canvas of its own; a cue panel per station with the station's
-// acknowledgements; a score table.
+// acknowledgements, and one for all stations; a score table and a plot of the live scores.
 //
 // A canvas per tile, not one canvas under the whole page: with software compositing (no GPU)
 // the browser reads every WebGL canvas it presents back from the renderer, and recomposites
@@ -90,14 +90,7 @@ class Tile {
     const more = document.createElement('details');
     more.innerHTML = '<summary>more cues</summary>';
     for (const c of kinds) {
-      const row = document.createElement('div');
-      row.className = 'cue';
-      const value = PARAM_DEFAULTS[c.kind] ?? c.default;
-      const unit = c.param.split('_').slice(1).join(' ') || c.param;
-      row.innerHTML = `<span class="inforce" title="in force at the station"></span>` +
-          `<label><input type="checkbox" data-cue="${c.kind}"> ${c.kind.replace(/_/g, ' ')}</label>` +
-          `<input type="number" data-strength="${c.kind}" value="${value}" min="${c.min}" max="${c.max}" step="any" title="${c.param}">` +
-          `<span>${unit}</span>`;
+      const row = cueRow(c);
       this.inForce.set(c.bit, row.querySelector('.inforce') as HTMLElement);
       (SHOWN.includes(c.kind) ? panel : more).appendChild(row);
     }
@@ -224,6 +217,100 @@ class Tile {
   }
 }
 
+// One cue kind's switch and strength (its in-force dot lit by the tile from the station's state).
+function cueRow(c: CueKindJson): HTMLDivElement {
+  const row = document.createElement('div');
+  row.className = 'cue';
+  const value = PARAM_DEFAULTS[c.kind] ?? c.default;
+  const unit = c.param.split('_').slice(1).join(' ') || c.param;
+  row.innerHTML = `<span class="inforce" title="in force at the station"></span>` +
+      `<label><input type="checkbox" data-cue="${c.kind}"> ${c.kind.replace(/_/g, ' ')}</label>` +
+      `<input type="number" data-strength="${c.kind}" value="${value}" min="${c.min}" max="${c.max}" step="any" title="${c.param}">` +
+      `<span>${unit}</span>`;
+  return row;
+}
+
+// The panel for every station: each kind's switch sends one command addressed to all ("cue all
+// KIND PARAM|off"); every station acknowledges it in its own tile. Built once the cue kinds
+// are known.
+function buildAllPanel(section: HTMLElement, kinds: CueKindJson[], send: (m: string) => boolean): void {
+  const rows = section.querySelector('.rows') as HTMLElement;
+  const more = document.createElement('details');
+  more.innerHTML = '<summary>more cues</summary>';
+  const moreRows = document.createElement('div');
+  moreRows.className = 'rows';
+  more.appendChild(moreRows);
+  for (const c of kinds) {
+    const row = cueRow(c);
+    row.querySelector('.inforce')!.remove();
+    (SHOWN.includes(c.kind) ? rows : moreRows).appendChild(row);
+  }
+  section.appendChild(more);
+  section.addEventListener('change', (e) => {
+    const t = e.target as HTMLInputElement;
+    if (t.dataset.cue) {
+      const strength = section.querySelector(`input[data-strength="${t.dataset.cue}"]`) as HTMLInputElement;
+      send(`cue all ${t.dataset.cue} ${t.checked ? Number(strength.value) : 'off'}`);
+    } else if (t.dataset.strength) {
+      const box = section.querySelector(`input[data-cue="${t.dataset.strength}"]`) as HTMLInputElement;
+      if (box.checked) send(`cue all ${t.dataset.strength} ${Number(t.value)}`);
+    }
+  });
+}
+
+// Each trainee's live score over the session (seconds since this page first heard of the
+// station): a line per station, 0-100, redrawn at most once a second. At most kPlotPoints
+// points per station; beyond, every other one is dropped (the oldest thinned first).
+const kPlotPoints = 2000;
+const PALETTE = ['#4fc3f7', '#ffb74d', '#81c784', '#e57373', '#ba68c8', '#fff176', '#4db6ac', '#f06292'];
+class ScorePlot {
+  readonly series = new Map<string, { trainee: string; t0: number; points: [number, number][] }>();
+  private drawnAt = 0;
+  constructor(private readonly el: HTMLElement) {}
+
+  add(list: StationJson[], nowMs: number): void {
+    for (const s of list) {
+      if (s.score === undefined) continue;
+      let line = this.series.get(s.id);
+      if (!line) {
+        line = { trainee: s.trainee, t0: nowMs, points: [] };
+        this.series.set(s.id, line);
+      }
+      line.trainee = s.trainee;
+      line.points.push([(nowMs - line.t0) / 1000, s.score]);
+      if (line.points.length > kPlotPoints) line.points = line.points.filter((_, i) => i % 2 === 0);
+    }
+    if (nowMs - this.drawnAt >= 1000) {
+      this.drawnAt = nowMs;
+      this.draw();
+    }
+  }
+
+  draw(): void {
+    const W = 640, H = 170, L = 34, R = 10, T = 8, B = 22;
+    let tMax = 10;
+    for (const l of this.series.values()) tMax = Math.max(tMax, l.points.at(-1)?.[0] ?? 0);
+    const x = (t: number) => L + (W - L - R) * t / tMax;
+    const y = (v: number) => T + (H - T - B) * (1 - Math.min(Math.max(v, 0), 100) / 100);
+    let svg = `<svg width="${W}" height="${H}" viewBox="0 0 ${W} ${H}" font-size="10" fill="#9aa">`;
+    for (const v of [0, 50, 100]) {
+      svg += `<line x1="${L}" x2="${W - R}" y1="${y(v)}" y2="${y(v)}" stroke="#333"/>` +
+          `<text x="${L - 4}" y="${y(v) + 3}" text-anchor="end">${v}</text>`;
+    }
+    svg += `<text x="${W - R}" y="${H - 6}" text-anchor="end">${tMax.toFixed(0)} s</text>` +
+        `<text x="${L}" y="${H - 6}">0 s</text>`;
+    let legend = '';
+    let k = 0;
+    for (const [id, l] of this.series) {
+      const colour = PALETTE[k++ % PALETTE.length];
+      const pts = l.points.map(([t, v]) => `${x(t).toFixed(1)},${y(v).toFixed(1)}`).join(' ');
+      svg += `<polyline data-station="${esc(id)}" points="${pts}" fill="none" stroke="${colour}" stroke-width="1.5"/>`;
+      legend += `<span style="color:${colour}">— ${esc(l.trainee)} (${esc(id)}) ${l.points.at(-1)?.[1].toFixed(1) ?? ''}</span>`;
+    }
+    this.el.innerHTML = `<div>score over the session</div>${svg}</svg><div class="legend">${legend}</div>`;
+  }
+}
+
 // A scene's name for a caption: its file name without the folder and the .yaml extension.
 function sceneName(path: string): string {
   return (path.split('/').pop() ?? '').replace(/\.ya?ml$/, '');
@@ -251,6 +338,9 @@ function main(): void {
   };
   let rejectedHtml = '';
   (window as any).microdexConsole = probe;
+  const allPanel = document.getElementById('all')!;
+  let allBuilt = false;
+  const plot = new ScorePlot(document.getElementById('plot')!);
 
   const link = new FrameLink(socketUrl(), 'frame_worker.js', {
     onText(m) {
@@ -258,6 +348,11 @@ function main(): void {
         const list = m.stations as StationJson[];
         probe.stations = list;
         slots = list.map((s) => s.id);
+        if (!allBuilt && (m.cue_kinds ?? []).length > 0) {
+          allBuilt = true;
+          buildAllPanel(allPanel, m.cue_kinds as CueKindJson[], (text) => link.send(text));
+        }
+        plot.add(list, performance.now());
         for (const s of list.slice(0, MAX_TILES)) {
           let tile = tiles.get(s.id);
           if (!tile) {

@@ -1,7 +1,9 @@
 // The instructor's console in headless Chromium: three live stations on three scenes are
 // mirrored as three drawn tiles with their scores; switching a cue on for one station shows
 // that station's acknowledgement (applied at step N) beside the command, and the station's
-// state reports the cue in force; the other stations get none. A bad cue gets an error.
+// state reports the cue in force; the other stations get none. A bad cue gets an error. A
+// cue from the all-stations panel is one command that every station acknowledges in its tile;
+// the score plot draws a line per station.
 // The instructor runs in a folder of its own where the stations' scene paths (relative to
 // theirs) lead nowhere: it draws their scenes from the SceneDescription topic alone.
 // node console_view_test.mjs --bin BUILD/bin --out DIR
@@ -130,6 +132,35 @@ try {
   check(reply && reply.includes('stiffness'), `an out-of-range cue is refused: "${reply}"`);
   const kinds = await tile.locator('input[data-cue]').count();
   check(kinds === 13, `the panel offers every cue kind but clear (${kinds})`);
+
+  // The panel for all stations: one command, acknowledged by each station in its own tile.
+  const all = page.locator('#all');
+  check(await all.locator('input[data-cue]').count() === kinds, 'the all-stations panel offers the same cue kinds');
+  await all.locator('input[data-strength="amplified_tremor"]').fill('2.5');
+  await all.locator('input[data-cue="amplified_tremor"]').check();
+  for (const id of ids) {
+    const t = await waitFor(async () => {
+      const texts = await page.locator(`.tile[data-station="${id}"] .ack`).allTextContents();
+      return texts.find((x) => /amplified_tremor 2\.5 → applied at step \d+/.test(x)) ?? null;
+    }, `station ${id} acknowledging the cue sent to all`, 20000);
+    check(true, `station ${id} acknowledges the cue sent to all ("${t}")`);
+  }
+  const allIds = await page.evaluate(() => [...document.querySelectorAll('.tile')].map((t) =>
+    [...t.querySelectorAll('.ack')].filter((a) => a.textContent.includes('amplified_tremor 2.5'))
+      .map((a) => a.dataset.cueId)).flat());
+  check(allIds.length === ids.length && new Set(allIds).size === 1,
+        `one command (cue #${allIds[0]}) for all three stations`);
+  await all.locator('input[data-cue="amplified_tremor"]').uncheck();
+
+  // The score plot: a line per station, with the scores heard so far.
+  const lines = await waitFor(() => page.evaluate((n) => {
+    const ps = [...document.querySelectorAll('#plot polyline')];
+    return ps.length === n && ps.every((p) => p.getAttribute('points').split(' ').length >= 4)
+      ? ps.map((p) => [p.dataset.station, p.getAttribute('points').split(' ').length]) : null;
+  }, ids.length), 'a score line per station', 20000);
+  check(JSON.stringify(lines.map((l) => l[0]).sort()) === JSON.stringify([...ids].sort()),
+        `the score plot has a line per station (${lines.map((l) => l.join(': ')).join(', ')} points)`);
+  await page.locator('#plot').screenshot({ path: join(a.out, 'console_score_plot.png') });
 
   // Enlarge a tile by clicking it.
   const before = await tile.locator('.viewport').boundingBox();
