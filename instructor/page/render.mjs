@@ -10,15 +10,9 @@
 // standard input closes (the replay has ended) it saves a last picture, then each station's
 // tile enlarged as DIR/station_ID.png, and exits 0; 1 when the page never showed the N
 // stations.
-import { createRequire } from 'node:module';
-import { appendFileSync, mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
-import { tmpdir } from 'node:os';
-import { dirname, join } from 'node:path';
-import { fileURLToPath } from 'node:url';
-
-const here = dirname(fileURLToPath(import.meta.url));
-const require = createRequire(join(here, '../../common/view/package.json'));
-const { chromium } = require('playwright-core');
+import { appendFileSync, mkdirSync, writeFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { openHeadless } from '../../common/view/headless.mjs';
 
 const opt = { 'every-ms': '1000', stations: '1', speed: '1', width: '1280', height: '720' };
 for (let i = 2; i + 1 < process.argv.length; i += 2) opt[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
@@ -37,19 +31,11 @@ process.stdin.on('error', () => { ended = true; });
 process.on('SIGTERM', () => { ended = true; });
 
 const csvField = (s) => (/[",\n]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s);
-const profile = mkdtempSync(join(tmpdir(), 'microdex-render-'));
 let status = 0;
-let context;
+let browser;
 try {
-  context = await chromium.launchPersistentContext(profile, {
-    executablePath: process.env.MICRODEX_CHROMIUM || '/usr/bin/chromium',
-    headless: true,
-    viewport: { width: Number(opt.width), height: Number(opt.height) },
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-           '--disable-background-networking', '--disable-component-update', '--disable-sync',
-           '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-  });
-  const page = await context.newPage();
+  browser = await openHeadless({ width: Number(opt.width), height: Number(opt.height) });
+  const { page } = browser;
   await page.goto(opt.url);
   await page.waitForFunction(() => window.microdexConsole !== undefined, null, { timeout: 30000 });
   const t0 = Date.now();
@@ -100,7 +86,6 @@ try {
   console.error(`render: ${String(e.message ?? e).split('\n')[0]}`);
   status = 1;
 } finally {
-  await context?.close().catch(() => undefined);
-  rmSync(profile, { recursive: true, force: true });
+  await browser?.close();
 }
 process.exit(status);
