@@ -8,6 +8,32 @@
 #include "common/net/messages.h"
 
 namespace microdex::instructor {
+namespace {
+
+std::string Num(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+// A number field of a message: finite, or the reason.
+double ParseNumber(const std::string& text, const char* what) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !std::isfinite(v)) {
+    throw std::invalid_argument(std::string(what) + " '" + text.substr(0, 64) +
+                                "' is not a number");
+  }
+  return v;
+}
+
+void CheckSpeed(double speed) {
+  if (!(speed >= 1.0 / 64 && speed <= 1024)) {
+    throw std::invalid_argument("replay: SPEED " + Num(speed) + " outside 1/64 … 1024");
+  }
+}
+
+}  // namespace
 
 ConsoleCue ParseConsoleMessage(const std::string& message) {
   std::istringstream in(message);
@@ -42,6 +68,95 @@ ConsoleCue ParseConsoleMessage(const std::string& message) {
     throw std::invalid_argument("cue: " + why);
   }
   return cue;
+}
+
+bool IsSessionMessage(const std::string& message) {
+  std::istringstream in(message);
+  std::string verb;
+  in >> verb;
+  return verb == "record" || verb == "replay";
+}
+
+std::string CheckRecordingName(const std::string& name) {
+  if (name.empty()) return "an empty name";
+  if (name.size() > 96) return "longer than 96 characters";
+  if (name.front() == '.') return "starts with '.'";
+  for (const char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == '-';
+    if (!ok) return "has a character other than letters, digits, '.', '_' and '-'";
+  }
+  if (!name.ends_with(".db") || name.size() == 3) return "does not end in .db";
+  return "";
+}
+
+SessionCommand ParseSessionMessage(const std::string& message) {
+  std::istringstream in(message);
+  std::string verb, what;
+  in >> verb >> what;
+  std::vector<std::string> rest;
+  for (std::string w; in >> w;) rest.push_back(w);
+  SessionCommand c;
+  const auto too_many = [&](std::size_t n) {
+    if (rest.size() > n) {
+      throw std::invalid_argument(verb + " " + what + ": unexpected '" + rest[n].substr(0, 64) +
+                                  "'");
+    }
+  };
+  if (verb == "record") {
+    if (what == "start") {
+      too_many(1);
+      c.verb = SessionCommand::Verb::kRecordStart;
+      if (!rest.empty()) {
+        c.file = rest[0].ends_with(".db") ? rest[0] : rest[0] + ".db";
+        if (const std::string why = CheckRecordingName(c.file); !why.empty()) {
+          throw std::invalid_argument("record start: NAME '" + rest[0].substr(0, 64) + "' " + why);
+        }
+      }
+      return c;
+    }
+    if (what == "stop") {
+      too_many(0);
+      c.verb = SessionCommand::Verb::kRecordStop;
+      return c;
+    }
+    throw std::invalid_argument("record: expected 'record start [NAME]' or 'record stop'");
+  }
+  if (verb == "replay") {
+    if (what == "play") {
+      too_many(3);
+      if (rest.empty()) throw std::invalid_argument("replay play: expected FILE");
+      c.verb = SessionCommand::Verb::kReplayPlay;
+      c.file = rest[0];
+      if (const std::string why = CheckRecordingName(c.file); !why.empty()) {
+        throw std::invalid_argument("replay play: FILE '" + c.file.substr(0, 64) + "' " + why);
+      }
+      if (rest.size() > 1) c.speed = ParseNumber(rest[1], "replay play: SPEED");
+      CheckSpeed(c.speed);
+      if (rest.size() > 2) c.from_s = ParseNumber(rest[2], "replay play: FROM_S");
+      if (c.from_s < 0) throw std::invalid_argument("replay play: FROM_S below 0");
+      return c;
+    }
+    if (what == "pause" || what == "stop") {
+      too_many(0);
+      c.verb =
+          what == "pause" ? SessionCommand::Verb::kReplayPause : SessionCommand::Verb::kReplayStop;
+      return c;
+    }
+    if (what == "speed") {
+      too_many(1);
+      if (rest.empty()) throw std::invalid_argument("replay speed: expected SPEED");
+      c.verb = SessionCommand::Verb::kReplaySpeed;
+      c.speed = ParseNumber(rest[0], "replay speed: SPEED");
+      CheckSpeed(c.speed);
+      return c;
+    }
+    throw std::invalid_argument(
+        "replay: expected 'replay play FILE [SPEED [FROM_S]]', 'replay pause', 'replay speed "
+        "SPEED' or 'replay stop'");
+  }
+  throw std::invalid_argument("unknown message '" + verb.substr(0, 32) +
+                              "' (expected record or replay)");
 }
 
 }  // namespace microdex::instructor

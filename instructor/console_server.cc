@@ -52,8 +52,10 @@ std::string DefaultWebDir() {
 }
 
 ConsoleServer::ConsoleServer(Instructor& instructor, const std::string& address, int port,
-                             const std::string& web_dir, const ConsoleSecurity& security)
+                             const std::string& web_dir, const ConsoleSecurity& security,
+                             SessionControl* session)
     : instructor_(instructor),
+      session_(session),
       scene_dir_((std::filesystem::temp_directory_path() /
                   ("microdex-console-scenes-" + std::to_string(getpid())))
                      .string()) {
@@ -171,11 +173,33 @@ std::string ConsoleServer::HandleClientMessage(const std::string& session_token,
       throw std::invalid_argument("cue: user '" + s->user + "' is an " + RoleName(s->role) +
                                   "; only an instructor sends cues");
     }
+    if (IsSessionMessage(message) && s->role != Role::kInstructor) {
+      throw std::invalid_argument("session: user '" + s->user + "' is an " + RoleName(s->role) +
+                                  "; only an instructor records and replays");
+    }
   }
   return HandleMessage(message);
 }
 
 std::string ConsoleServer::HandleMessage(const std::string& message) {
+  if (IsSessionMessage(message)) {
+    if (session_ == nullptr) {
+      throw std::invalid_argument(
+          "record/replay: this console has no recording folder (microdex-instructor "
+          "--record-dir DIR)");
+    }
+    const SessionCommand command = ParseSessionMessage(message);
+    std::string reply;
+    try {
+      reply = session_->Handle(command);
+    } catch (const std::logic_error& e) {
+      throw std::invalid_argument(e.what());  // refused
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(e.what());  // the file could not be made or read
+    }
+    next_status_ns_ = 0;  // show it at once
+    return reply;
+  }
   const ConsoleCue cue = ParseConsoleMessage(message);
   const std::string& station = cue.station;
   const cues::CueKind kind = cue.kind;
@@ -244,7 +268,9 @@ std::string ConsoleServer::StatusJsonHead() const {
   }
   rej += "},\"latest\":" + view::JsonQuote(latest) + "}";
   return "{\"type\":\"stations\",\"issuer_session\":" + view::JsonQuote(instructor_.session_id()) +
-         ",\"cue_kinds\":" + CueKindsJson() + ",\"rejected\":" + rej + ",\"stations\":[";
+         ",\"cue_kinds\":" + CueKindsJson() + ",\"rejected\":" + rej +
+         ",\"session\":" + (session_ ? session_->StatusJson() : std::string("null")) +
+         ",\"stations\":[";
 }
 
 void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, std::int64_t now_ns,

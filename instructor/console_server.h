@@ -6,7 +6,8 @@
 // kinds with their parameter limits, and per station trainee, scene, presence, loop health, live
 // score, and the cues this console sent with the station's acknowledgement (applied at step N, or
 // rejected and why). The page sends "cue STATION KIND PARAM|off" (every kind of
-// common/cues/cue_kind.h). The scene of a station (/scene/ID.json) comes from the files it
+// common/cues/cue_kind.h), and, with session controls, "record ..." and "replay ..."
+// (console_session.h). The scene of a station (/scene/ID.json) comes from the files it
 // sent on the SceneDescription topic, checked against the hash in its StationInfo, written
 // under a folder of this console's own and loaded there: the console needs none of the
 // station's files.
@@ -28,6 +29,7 @@
 #include "common/view/view_frame.h"
 #include "common/view/view_server.h"
 #include "instructor/console_auth.h"
+#include "instructor/console_session.h"
 #include "instructor/instructor.h"
 
 namespace microdex::instructor {
@@ -80,8 +82,11 @@ class ConsoleServer {
   static constexpr std::size_t kCuesShown = 8;  // per station, the latest
 
   // Throws std::runtime_error when the pages are missing or the port cannot be bound.
+  // `session`: the recording and replay controls (console_session.h), or nullptr for none;
+  // it must outlive the server.
   ConsoleServer(Instructor& instructor, const std::string& address, int port,
-                const std::string& web_dir, const ConsoleSecurity& security = {});
+                const std::string& web_dir, const ConsoleSecurity& security = {},
+                SessionControl* session = nullptr);
   ~ConsoleServer();
   ConsoleServer(const ConsoleServer&) = delete;
   ConsoleServer& operator=(const ConsoleServer&) = delete;
@@ -94,8 +99,8 @@ class ConsoleServer {
   std::string StatusJsonHead() const;
   void AppendStationJson(const StationView& v, std::size_t slot, std::int64_t now_ns,
                          std::string& out) const;
-  // The same from a logged-in page: its session must still be valid, and a cue needs the
-  // instructor role (throws std::invalid_argument otherwise).
+  // The same from a logged-in page: its session must still be valid, and a cue, a recording
+  // or a replay needs the instructor role (throws std::invalid_argument otherwise).
   std::string HandleClientMessage(const std::string& session_token, const std::string& message);
   bool https() const { return https_; }
 
@@ -111,6 +116,7 @@ class ConsoleServer {
   std::optional<view::WebFile> SceneFor(const std::string& station_id);
 
   Instructor& instructor_;
+  SessionControl* session_ = nullptr;
   std::map<std::string, std::vector<SentCue>> sent_;  // by station
   std::map<std::string, FrameForwarder> forwarders_;  // by station
   std::map<std::uint64_t, std::string> scene_json_;   // by the scene files' hash

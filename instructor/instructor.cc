@@ -187,14 +187,8 @@ Instructor::Instructor(const InstructorOptions& options)
                  std::to_string(getpid()))
                     .substr(0, 64);
   Dds& d = *dds_;
-  if (!options_.record_file.empty()) {
-    recorder_ = std::make_unique<record::Recorder>(
-        options_.record_file,
-        std::map<std::string, std::string>{{"recorder_session", session_id_},
-                                           {"issuer", options_.issuer},
-                                           {"dds_domain", std::to_string(options_.dds.domain_id)},
-                                           {"dds_partition", options_.dds.partition}},
-        options_.recorder);
+  ready_ = options_.recording_ready || !options_.record_file.empty();
+  if (ready_) {
     d.types.emplace_back(new msg::StationInfoPubSubType());
     d.types.emplace_back(new msg::DeviceInputPubSubType());
     d.types.emplace_back(new msg::ToolStatePubSubType());
@@ -212,6 +206,7 @@ Instructor::Instructor(const InstructorOptions& options)
                      record::KnownTopics()[static_cast<std::size_t>(i)].type);
     }
   }
+  if (!options_.record_file.empty()) StartRecording(options_.record_file);
   net::DdsOptions dds_options = options_.dds;
   dds_options.participant_listener = &d.writer_partitions;
   d.context = std::make_unique<net::DdsContext>(dds_options);
@@ -221,9 +216,9 @@ Instructor::Instructor(const InstructorOptions& options)
   d.info = d.context->CreateReader<msg::StationInfoPubSubType>(net::kStationInfoTopic);
   // Recording: readers that keep every sample until it is taken (net::RecordingReaderSpec).
   const auto spec = [&](const net::TopicSpec& s) {
-    return recorder_ ? net::RecordingReaderSpec(s) : s;
+    return ready_ ? net::RecordingReaderSpec(s) : s;
   };
-  if (recorder_ || options_.receive_inputs) {
+  if (ready_ || options_.receive_inputs) {
     d.input = d.context->CreateReader<msg::DeviceInputPubSubType>(spec(net::kDeviceInputTopic));
   }
   d.tool = d.context->CreateReader<msg::ToolStatePubSubType>(spec(net::kToolStateTopic));
@@ -236,7 +231,7 @@ Instructor::Instructor(const InstructorOptions& options)
   d.scene = d.context->CreateReader<msg::SceneDescriptionPubSubType>(net::kSceneDescriptionTopic);
   d.overlay = d.context->CreateReader<msg::CueOverlayPubSubType>(spec(net::kCueOverlayTopic));
   d.cue = d.context->CreateWriter<msg::CueCommandPubSubType>(net::kCueCommandTopic);
-  if (recorder_) {
+  if (ready_) {
     // DeviceForce: the bridge's writer is best-effort and latest-only; read with a deep
     // best-effort history so that none is replaced before it is taken.
     net::TopicSpec force = net::kDeviceForceTopic;
@@ -486,7 +481,9 @@ void Instructor::HandleLiveliness() {
 
 template <class Msg>
 void Instructor::Record(int topic, Msg& m, const void* sample_info) {
-  if (!recorder_) return;
+  // StationInfo is kept even while not recording: a recording begun later starts with it.
+  const bool info = topic == static_cast<int>(record::TopicIndex::kStationInfo);
+  if (!ready_ || (!info && !recording_.load(std::memory_order_relaxed))) return;
   const auto& si = *static_cast<const dds::SampleInfo*>(sample_info);
   Dds& d = *dds_;
   dds::TopicDataType& type = *d.types[static_cast<std::size_t>(topic)];
@@ -507,7 +504,9 @@ void Instructor::Record(int topic, Msg& m, const void* sample_info) {
   r.sequence = si.sample_identity.sequence_number().to64long();
   r.step = m.step();
   r.cdr.assign(d.payload.data, d.payload.data + d.payload.length);
-  recorder_->Push(std::move(r));
+  std::lock_guard<std::mutex> lock(recorder_mutex_);
+  if (info) latest_info_[r.station] = r;
+  if (recorder_) recorder_->Push(std::move(r));
 }
 
 template <class Msg, class Plain>
@@ -599,7 +598,10 @@ void Instructor::HandleInputs() {
       v.inputs_lost += p.header.step - v.last_input_step - 1;
       gaps_.push_back({p.header.station_id, p.header.session_id, v.last_input_step + 1,
                        p.header.step - 1, RealtimeNowNs()});
-      if (recorder_) recorder_->SetMetadata("input_gaps", FormatInputGaps(gaps_));
+      if (const auto rec = CurrentRecorder()) {
+        rec->SetMetadata("input_gaps",
+                         FormatInputGaps(gaps_, recording_started_realtime_ns_.load()));
+      }
     }
     v.last_input_step = p.header.step;
   }
@@ -712,26 +714,104 @@ std::vector<std::uint64_t> Instructor::SendCondition(const std::string& station_
   return ids;
 }
 
+std::shared_ptr<record::Recorder> Instructor::CurrentRecorder() const {
+  std::lock_guard<std::mutex> lock(recorder_mutex_);
+  return recorder_;
+}
+
 std::optional<record::RecorderStats> Instructor::RecorderStats() const {
-  if (!recorder_) return std::nullopt;
-  return recorder_->stats();
+  const auto rec = CurrentRecorder();
+  if (!rec) return std::nullopt;
+  return rec->stats();
 }
 
 void Instructor::RecordRejected(bool now) {
-  if (!recorder_) return;
+  const auto rec = CurrentRecorder();
+  if (!rec) return;
   const std::int64_t t = MonotonicNowNs();
   std::lock_guard<std::mutex> lock(mutex_);
   if (rejected_.total == rejected_recorded_ || (!now && t < next_rejected_record_ns_)) return;
   rejected_recorded_ = rejected_.total;
   next_rejected_record_ns_ = t + kRejectedRecordPeriod_ns;
-  recorder_->SetMetadata("rejected_samples", FormatRejectedMetadata(rejected_));
-  recorder_->SetMetadata("rejected_latest", rejected_.last_reason);
+  rec->SetMetadata("rejected_samples", FormatRejectedMetadata(rejected_));
+  rec->SetMetadata("rejected_latest", rejected_.last_reason);
 }
 
 void Instructor::FlushRecording() {
-  if (!recorder_) return;
+  const auto rec = CurrentRecorder();
+  if (!rec) return;
   RecordRejected(true);
-  recorder_->Flush();
+  rec->Flush();
+}
+
+void Instructor::StartRecording(const std::string& path) {
+  if (!ready_) {
+    throw std::logic_error(
+        "record: this console was not started ready to record (microdex-instructor "
+        "--record-dir DIR or --record FILE)");
+  }
+  if (recording_.load()) {
+    throw std::logic_error("record: already recording to " + RecordingPath());
+  }
+  // The file is made here, on the caller's thread (the DDS thread never waits for a disk).
+  auto rec = std::make_shared<record::Recorder>(
+      path,
+      std::map<std::string, std::string>{{"recorder_session", session_id_},
+                                         {"issuer", options_.issuer},
+                                         {"dds_domain", std::to_string(options_.dds.domain_id)},
+                                         {"dds_partition", options_.dds.partition}},
+      options_.recorder);
+  std::vector<std::string> alive;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [id, v] : stations_) {
+      if (v.presence == Presence::kAlive) alive.push_back(id);
+    }
+    rejected_recorded_ = 0;  // the counts so far go into the new file too
+    next_rejected_record_ns_ = 0;
+  }
+  const std::int64_t now_realtime = RealtimeNowNs();
+  std::lock_guard<std::mutex> lock(recorder_mutex_);
+  if (recorder_) throw std::logic_error("record: already recording to " + recorder_->path());
+  // The stations alive now are announced first, as received, at the recording's start.
+  for (const std::string& id : alive) {
+    const auto it = latest_info_.find(id);
+    if (it == latest_info_.end()) continue;
+    record::RecordedMessage m = it->second;
+    m.receive_ns = now_realtime;
+    rec->Push(std::move(m));
+  }
+  recorder_ = std::move(rec);
+  recording_started_ns_ = MonotonicNowNs();
+  recording_started_realtime_ns_ = now_realtime;
+  recording_.store(true);
+}
+
+std::optional<record::RecorderStats> Instructor::StopRecording() {
+  if (!CurrentRecorder()) return std::nullopt;
+  RecordRejected(true);
+  std::shared_ptr<record::Recorder> rec;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> rlock(recorder_mutex_);
+    if (!recorder_) return std::nullopt;
+    rec = std::move(recorder_);
+    recorder_.reset();
+    recording_.store(false);
+    rec->SetMetadata("input_gaps", FormatInputGaps(gaps_, recording_started_realtime_ns_.load()));
+  }
+  rec->Flush();
+  return rec->stats();  // the file closes with the last reference
+}
+
+std::string Instructor::RecordingPath() const {
+  const auto rec = CurrentRecorder();
+  return rec ? rec->path() : "";
+}
+
+std::int64_t Instructor::RecordingStartedNs() const {
+  std::lock_guard<std::mutex> lock(recorder_mutex_);
+  return recorder_ ? recording_started_ns_.load() : 0;
 }
 
 std::vector<StationView> Instructor::Stations() const {
@@ -880,9 +960,10 @@ std::string FormatRejectedMetadata(const RejectedSamples& rejected) {
   return out;
 }
 
-std::string FormatInputGaps(const std::vector<InputGap>& gaps) {
+std::string FormatInputGaps(const std::vector<InputGap>& gaps, std::int64_t from_realtime_ns) {
   std::string out;
   for (const auto& g : gaps) {
+    if (g.receive_ns < from_realtime_ns) continue;
     out += g.station_id + " " + g.session_id + " " + std::to_string(g.first_missing_step) + " " +
            std::to_string(g.last_missing_step) + " " + std::to_string(g.receive_ns) + "\n";
   }

@@ -34,8 +34,14 @@ struct InstructorOptions {
   net::DdsOptions dds;
   std::string issuer = "instructor";
   bool record_latency = false;  // keep state-latency samples (benchmark)
-  // Record every sample of every station, and the cues sent, to this SQLite file ("": none).
+  // Record every sample of every station, and the cues sent, to this SQLite file from the start
+  // ("": none).
   std::string record_file;
+  // Read the stations' topics as a recording needs them from the start (the recording readers:
+  // reliable, deep; DeviceInput and DeviceForce taken), so that StartRecording may begin a
+  // recording at any time. Implied by record_file. A console that is not ready keeps the
+  // lighter best-effort readers and cannot record.
+  bool recording_ready = false;
   record::RecorderConfig recorder;
   // Take every station's DeviceInput (1 kHz each: counted, gaps marked) even when not
   // recording. A recording always takes them; a console without one draws the mirrored states
@@ -190,11 +196,25 @@ class Instructor {
   // DeviceInput gaps seen so far, in arrival order.
   std::vector<InputGap> InputGaps() const;
 
-  // The recorder's counters (record_file only); nullopt without a recording.
+  // The recorder's counters; nullopt while not recording.
   std::optional<record::RecorderStats> RecorderStats() const;
   // Writes what the recorder holds, with the rejected counts so far, and waits for the commit
-  // (record_file only).
+  // (nothing while not recording).
   void FlushRecording();
+
+  bool recording_ready() const { return ready_; }
+  // Starts recording into a new SQLite file at `path`: first the StationInfo of every station
+  // alive now (so that a replay announces them), then every sample as it arrives. Throws
+  // std::logic_error when the console is not recording-ready or already records,
+  // std::runtime_error "PATH: reason" when the file cannot be created (an existing file is
+  // never overwritten).
+  void StartRecording(const std::string& path);
+  // Ends the recording: writes what is queued, with the rejected counts and input gaps, closes
+  // the file and returns its final counters (nullopt when none was running).
+  std::optional<record::RecorderStats> StopRecording();
+  // The file being recorded ("" while not recording) and when it began (CLOCK_MONOTONIC, ns).
+  std::string RecordingPath() const;
+  std::int64_t RecordingStartedNs() const;
 
  private:
   struct Dds;
@@ -239,8 +259,19 @@ class Instructor {
   static void MarkLost(StationView& v, LossSignal signal, std::int64_t now_ns);
 
   InstructorOptions options_;
+  bool ready_ = false;  // recording_ready or record_file
   std::string session_id_;
-  std::unique_ptr<record::Recorder> recorder_;  // before dds_: outlives the DDS thread
+  // The running recording, if any; swapped by StartRecording / StopRecording on any thread,
+  // pushed to by the DDS thread, under recorder_mutex_ (taken after mutex_ when both are).
+  mutable std::mutex recorder_mutex_;
+  std::shared_ptr<record::Recorder> recorder_;  // before dds_: outlives the DDS thread
+  std::atomic<std::int64_t> recording_started_ns_{0};
+  std::atomic<std::int64_t> recording_started_realtime_ns_{0};
+  std::atomic<bool> recording_{false};  // recorder_ set: the DDS thread's test without the lock
+  // The latest StationInfo of each station as recorded (recording-ready only), for the start of
+  // a recording begun later (recorder_mutex_).
+  std::map<std::string, record::RecordedMessage> latest_info_;
+  std::shared_ptr<record::Recorder> CurrentRecorder() const;
   std::unique_ptr<Dds> dds_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> next_cue_id_{1};
@@ -270,8 +301,8 @@ std::string FormatRejected(const RejectedSamples& rejected);
 std::string FormatRejectedMetadata(const RejectedSamples& rejected);
 
 // The recording's "input_gaps" metadata: one line per gap, "STATION SESSION FIRST_MISSING_STEP
-// LAST_MISSING_STEP RECEIVE_NS".
-std::string FormatInputGaps(const std::vector<InputGap>& gaps);
+// LAST_MISSING_STEP RECEIVE_NS"; only the gaps received at or after from_realtime_ns.
+std::string FormatInputGaps(const std::vector<InputGap>& gaps, std::int64_t from_realtime_ns = 0);
 
 // CLOCK_MONOTONIC now, ns (the clock of the *_ns fields above).
 std::int64_t MonotonicNowNs();

@@ -91,6 +91,13 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   app.add_option("--record", o.record_file,
                  "record the session (every station's topics, the cues sent) to this new SQLite "
                  "file; see microdex-replay");
+  std::string record_dir, scene_dir;
+  app.add_option("--record-dir", record_dir,
+                 "recording and replay from the console page (--http): recordings start and "
+                 "stop there, into this folder (made when missing), and replay from it");
+  app.add_option("--scene-dir", scene_dir,
+                 "with --record-dir: where a replay looks for a recorded scene by its file name "
+                 "when its recorded path is not there");
   std::string db_url, course, experiment_file;
   app.add_option("--db", db_url,
                  "scores database: an SQLite file (one per course; created when missing) or "
@@ -143,6 +150,13 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     std::fprintf(stderr, "microdex-instructor: expected --headless and/or --http PORT\n");
     return 2;
   }
+  if (!record_dir.empty() && http_port < 0) {
+    std::fprintf(stderr,
+                 "microdex-instructor: --record-dir: the controls are on the console "
+                 "page: expected --http PORT\n");
+    return 2;
+  }
+  o.recording_ready = !record_dir.empty();
   if (http_port > 65535) {
     std::fprintf(stderr, "microdex-instructor: --http: expected a port 0..65535\n");
     return 2;
@@ -189,10 +203,16 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
 
   try {
     instructor::Instructor console(o);
+    std::unique_ptr<instructor::SessionControl> session;
+    if (!record_dir.empty()) {
+      session = std::make_unique<instructor::SessionControl>(console, record_dir, o.dds, scene_dir);
+      std::printf("recordings: %s\n", record_dir.c_str());
+    }
     std::unique_ptr<instructor::ConsoleServer> web;
     if (http_port >= 0) {
       web = std::make_unique<instructor::ConsoleServer>(console, http_address, http_port,
-                                                        instructor::DefaultWebDir(), web_security);
+                                                        instructor::DefaultWebDir(), web_security,
+                                                        session.get());
       std::printf("console: %s://%s:%u/\n", web->https() ? "https" : "http", http_address.c_str(),
                   unsigned{web->port()});
     }
@@ -285,11 +305,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                   static_cast<unsigned long long>(g.first_missing_step),
                   static_cast<unsigned long long>(g.last_missing_step));
     }
-    if (const auto rs = console.RecorderStats()) {
-      console.FlushRecording();
-      const auto r = *console.RecorderStats();
+    web.reset();      // no more page commands
+    session.reset();  // a replay playing stops
+    if (const std::string recording = console.RecordingPath(); !recording.empty()) {
+      const auto r = *console.StopRecording();
       std::printf("recorded %llu samples to %s (%llu dropped%s%s)\n",
-                  static_cast<unsigned long long>(r.written), o.record_file.c_str(),
+                  static_cast<unsigned long long>(r.written), recording.c_str(),
                   static_cast<unsigned long long>(r.dropped),
                   r.error.empty() ? "" : "; error: ", r.error.c_str());
       if (!r.error.empty()) {

@@ -311,6 +311,115 @@ class ScorePlot {
   }
 }
 
+// The recording and replay controls (microdex-instructor --record-dir DIR; the server's
+// console_session.h): start and stop a recording into DIR, DIR's recordings with a play button
+// each, and the replay playing (progress, pause, speed, stop). The server refuses what cannot
+// be done (a replay while recording, a replay of a station that is live here, ...) and the
+// reason shows under the controls.
+interface RecordingJson { file: string; bytes: number; seconds: number; stations: string[]; recording: boolean; error: string }
+interface SessionJson {
+  record_dir: string; ready: boolean; can_replay: boolean;
+  recording: null | { file: string; seconds: number; written: number; dropped: number; error: string };
+  last_recording: null | { file: string; written: number; dropped: number };
+  replay: null | { file: string; stations: string[]; length_s: number; position_s: number; speed: number;
+    paused: boolean; done: boolean; published?: number; stopped?: boolean; error?: string; scenes_missing?: string[] };
+  recordings: RecordingJson[];
+}
+const SPEEDS = [0.25, 0.5, 1, 2, 4, 8];
+class SessionPanel {
+  private built = false;
+  private listHtml = '';
+  private statusHtml = '';
+  private replayHtml = '';
+  messages: string[] = []; // the server's replies and refusals, latest last
+  constructor(private readonly el: HTMLElement, private readonly send: (m: string) => boolean) {}
+
+  update(session: SessionJson | null): void {
+    const body = this.el.querySelector('.body') as HTMLElement;
+    if (!session) {
+      const text = 'not available: start the console with --record-dir DIR to record and replay from here';
+      if (body.textContent !== text) body.textContent = text;
+      return;
+    }
+    if (!this.built) this.build(body);
+    const rec = session.recording;
+    const busy = session.replay !== null && !session.replay.done;
+    (body.querySelector('#rec-start') as HTMLButtonElement).disabled = rec !== null || busy;
+    (body.querySelector('#rec-stop') as HTMLButtonElement).disabled = rec === null;
+    const status = rec
+        ? `<span class="rec-on">● recording ${esc(rec.file)}</span> · ${rec.seconds.toFixed(1)} s · ${rec.written} samples written` +
+          (rec.dropped ? ` · <span class="lost">${rec.dropped} dropped</span>` : '') + (rec.error ? ` · <span class="lost">${esc(rec.error)}</span>` : '')
+        : session.last_recording
+            ? `not recording · last: ${esc(session.last_recording.file)}, ${session.last_recording.written} samples (${session.last_recording.dropped} dropped)`
+            : `not recording · into ${esc(session.record_dir)}`;
+    if (status !== this.statusHtml) {
+      this.statusHtml = status;
+      (body.querySelector('#rec-status') as HTMLElement).innerHTML = status;
+    }
+    const r = session.replay;
+    const replay = !r ? 'no replay'
+        : r.done
+            ? `${esc(r.file)}: ${r.error ? `<span class="lost">failed: ${esc(r.error)}</span>` : r.stopped ? 'stopped' : 'played to the end'}` +
+              ` · ${r.published ?? 0} samples` +
+              ((r.scenes_missing ?? []).length ? ` · <span class="lost">scene not found: ${esc((r.scenes_missing ?? []).join('; '))}</span>` : '')
+            : `▶ ${esc(r.file)} (${esc(r.stations.join(', '))}) · ${r.position_s.toFixed(1)} / ${r.length_s.toFixed(1)} s · ×${r.speed}${r.paused ? ' · paused' : ''}`;
+    if (replay !== this.replayHtml) {
+      this.replayHtml = replay;
+      (body.querySelector('#rp-status') as HTMLElement).innerHTML = replay;
+    }
+    const progress = body.querySelector('#rp-progress') as HTMLProgressElement;
+    progress.max = r?.length_s || 1;
+    progress.value = r ? (r.done && !r.stopped && !r.error ? r.length_s : r.position_s) : 0;
+    for (const id of ['#rp-pause', '#rp-speed', '#rp-stop']) {
+      (body.querySelector(id) as HTMLInputElement).disabled = !busy;
+    }
+    (body.querySelector('#rp-pause') as HTMLButtonElement).textContent = r?.paused ? 'resume' : 'pause';
+    const rows = session.recordings.map((f) => `<tr data-file="${esc(f.file)}"><td>${esc(f.file)}</td>` +
+        `<td>${f.recording ? '<span class="rec-on">recording…</span>' : f.error ? `<span class="lost">${esc(f.error)}</span>` : esc(f.stations.join(', '))}</td>` +
+        `<td class="num">${f.recording ? '' : f.seconds.toFixed(1) + ' s'}</td><td class="num">${(f.bytes / 1e6).toFixed(2)} MB</td>` +
+        `<td>${f.recording || f.error || !session.can_replay ? '' : `<button data-play="${esc(f.file)}"${busy || rec ? ' disabled' : ''}>▶ play</button>`}</td></tr>`).join('');
+    if (rows !== this.listHtml) {
+      this.listHtml = rows;
+      (body.querySelector('#recordings tbody') as HTMLElement).innerHTML =
+          rows || '<tr><td colspan="5">no recordings yet</td></tr>';
+    }
+  }
+
+  // A reply or refusal of the server to a session command.
+  note(text: string, bad: boolean): void {
+    this.messages.push(text);
+    const msg = this.el.querySelector('.msg') as HTMLElement | null;
+    if (!msg) return;
+    msg.textContent = text;
+    msg.className = bad ? 'msg lost' : 'msg';
+  }
+
+  private build(body: HTMLElement): void {
+    this.built = true;
+    body.innerHTML =
+        `<div class="row">record <input id="rec-name" size="24" placeholder="name (default: session-DATE-TIME)">` +
+        `<button id="rec-start">● record</button><button id="rec-stop">■ stop</button><span id="rec-status"></span></div>` +
+        `<div class="row">replay <button id="rp-pause">pause</button><select id="rp-speed">` +
+        SPEEDS.map((v) => `<option value="${v}"${v === 1 ? ' selected' : ''}>×${v}</option>`).join('') +
+        `</select><button id="rp-stop">■ stop</button><progress id="rp-progress" value="0" max="1"></progress><span id="rp-status"></span></div>` +
+        `<div class="msg"></div>` +
+        `<table id="recordings"><thead><tr><th>recording</th><th>stations</th><th>length</th><th>size</th><th></th></tr></thead><tbody></tbody></table>`;
+    const name = body.querySelector('#rec-name') as HTMLInputElement;
+    const speed = body.querySelector('#rp-speed') as HTMLSelectElement;
+    body.querySelector('#rec-start')!.addEventListener('click', () => {
+      this.send(`record start ${name.value.trim()}`.trim());
+    });
+    body.querySelector('#rec-stop')!.addEventListener('click', () => this.send('record stop'));
+    body.querySelector('#rp-pause')!.addEventListener('click', () => this.send('replay pause'));
+    body.querySelector('#rp-stop')!.addEventListener('click', () => this.send('replay stop'));
+    speed.addEventListener('change', () => this.send(`replay speed ${speed.value}`));
+    body.addEventListener('click', (e) => {
+      const file = (e.target as HTMLElement).dataset?.play;
+      if (file) this.send(`replay play ${file} ${speed.value}`);
+    });
+  }
+}
+
 // A scene's name for a caption: its file name without the folder and the .yaml extension.
 function sceneName(path: string): string {
   return (path.split('/').pop() ?? '').replace(/\.ya?ml$/, '');
@@ -341,6 +450,9 @@ function main(): void {
   const allPanel = document.getElementById('all')!;
   let allBuilt = false;
   const plot = new ScorePlot(document.getElementById('plot')!);
+  const session = new SessionPanel(document.getElementById('session')!, (text) => link.send(text));
+  (probe as any).session = null;
+  (probe as any).sessionMessages = session.messages;
 
   const link = new FrameLink(socketUrl(), 'frame_worker.js', {
     onText(m) {
@@ -353,6 +465,8 @@ function main(): void {
           buildAllPanel(allPanel, m.cue_kinds as CueKindJson[], (text) => link.send(text));
         }
         plot.add(list, performance.now());
+        (probe as any).session = m.session ?? null;
+        session.update((m.session ?? null) as SessionJson | null);
         for (const s of list.slice(0, MAX_TILES)) {
           let tile = tiles.get(s.id);
           if (!tile) {
@@ -390,6 +504,13 @@ function main(): void {
       } else if (m.type === 'error') {
         probe.errors.push(m.error);
         console.warn(`console: ${m.error}`);
+        if (/^(record|replay|session)/.test(m.error)) session.note(m.error, true);
+      } else if (m.type === 'recording_started') {
+        session.note(`recording to ${m.file}`, false);
+      } else if (m.type === 'recording_stopped') {
+        session.note(`recorded ${m.written} samples to ${m.file} (${m.dropped} dropped)`, false);
+      } else if (m.type === 'replay_started') {
+        session.note(`replaying ${m.file}: ${(m.stations as string[]).join(', ')}, ${Number(m.length_s).toFixed(1)} s`, false);
       }
     },
     onStatus(open) { document.getElementById('link')!.textContent = open ? 'live' : 'disconnected'; },

@@ -14,6 +14,7 @@
 #include "cue_overlayPubSubTypes.h"
 #include "device_inputPubSubTypes.h"
 #include "instructor/console_message.h"
+#include "instructor/console_session.h"
 #include "needle_statePubSubTypes.h"
 #include "scorePubSubTypes.h"
 #include "station/page_device.h"
@@ -243,6 +244,11 @@ int ExerciseWsMessage(const std::string& text) {
   }
   try {
     instructor::ParseConsoleMessage(text);
+    ++accepted;
+  } catch (const std::invalid_argument&) {
+  }
+  try {
+    instructor::ParseSessionMessage(text);
     ++accepted;
   } catch (const std::invalid_argument&) {
   }

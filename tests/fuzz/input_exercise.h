@@ -30,8 +30,8 @@ SampleResult ExerciseSample(const std::uint8_t* data, std::size_t size);
 std::vector<std::pair<std::string, std::vector<std::uint8_t>>> ValidSamples();
 
 // A WebSocket text message from a page, to every decoder of one: the station page's input
-// (ParsePageInput), the console's cue command (ParseConsoleMessage), the frame credit
-// (view::ParseCredit). How many accepted it.
+// (ParsePageInput), the console's cue command (ParseConsoleMessage) and session command
+// (ParseSessionMessage), the frame credit (view::ParseCredit). How many accepted it.
 int ExerciseWsMessage(const std::string& text);
 
 }  // namespace microdex::fuzz

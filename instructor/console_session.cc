@@ -1,0 +1,313 @@
+#include "instructor/console_session.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <ctime>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/record/session_reader.h"
+#include "common/view/scene_view.h"
+
+namespace microdex::instructor {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Quote(const std::string& s) { return view::JsonQuote(s); }
+std::string Num(double v) { return view::JsonNumber(v, 6); }
+
+std::string Join(const std::vector<std::string>& v) {
+  std::string out;
+  for (const std::string& s : v) {
+    if (!out.empty()) out += ", ";
+    out += s;
+  }
+  return out;
+}
+
+std::string StringList(const std::vector<std::string>& v) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (i) out += ',';
+    out += Quote(v[i]);
+  }
+  return out + "]";
+}
+
+std::string DefaultRecordingName() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char name[64];
+  std::strftime(name, sizeof name, "session-%Y%m%d-%H%M%S.db", &utc);
+  return name;
+}
+
+}  // namespace
+
+SessionControl::SessionControl(Instructor& instructor, const std::string& record_dir,
+                               net::DdsOptions dds, std::string scene_dir)
+    : instructor_(instructor),
+      dir_(record_dir),
+      dds_(std::move(dds)),
+      scene_dir_(std::move(scene_dir)) {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (!fs::is_directory(dir_, ec)) {
+    throw std::runtime_error("--record-dir " + dir_ + ": not a folder that can be made");
+  }
+  dds_.participant_name = "microdex-console-replay";
+}
+
+SessionControl::~SessionControl() {
+  if (replay_) {
+    replay_->stop = true;
+    if (replay_->thread.joinable()) replay_->thread.join();
+  }
+}
+
+bool SessionControl::replaying() const { return replay_ && !replay_->done.load(); }
+
+void SessionControl::EndReplay() {
+  if (replay_ && replay_->done.load() && replay_->thread.joinable()) replay_->thread.join();
+}
+
+std::string SessionControl::Handle(const SessionCommand& c) {
+  EndReplay();
+  using Verb = SessionCommand::Verb;
+  switch (c.verb) {
+    case Verb::kRecordStart:
+      return StartRecording(c.file.empty() ? DefaultRecordingName() : c.file);
+    case Verb::kRecordStop: {
+      const std::string path = instructor_.RecordingPath();
+      if (path.empty()) throw std::invalid_argument("record stop: not recording");
+      last_recording_stats_ = instructor_.StopRecording();
+      last_recording_ = fs::path(path).filename().string();
+      next_list_ns_ = 0;
+      const record::RecorderStats& s = *last_recording_stats_;
+      spdlog::info("console: recorded {} samples to {} ({} dropped)", s.written, path, s.dropped);
+      return "{\"type\":\"recording_stopped\",\"file\":" + Quote(last_recording_) +
+             ",\"written\":" + std::to_string(s.written) +
+             ",\"dropped\":" + std::to_string(s.dropped) + ",\"error\":" + Quote(s.error) + "}";
+    }
+    case Verb::kReplayPlay:
+      return StartReplay(c);
+    case Verb::kReplayPause:
+    case Verb::kReplaySpeed:
+    case Verb::kReplayStop: {
+      if (!replaying()) throw std::invalid_argument("replay: nothing is playing");
+      PlayerClock& clock = *replay_->clock;
+      if (c.verb == Verb::kReplayPause) clock.TogglePause();
+      if (c.verb == Verb::kReplaySpeed) clock.SetSpeed(c.speed);
+      if (c.verb == Verb::kReplayStop) {
+        replay_->stop = true;
+        replay_->thread.join();
+      }
+      return "{\"type\":\"replay\",\"file\":" + Quote(replay_->file) +
+             ",\"paused\":" + (clock.paused() ? "true" : "false") +
+             ",\"speed\":" + Num(clock.speed()) +
+             ",\"stopped\":" + (c.verb == Verb::kReplayStop ? "true" : "false") + "}";
+    }
+  }
+  throw std::invalid_argument("session: unknown command");
+}
+
+std::string SessionControl::StartRecording(const std::string& name) {
+  if (replaying()) {
+    throw std::invalid_argument("record start: a replay is playing (" + replay_->file +
+                                "); stop it first");
+  }
+  if (!instructor_.recording_ready()) {
+    throw std::invalid_argument("record start: this console was not started ready to record");
+  }
+  if (const std::string now = instructor_.RecordingPath(); !now.empty()) {
+    throw std::invalid_argument("record start: already recording to " +
+                                fs::path(now).filename().string());
+  }
+  const fs::path path = fs::path(dir_) / name;
+  std::error_code ec;
+  if (fs::exists(path, ec))
+    throw std::invalid_argument("record start: " + name + " exists already");
+  instructor_.StartRecording(path.string());  // std::runtime_error "PATH: reason"
+  next_list_ns_ = 0;
+  spdlog::info("console: recording to {}", path.string());
+  return "{\"type\":\"recording_started\",\"file\":" + Quote(name) + "}";
+}
+
+std::string SessionControl::StartReplay(const SessionCommand& c) {
+  if (replaying()) {
+    throw std::invalid_argument("replay play: " + replay_->file + " is playing; stop it first");
+  }
+  if (!instructor_.RecordingPath().empty()) {
+    throw std::invalid_argument("replay play: this console is recording; stop the recording first");
+  }
+  if (!dds_.security_dir.empty()) {
+    throw std::invalid_argument(
+        "replay play: not from a secure console (its replay participant has no identity of the "
+        "course); use microdex-replay");
+  }
+  const fs::path path = fs::path(dir_) / c.file;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw std::invalid_argument("replay play: no recording " + c.file + " in " + dir_);
+  }
+  auto reader = std::make_unique<record::SessionReader>(path.string());  // RecordError
+  auto replay = std::make_unique<Replay>();
+  replay->file = c.file;
+  replay->stations = reader->Stations();
+  std::tie(replay->first_ns, replay->last_ns) = reader->TimeRange();
+  if (replay->stations.empty()) throw std::invalid_argument("replay play: " + c.file + " is empty");
+  const double length_s = static_cast<double>(replay->last_ns - replay->first_ns) * 1e-9;
+  if (c.from_s >= length_s) {
+    throw std::invalid_argument("replay play: FROM_S " + Num(c.from_s) + " s is past the end (" +
+                                Num(length_s) + " s)");
+  }
+  // A station alive here now would get the recorded samples mixed into its own.
+  std::vector<std::string> live;
+  const std::set<std::string> recorded(replay->stations.begin(), replay->stations.end());
+  instructor_.VisitStations([&](const StationView& v) {
+    if (v.presence == Presence::kAlive && recorded.count(v.info.header.station_id) > 0) {
+      live.push_back(v.info.header.station_id);
+    }
+  });
+  if (!live.empty()) {
+    throw std::invalid_argument("replay play: station " + Join(live) + " of " + c.file +
+                                " is live here; its replay would mix with it");
+  }
+  const std::int64_t from_ns = replay->first_ns + static_cast<std::int64_t>(c.from_s * 1e9);
+  replay->clock = std::make_unique<PlayerClock>(from_ns, c.speed);
+  PlayOptions o;
+  o.speed = c.speed;
+  o.scene_dir = scene_dir_;
+  if (c.from_s > 0) o.from_s = c.from_s;
+  o.wait_for_console_s = 2;  // this console's readers are in this process
+  Replay* r = replay.get();
+  replay->thread = std::thread([this, r, reader = std::move(reader), o]() mutable {
+    try {
+      r->stats = Play(*reader, dds_, o, *r->clock, r->stop);
+    } catch (const std::exception& e) {
+      r->error = e.what();
+      spdlog::error("console: replay {}: {}", r->file, r->error);
+    }
+    r->done = true;
+  });
+  EndReplay();
+  replay_ = std::move(replay);
+  spdlog::info("console: replaying {} at {}x from {} s", c.file, c.speed, c.from_s);
+  return "{\"type\":\"replay_started\",\"file\":" + Quote(c.file) +
+         ",\"stations\":" + StringList(replay_->stations) + ",\"length_s\":" + Num(length_s) + "}";
+}
+
+std::vector<RecordingFile> SessionControl::Recordings() {
+  const std::string recording = fs::path(instructor_.RecordingPath()).filename().string();
+  std::vector<std::pair<fs::file_time_type, std::string>> found;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (!CheckRecordingName(name).empty() || !it->is_regular_file(ec)) continue;
+    found.emplace_back(it->last_write_time(ec), name);
+  }
+  std::sort(found.begin(), found.end(), std::greater<>());
+  if (found.size() > kMaxListed) found.resize(kMaxListed);
+  std::vector<RecordingFile> out;
+  std::map<std::string, Cached> kept;
+  for (const auto& [mtime, name] : found) {
+    const fs::path path = fs::path(dir_) / name;
+    RecordingFile f;
+    f.name = name;
+    f.bytes = fs::file_size(path, ec);
+    if (name == recording) {
+      out.push_back(f);  // being written: not opened
+      continue;
+    }
+    const auto c = cache_.find(name);
+    if (c != cache_.end() && c->second.mtime == mtime && c->second.bytes == f.bytes) {
+      kept[name] = c->second;
+      out.push_back(c->second.file);
+      continue;
+    }
+    try {
+      record::SessionReader reader(path.string());
+      f.stations = reader.Stations();
+      const auto [first, last] = reader.TimeRange();
+      f.seconds = static_cast<double>(last - first) * 1e-9;
+    } catch (const std::exception& e) {
+      f.error = e.what();
+    }
+    kept[name] = Cached{mtime, f.bytes, f};
+    out.push_back(f);
+  }
+  cache_ = std::move(kept);
+  return out;
+}
+
+std::string SessionControl::StatusJson() {
+  EndReplay();
+  const std::int64_t now = MonotonicNowNs();
+  if (now >= next_list_ns_) {
+    listed_ = Recordings();
+    next_list_ns_ = now + 1'000'000'000;
+  }
+  std::string out = "{\"record_dir\":" + Quote(dir_) +
+                    ",\"ready\":" + (instructor_.recording_ready() ? "true" : "false") +
+                    ",\"can_replay\":" + (dds_.security_dir.empty() ? "true" : "false");
+  out += ",\"recording\":";
+  const std::string path = instructor_.RecordingPath();
+  const std::optional<record::RecorderStats> stats = instructor_.RecorderStats();
+  if (!path.empty() && stats) {
+    out += "{\"file\":" + Quote(fs::path(path).filename().string()) + ",\"seconds\":" +
+           Num(static_cast<double>(now - instructor_.RecordingStartedNs()) * 1e-9) +
+           ",\"written\":" + std::to_string(stats->written) +
+           ",\"dropped\":" + std::to_string(stats->dropped) + ",\"error\":" + Quote(stats->error) +
+           "}";
+  } else {
+    out += "null";
+  }
+  out += ",\"last_recording\":";
+  if (last_recording_stats_) {
+    out += "{\"file\":" + Quote(last_recording_) +
+           ",\"written\":" + std::to_string(last_recording_stats_->written) +
+           ",\"dropped\":" + std::to_string(last_recording_stats_->dropped) + "}";
+  } else {
+    out += "null";
+  }
+  out += ",\"replay\":";
+  if (replay_) {
+    const Replay& r = *replay_;
+    const bool done = r.done.load();
+    const double length_s = static_cast<double>(r.last_ns - r.first_ns) * 1e-9;
+    const double at_s =
+        std::clamp(static_cast<double>(r.clock->SessionNowNs() - r.first_ns) * 1e-9, 0.0, length_s);
+    out += "{\"file\":" + Quote(r.file) + ",\"stations\":" + StringList(r.stations) +
+           ",\"length_s\":" + Num(length_s) + ",\"position_s\":" + Num(at_s) +
+           ",\"speed\":" + Num(r.clock->speed()) +
+           ",\"paused\":" + (r.clock->paused() ? "true" : "false") +
+           ",\"done\":" + (done ? "true" : "false");
+    if (done) {
+      out += ",\"published\":" + std::to_string(r.stats.published) +
+             ",\"stopped\":" + (r.stop.load() ? "true" : "false") + ",\"error\":" + Quote(r.error) +
+             ",\"scenes_missing\":" + StringList(r.stats.scenes_missing);
+    }
+    out += "}";
+  } else {
+    out += "null";
+  }
+  out += ",\"recordings\":[";
+  for (std::size_t i = 0; i < listed_.size(); ++i) {
+    const RecordingFile& f = listed_[i];
+    if (i) out += ',';
+    out += "{\"file\":" + Quote(f.name) + ",\"bytes\":" + std::to_string(f.bytes) +
+           ",\"seconds\":" + Num(f.seconds) + ",\"stations\":" + StringList(f.stations) +
+           ",\"recording\":" + (f.name == fs::path(path).filename().string() ? "true" : "false") +
+           ",\"error\":" + Quote(f.error) + "}";
+  }
+  return out + "]}";
+}
+
+}  // namespace microdex::instructor

@@ -1,0 +1,108 @@
+#pragma once
+// The console's session controls (microdex-instructor --record-dir DIR): start and stop a
+// recording into DIR, list DIR's recordings, and replay one into this console, with pause,
+// speed and stop. The page sends them over its WebSocket:
+//
+//   record start [NAME]                 NAME.db in DIR (default session-YYYYMMDD-HHMMSS.db, UTC)
+//   record stop
+//   replay play FILE [SPEED [FROM_S]]   FILE: a recording in DIR, by name
+//   replay pause                        pause or resume
+//   replay speed SPEED                  1/64 … 1024
+//   replay stop
+//
+// A replay republishes the recording over DDS (replay_player.h) from a participant of this
+// process, in the console's domain and partition, so the console mirrors the recorded stations
+// as it mirrors live ones; the recorded scenes are sent when found (PlayOptions::scene_dir).
+// Refused, with the reason: a replay while recording or replaying, a recording while
+// replaying, a replay of a station that is alive here now (its samples would mix with the live
+// ones), a replay from a secure console (its participant has no identity of the course: use
+// microdex-replay), a name with a folder in it or that exists already.
+//
+// Threads: Handle and StatusJson run on the view server's thread; the replay on a thread of
+// its own (Play), stopped by the destructor.
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/net/dds_context.h"
+#include "instructor/console_message.h"
+#include "instructor/instructor.h"
+#include "instructor/replay_player.h"
+
+namespace microdex::instructor {
+
+// One recording of DIR, as listed.
+struct RecordingFile {
+  std::string name;
+  std::uintmax_t bytes = 0;
+  double seconds = 0;  // first to last message
+  std::vector<std::string> stations;
+  std::string error;  // the file does not open as a recording (why)
+};
+
+class SessionControl {
+ public:
+  static constexpr std::size_t kMaxListed = 50;  // the newest recordings listed
+
+  // `dds`: the console's own options (domain, partition, profile) for the replay's
+  // participant; `scene_dir`: where a replay looks for a recorded scene by name. Throws
+  // std::runtime_error when DIR is not a folder that can be made.
+  SessionControl(Instructor& instructor, const std::string& record_dir, net::DdsOptions dds,
+                 std::string scene_dir = "");
+  ~SessionControl();
+  SessionControl(const SessionControl&) = delete;
+  SessionControl& operator=(const SessionControl&) = delete;
+
+  // Carries out a command; returns the reply (JSON) or throws std::invalid_argument (refused:
+  // why) / std::runtime_error (the file could not be made).
+  std::string Handle(const SessionCommand& command);
+  // The "session" object of the station list: the folder, the recording, the replay, the
+  // recordings (listed again at most once a second).
+  std::string StatusJson();
+  // DIR's recordings, newest first (at most kMaxListed).
+  std::vector<RecordingFile> Recordings();
+  const std::string& record_dir() const { return dir_; }
+  bool replaying() const;
+
+ private:
+  struct Replay {
+    std::string file;
+    std::int64_t first_ns = 0, last_ns = 0;
+    std::vector<std::string> stations;
+    std::unique_ptr<PlayerClock> clock;
+    std::atomic<bool> stop{false};
+    std::atomic<bool> done{false};
+    PlayStats stats;    // once done
+    std::string error;  // once done: why it failed ("" when it played)
+    std::thread thread;
+  };
+  void EndReplay();  // joins a finished or stopped replay
+  std::string StartRecording(const std::string& name);
+  std::string StartReplay(const SessionCommand& c);
+
+  Instructor& instructor_;
+  std::string dir_;
+  net::DdsOptions dds_;
+  std::string scene_dir_;
+  std::unique_ptr<Replay> replay_;  // the running or the last replay
+  std::string last_recording_;      // the file of the last recording stopped
+  std::optional<record::RecorderStats> last_recording_stats_;
+  struct Cached {
+    std::filesystem::file_time_type mtime;
+    std::uintmax_t bytes = 0;
+    RecordingFile file;
+  };
+  std::map<std::string, Cached> cache_;  // by name
+  std::vector<RecordingFile> listed_;
+  std::int64_t next_list_ns_ = 0;
+};
+
+}  // namespace microdex::instructor
