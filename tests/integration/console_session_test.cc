@@ -1,0 +1,164 @@
+// The console's session controls (instructor/console_session.h) with a live station over DDS on
+// loopback: a recording started while the station runs begins with its StationInfo and then
+// holds its states; a second start and a replay of a live station are refused with the reason;
+// once the station has left, the recording replays into the same console (the station alive
+// again, with new states), paused and resumed, to its end, after which the station has left
+// again. A console not started ready to record refuses to start one.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <chrono>
+#include <map>
+#include <stdexcept>
+#include <thread>
+
+#include "common/record/recorded_topics.h"
+#include "common/record/session_reader.h"
+#include "instructor/console_session.h"
+#include "instructor/instructor.h"
+#include "tests/integration/process.h"
+
+namespace microdex {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::WaitUntil;
+
+constexpr int kDomain = 88;
+const char* const kStation = "sess-a";
+
+std::string Refusal(instructor::SessionControl& s, const std::string& message) {
+  try {
+    s.Handle(instructor::ParseSessionMessage(message));
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+instructor::StationView Station(instructor::Instructor& console) {
+  return console.Station(kStation).value_or(instructor::StationView{});
+}
+
+TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole) {
+  std::string dir = "/tmp/microdex-it-console-session-XXXXXX";
+  ASSERT_NE(mkdtemp(dir.data()), nullptr);
+  net::DdsOptions dds;
+  dds.profile_file = net::DefaultDdsProfileFile();
+  dds.domain_id = kDomain;
+  instructor::InstructorOptions options;
+  options.dds = dds;
+  options.recording_ready = true;
+  instructor::Instructor console(options);
+  instructor::SessionControl session(console, dir + "/recordings", dds);
+
+  std::vector<pid_t> pids{testing::Spawn(
+      "microdex-station",
+      {"--scene", testing::SourceDir() + "/assets/scenes/needle_tube.yaml", "--station-id",
+       kStation, "--duration", "5", "--domain", std::to_string(kDomain), "--no-realtime"},
+      dir + "/station.log")};
+  ASSERT_TRUE(WaitUntil([&] { return Station(console).tool.count > 30; }, 20s))
+      << testing::ReadFile(dir + "/station.log");
+
+  // From the middle of the station's run.
+  const std::string started = session.Handle(instructor::ParseSessionMessage("record start first"));
+  EXPECT_NE(started.find("\"file\":\"first.db\""), std::string::npos) << started;
+  EXPECT_NE(Refusal(session, "record start second").find("already recording to first.db"),
+            std::string::npos);
+  EXPECT_NE(Refusal(session, "replay play first.db").find("is recording"), std::string::npos);
+  EXPECT_NE(session.StatusJson().find("\"recording\":{\"file\":\"first.db\""), std::string::npos);
+  std::this_thread::sleep_for(1500ms);
+  const std::string stopped = session.Handle(instructor::ParseSessionMessage("record stop"));
+  EXPECT_NE(stopped.find("\"dropped\":0"), std::string::npos) << stopped;
+  EXPECT_NE(Refusal(session, "record stop").find("not recording"), std::string::npos);
+  EXPECT_NE(Refusal(session, "record start first").find("exists already"), std::string::npos);
+
+  {
+    record::SessionReader reader(dir + "/recordings/first.db");
+    EXPECT_TRUE(reader.problems().empty());
+    std::map<int, int> count;
+    int first_topic = -1;
+    reader.ForEach({}, [&](const record::MessageView& m) {
+      if (m.station == kStation && first_topic < 0) first_topic = m.topic;
+      ++count[m.topic];
+      return true;
+    });
+    EXPECT_EQ(first_topic, static_cast<int>(record::TopicIndex::kStationInfo))
+        << "a recording begun later announces the station first";
+    EXPECT_EQ(count[static_cast<int>(record::TopicIndex::kStationInfo)], 1);
+    // 1.5 s of a 60 Hz mirror and the 1 kHz inputs, with slack for a loaded host.
+    EXPECT_GT(count[static_cast<int>(record::TopicIndex::kToolState)], 40);
+    EXPECT_GT(count[static_cast<int>(record::TopicIndex::kDeviceInput)], 500);
+    const auto [first, last] = reader.TimeRange();
+    EXPECT_GT(last - first, 1'000'000'000);
+    EXPECT_EQ(reader.metadata().at("recorder_session"), console.session_id());
+  }
+  const auto listed = session.Recordings();
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].name, "first.db");
+  EXPECT_EQ(listed[0].stations, std::vector<std::string>{kStation});
+  EXPECT_GT(listed[0].seconds, 1.0);
+
+  // The station is live: its replay would mix with it.
+  EXPECT_NE(Refusal(session, "replay play first.db").find("station sess-a of first.db is live"),
+            std::string::npos);
+  EXPECT_NE(Refusal(session, "replay play none.db").find("no recording none.db"),
+            std::string::npos);
+  const auto status = testing::WaitExit(pids[0], 30s);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(*status, 0) << testing::ReadFile(dir + "/station.log");
+  ASSERT_TRUE(WaitUntil(
+      [&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s));
+  const std::uint64_t tools_before = Station(console).tool.count;
+  const int comebacks_before = Station(console).comebacks;
+
+  session.Handle(instructor::ParseSessionMessage("replay play first.db 1"));
+  EXPECT_TRUE(session.replaying());
+  EXPECT_NE(Refusal(session, "record start during").find("a replay is playing"),
+            std::string::npos);
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        const auto v = Station(console);
+        return v.presence == instructor::Presence::kAlive && v.comebacks > comebacks_before &&
+               v.tool.count > tools_before + 10;
+      },
+      15s))
+      << session.StatusJson();
+  session.Handle(instructor::ParseSessionMessage("replay pause"));
+  EXPECT_NE(session.StatusJson().find("\"paused\":true"), std::string::npos);
+  std::this_thread::sleep_for(300ms);  // what was in flight arrives
+  const std::uint64_t paused_at = Station(console).tool.count;
+  std::this_thread::sleep_for(500ms);
+  EXPECT_EQ(Station(console).tool.count, paused_at) << "nothing is replayed while paused";
+  session.Handle(instructor::ParseSessionMessage("replay pause"));
+  session.Handle(instructor::ParseSessionMessage("replay speed 4"));
+  ASSERT_TRUE(WaitUntil([&] { return !session.replaying(); }, 20s)) << session.StatusJson();
+  const std::string done = session.StatusJson();
+  EXPECT_NE(done.find("\"done\":true"), std::string::npos) << done;
+  EXPECT_NE(done.find("\"stopped\":false"), std::string::npos) << done;
+  EXPECT_NE(done.find("\"error\":\"\""), std::string::npos) << done;
+  EXPECT_GT(Station(console).tool.count, paused_at);
+  EXPECT_TRUE(WaitUntil(
+      [&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s))
+      << "the replayed station leaves at the end";
+  testing::KillAll(pids);
+}
+
+TEST(ConsoleSession, AConsoleNotReadyToRecordRefusesToStartOne) {
+  instructor::InstructorOptions options;
+  options.dds.profile_file = net::DefaultDdsProfileFile();
+  options.dds.domain_id = kDomain;
+  instructor::Instructor console(options);
+  EXPECT_FALSE(console.recording_ready());
+  try {
+    console.StartRecording("/tmp/never-made.db");
+    ADD_FAILURE() << "started";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not started ready to record"), std::string::npos);
+  }
+  EXPECT_FALSE(console.StopRecording().has_value());
+  EXPECT_EQ(console.RecordingPath(), "");
+}
+
+}  // namespace
+}  // namespace microdex
