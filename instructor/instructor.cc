@@ -437,8 +437,15 @@ void Instructor::HandleStationInfo() {
     if (si.valid_data) {
       dds_->instance_to_station[HandleKey(si.instance_handle)] = info.header.station_id;
       writer_to_station_[HandleKey(si.publication_handle)] = info.header.station_id;
-      dds_->current_info_writer[info.header.station_id] = HandleKey(si.publication_handle);
+      std::string& current = dds_->current_info_writer[info.header.station_id];
       StationView& v = ViewFor(info.header.station_id);
+      if (current != HandleKey(si.publication_handle)) {
+        // Another writer: a new run or a replay of a recorded one (which may repeat the steps
+        // of a run seen before, under its session id). The same writer announcing again after
+        // a partition keeps the steps it sent, so that those it resends are dropped.
+        v.input_session.clear();
+        current = HandleKey(si.publication_handle);
+      }
       const bool known = v.info.header.session_id.size() > 0;
       if (known && v.presence != Presence::kAlive) ++v.comebacks;
       if (v.presence != Presence::kAlive || !known) v.presence_changed_ns = now;

@@ -195,7 +195,9 @@ std::vector<std::string> ScoresWriter::Update(const std::vector<StationView>& st
     row.skill = v.info.skill;
     row.device = v.info.device;
     row.instructor_session = console_.session_id();
-    row.recording = options_.recording;
+    // The file being recorded now (a recording started from the page), else --record's.
+    row.recording = console_.RecordingPath();
+    if (row.recording.empty()) row.recording = options_.recording;
     row.started_ns = v.info.header.stamp_ns ? v.info.header.stamp_ns : RealtimeNowNs();
     if (info_missing) {  // not the previous run's seed, skill and start
       row.seed = 0;

@@ -26,7 +26,7 @@ namespace microdex::instructor {
 struct ScoresWriterOptions {
   std::string url;                 // --db
   std::string course = "default";  // --course
-  std::string recording;           // --record file ("" none)
+  std::string recording;           // --record file ("" none); a recording running is named first
   std::optional<scores::ExperimentDef> experiment;
 };
 

@@ -4,6 +4,8 @@
 // once the station has left, the recording replays into the same console (the station alive
 // again, with new states), paused and resumed, to its end, after which the station has left
 // again. A console not started ready to record refuses to start one.
+#include "instructor/console_session.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -14,7 +16,6 @@
 
 #include "common/record/recorded_topics.h"
 #include "common/record/session_reader.h"
-#include "instructor/console_session.h"
 #include "instructor/instructor.h"
 #include "tests/integration/process.h"
 
@@ -107,15 +108,14 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   const auto status = testing::WaitExit(pids[0], 30s);
   ASSERT_TRUE(status.has_value());
   EXPECT_EQ(*status, 0) << testing::ReadFile(dir + "/station.log");
-  ASSERT_TRUE(WaitUntil(
-      [&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s));
+  ASSERT_TRUE(
+      WaitUntil([&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s));
   const std::uint64_t tools_before = Station(console).tool.count;
   const int comebacks_before = Station(console).comebacks;
 
   session.Handle(instructor::ParseSessionMessage("replay play first.db 1"));
   EXPECT_TRUE(session.replaying());
-  EXPECT_NE(Refusal(session, "record start during").find("a replay is playing"),
-            std::string::npos);
+  EXPECT_NE(Refusal(session, "record start during").find("a replay is playing"), std::string::npos);
   ASSERT_TRUE(WaitUntil(
       [&] {
         const auto v = Station(console);
@@ -138,8 +138,8 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   EXPECT_NE(done.find("\"stopped\":false"), std::string::npos) << done;
   EXPECT_NE(done.find("\"error\":\"\""), std::string::npos) << done;
   EXPECT_GT(Station(console).tool.count, paused_at);
-  EXPECT_TRUE(WaitUntil(
-      [&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s))
+  EXPECT_TRUE(
+      WaitUntil([&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s))
       << "the replayed station leaves at the end";
   testing::KillAll(pids);
 }

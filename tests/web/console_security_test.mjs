@@ -131,6 +131,19 @@ try {
       () => window.microdexConsole.errors.find((e) => e.includes('only an instructor'))),
       'the observer\'s cue refused', 10000);
   check(true, `the observer's cue is refused: "${refused}"`);
+  // Recording and replay are the instructor's too (refused before anything else is looked at).
+  const sessionRefused = await observer.page.evaluate(() => new Promise((resolve) => {
+    const ws = new WebSocket(`wss://${location.host}/ws`);
+    ws.onmessage = (e) => {
+      if (typeof e.data !== 'string') return;
+      const m = JSON.parse(e.data);
+      if (m.type === 'error') resolve(m.error);
+    };
+    ws.onopen = () => ws.send('record start lesson');
+    setTimeout(() => resolve(null), 5000);
+  }));
+  check(sessionRefused && sessionRefused.includes('only an instructor records and replays'),
+        `the observer's recording is refused: "${sessionRefused}"`);
   await observer.page.close();
 
   // --- an instructor: page data, WebSocket and cues

@@ -1,0 +1,130 @@
+// The console's recording and replay controls in headless Chromium (microdex-instructor --http
+// --record-dir DIR): with a live station, "record" starts a recording into DIR and "stop" ends
+// it; the recording is listed with its station and length. Playing it while the station is
+// live is refused with the reason shown on the page; once the station has left, playing it
+// brings the station back into the grid (alive, drawn, new frames), pause holds it, and it
+// plays to its end. A name that would leave DIR is refused.
+// node console_session_test.mjs --bin BUILD/bin --out DIR
+import { mkdtempSync, readdirSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { launchBrowser, sourceDir } from './browser.mjs';
+import { args, check, startProcess, stopProcess, waitFor } from './harness.mjs';
+
+const a = args({ bin: join(sourceDir, 'build/bin'), out: join(sourceDir, 'build/web-artifacts') });
+const dds = ['--partition', `web-session-${process.pid}`];
+const id = 'web-session';
+const work = mkdtempSync(join(tmpdir(), 'microdex-console-session-'));
+const recordings = join(work, 'recordings');
+const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
+                                      ['--http', '0', '--record-dir', recordings, '--scene-dir',
+                                       join(sourceDir, 'assets/scenes'), '--duration', '200', ...dds],
+                                      /console: http:\/\/127\.0\.0\.1:(\d+)\//, { cwd: work });
+const station = await startProcess(join(a.bin, 'microdex-station'), [
+  '--scene', 'assets/scenes/needle_tube.yaml', '--station-id', id, '--trainee', 'trainee R',
+  '--no-realtime', '--duration', '120', ...dds,
+], /station|info/, { cwd: sourceDir });
+const url = `http://127.0.0.1:${instructor.match[1]}/`;
+const { context, close } = await launchBrowser({ width: 1280, height: 900 });
+const probe = (page) => page.evaluate(() => {
+  const c = window.microdexConsole;
+  const s = c.stations.find((x) => x.id === 'web-session');
+  return { session: c.session, station: s ?? null, frames: c.framesReceived, messages: c.sessionMessages.slice(),
+           rejected: c.rejected.total };
+});
+try {
+  const page = await context.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  await page.goto(url);
+  await waitFor(() => page.evaluate(() => {
+    const c = window.microdexConsole;
+    return c && c.session && c.stations.length === 1 && c.tilesDrawn === 1 && c.framesReceived > 20;
+  }), 'the live station drawn and the session controls listed', 40000);
+  check(await page.locator('#rec-start').isEnabled(), 'the record button is enabled');
+  check(await page.locator('#rec-stop').isDisabled(), 'the stop button is disabled while not recording');
+
+  // Record about 3 s of the live station.
+  await page.locator('#rec-name').fill('lesson-1');
+  await page.locator('#rec-start').click();
+  const rec = await waitFor(async () => {
+    const p = await probe(page);
+    return p.session.recording && p.session.recording.written > 200 ? p.session.recording : null;
+  }, 'the recording running with samples written', 15000);
+  check(rec.file === 'lesson-1.db', `recording into lesson-1.db (${rec.file})`);
+  check(/● recording lesson-1\.db/.test(await page.locator('#rec-status').textContent()),
+        'the page shows the recording');
+  await page.waitForTimeout(2500);
+  await page.locator('#rec-stop').click();
+  const listed = await waitFor(async () => {
+    const p = await probe(page);
+    const f = p.session.recordings.find((x) => x.file === 'lesson-1.db');
+    return !p.session.recording && f && !f.recording && f.seconds > 0 ? f : null;
+  }, 'the stopped recording listed', 15000);
+  check(JSON.stringify(listed.stations) === JSON.stringify([id]) && listed.seconds >= 2,
+        `lesson-1.db holds ${listed.stations.join(', ')} for ${listed.seconds.toFixed(1)} s`);
+  check(readdirSync(recordings).includes('lesson-1.db'), 'the file is in the recording folder');
+  const row = page.locator('#recordings tr[data-file="lesson-1.db"]');
+  check(await row.count() === 1, 'the recordings table lists it');
+  await page.locator('#session').screenshot({ path: join(a.out, 'console_session_recorded.png') });
+
+  // Playing it while the station is live is refused, and the page says why.
+  await row.locator('button[data-play]').click();
+  const refused = await waitFor(async () => {
+    const m = (await probe(page)).messages;
+    return m.find((x) => /is live here/.test(x)) ?? null;
+  }, 'the refusal of a replay of a live station', 10000);
+  check(/station web-session of lesson-1\.db is live here/.test(refused), `refused: "${refused}"`);
+  check((await page.locator('#session .msg').textContent()).includes('is live here'),
+        'the refusal is shown under the controls');
+  // A name that would leave the folder.
+  await page.locator('#rec-name').fill('../escape');
+  await page.locator('#rec-start').click();
+  const badName = await waitFor(async () => (await probe(page)).messages.find((x) => /NAME/.test(x)) ?? null,
+                                'the refusal of a bad name', 10000);
+  check(/record start: NAME '\.\.\/escape' starts with '\.'/.test(badName), `refused: "${badName}"`);
+  check(!readdirSync(work).some((f) => f.includes('escape')) && readdirSync(recordings).length >= 1,
+        'nothing written outside the folder');
+
+  // The station leaves; its recording replays into the console.
+  await stopProcess(station.child);
+  await waitFor(async () => (await probe(page)).station?.presence === 'left',
+                'the station departed', 15000);
+  const framesBefore = (await probe(page)).frames;
+  await row.locator('button[data-play]').click();
+  const playing = await waitFor(async () => {
+    const p = await probe(page);
+    return p.session.replay && !p.session.replay.done && p.station?.presence === 'alive' &&
+        p.frames > framesBefore + 10 ? p : null;
+  }, 'the replayed station alive again with new frames', 20000);
+  check(playing.session.replay.file === 'lesson-1.db', 'the replay of lesson-1.db is playing');
+  check(await page.locator('#rec-start').isDisabled(), 'recording is not offered during a replay');
+  await page.screenshot({ path: join(a.out, 'console_session_replaying.png') });
+  await page.locator('#rp-pause').click();
+  await waitFor(async () => (await probe(page)).session.replay.paused, 'the replay paused', 5000);
+  const at = (await probe(page)).session.replay.position_s;
+  await page.waitForTimeout(1000);
+  const still = (await probe(page)).session.replay.position_s;
+  check(Math.abs(still - at) < 0.05, `paused, the position holds (${at.toFixed(2)} → ${still.toFixed(2)} s)`);
+  check((await page.locator('#rp-pause').textContent()) === 'resume', 'the pause button offers resume');
+  await page.locator('#rp-pause').click();
+  const ended = await waitFor(async () => {
+    const r = (await probe(page)).session.replay;
+    return r && r.done ? r : null;
+  }, 'the replay played to its end', 20000);
+  check(!ended.stopped && ended.error === '' && ended.published > 100,
+        `played to the end: ${ended.published} samples republished`);
+  check(ended.scenes_missing.length === 0, `the recorded scene was found in --scene-dir (${ended.scenes_missing.join('; ')})`);
+  const rejected = (await probe(page)).rejected;
+  check(rejected === 0, `the console took every replayed sample, though it had seen the run live (${rejected} rejected)`);
+  await waitFor(async () => (await probe(page)).station?.presence === 'left',
+                'the replayed station left at the end', 10000);
+  check(/played to the end/.test(await page.locator('#rp-status').textContent()), 'the page says it played to the end');
+  await page.locator('#session').screenshot({ path: join(a.out, 'console_session_played.png') });
+  check(errors.length === 0, `no page errors (${errors.join('; ')})`);
+} finally {
+  await close();
+  await stopProcess(station.child);
+  await stopProcess(instructor.child);
+  rmSync(work, { recursive: true, force: true });
+}
