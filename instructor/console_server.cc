@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "common/cues/cue_kind.h"
 #include "common/scene/scene.h"
@@ -342,6 +344,44 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
   out += j.str();
 }
 
+void ConsoleServer::SetPastScores(const std::string& course,
+                                  const std::vector<scores::ScoredSession>& sessions) {
+  // The latest kPastPerLine of each trainee and scene, in start order.
+  std::map<std::pair<std::string, std::string>, std::vector<const scores::ScoredSession*>> lines;
+  for (const scores::ScoredSession& s : sessions) lines[{s.trainee, s.scene}].push_back(&s);
+  std::string j =
+      "{\"type\":\"past_scores\",\"course\":" + view::JsonQuote(course) + ",\"lines\":[";
+  bool first_line = true;
+  for (auto& [key, runs] : lines) {
+    std::sort(runs.begin(), runs.end(), [](const auto* a, const auto* b) {
+      return std::tie(a->started_ns, a->id) < std::tie(b->started_ns, b->id);
+    });
+    if (runs.size() > kPastPerLine) runs.erase(runs.begin(), runs.end() - kPastPerLine);
+    if (!first_line) j += ',';
+    first_line = false;
+    j += "{\"trainee\":" + view::JsonQuote(key.first) +
+         ",\"scene\":" + view::JsonQuote(key.second) + ",\"sessions\":[";
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (i) j += ',';
+      j += "{\"id\":" + view::JsonQuote(runs[i]->id) +
+           ",\"started_ms\":" + Num(static_cast<double>(runs[i]->started_ns) * 1e-6) +
+           ",\"score\":" + Num(runs[i]->score) + "}";
+    }
+    j += "]}";
+  }
+  j += "]}";
+  std::lock_guard<std::mutex> lock(past_mutex_);
+  if (j != past_json_) {
+    past_json_ = std::move(j);
+    past_changed_ = true;
+  }
+}
+
+std::string ConsoleServer::PastScoresJson() const {
+  std::lock_guard<std::mutex> lock(past_mutex_);
+  return past_json_;
+}
+
 // Deltas only: under the registry's lock, a frame for each station whose newest tool state
 // FrameForwarder says is due (the others cost a comparison), the station list at
 // kStatusRate_hz or when the stations change; nothing of the registry is copied. The frames
@@ -393,6 +433,18 @@ void ConsoleServer::Poll() {
     ids_ = ids;
     server_->BroadcastText(StatusJsonHead() + status + "]}");
     next_status_ns_ = now + static_cast<std::int64_t>(1e9 / kStatusRate_hz);
+  }
+  {
+    std::string past;
+    {
+      std::lock_guard<std::mutex> lock(past_mutex_);
+      if (!past_json_.empty() && (past_changed_ || now >= next_past_ns_)) {
+        past = past_json_;
+        past_changed_ = false;
+        next_past_ns_ = now + static_cast<std::int64_t>(kPastPeriod_s * 1e9);
+      }
+    }
+    if (!past.empty()) server_->BroadcastText(past);
   }
   if (encoded.empty()) return;
   // Each period starts at the next station: a page short of credit (view_server.h) loses

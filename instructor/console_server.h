@@ -23,9 +23,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
+#include "common/scores/scores_store.h"
 #include "common/view/view_frame.h"
 #include "common/view/view_server.h"
 #include "instructor/console_auth.h"
@@ -104,6 +106,16 @@ class ConsoleServer {
   std::string HandleClientMessage(const std::string& session_token, const std::string& message);
   bool https() const { return https_; }
 
+  // The final scores of past sessions (the scores database, ScoresWriter::FinalScores) for the
+  // page's plot over sessions: at most kPastPerLine of each trainee and scene, the latest.
+  // Sent to the pages as a "past_scores" message when it changed and every kPastPeriod_s (so
+  // that a page opened later gets it). Any thread.
+  static constexpr std::size_t kPastPerLine = 40;
+  static constexpr double kPastPeriod_s = 5;
+  void SetPastScores(const std::string& course, const std::vector<scores::ScoredSession>& sessions);
+  // The "past_scores" message as last set ("" before).
+  std::string PastScoresJson() const;
+
  private:
   struct SentCue {
     std::uint64_t cue_id = 0;
@@ -125,6 +137,10 @@ class ConsoleServer {
   std::vector<std::string> ids_;                      // slot → station id, as last listed
   std::vector<std::unique_ptr<view::FrameBytes>> frames_;  // per slot, reused
   std::int64_t next_status_ns_ = 0;
+  mutable std::mutex past_mutex_;
+  std::string past_json_;      // past_mutex_
+  bool past_changed_ = false;  // past_mutex_
+  std::int64_t next_past_ns_ = 0;
   std::size_t first_slot_ = 0;
   std::unique_ptr<ConsoleAuth> auth_;  // login on when set
   bool https_ = false;

@@ -226,6 +226,17 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                     trainee.c_str(), condition.c_str());
       }
     }
+    // The page's plot of past sessions, from the scores database.
+    std::int64_t next_past = 0;
+    const auto send_past_scores = [&](std::int64_t now) {
+      if (!scores_db || !web || now < next_past) return;
+      next_past = now + 2'000'000'000;
+      try {
+        web->SetPastScores(scores_options.course, scores_db->FinalScores());
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "microdex-instructor: scores database: %s\n", e.what());
+      }
+    };
     const std::int64_t start = instructor::MonotonicNowNs();
     std::int64_t next_table = start + static_cast<std::int64_t>(table_period_s * 1e9);
     std::vector<bool> sent(cues.size(), false);
@@ -264,6 +275,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
         if (!e.text.empty()) std::printf(" (%s)", e.text.c_str());
         std::printf("\n");
       }
+      send_past_scores(now);
       if (headless && table_period_s > 0 && now >= next_table) {
         std::printf("--- t = %.1f s\n%s", t,
                     instructor::FormatStationTable(console.Stations(), now).c_str());

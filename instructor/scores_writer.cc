@@ -310,4 +310,10 @@ void ScoresWriter::Finish(const std::vector<StationView>& stations) {
   }
 }
 
+std::vector<scores::ScoredSession> ScoresWriter::FinalScores() {
+  std::vector<scores::ScoredSession> out = scores::LoadScoredSessions(*db_, options_.course);
+  std::erase_if(out, [](const scores::ScoredSession& s) { return !s.is_final; });
+  return out;
+}
+
 }  // namespace microdex::instructor

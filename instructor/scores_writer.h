@@ -19,6 +19,7 @@
 
 #include "common/scores/experiment.h"
 #include "common/scores/scores_db.h"
+#include "common/scores/scores_store.h"
 #include "instructor/instructor.h"
 
 namespace microdex::instructor {
@@ -47,6 +48,9 @@ class ScoresWriter {
 
   // With an experiment: every trainee has a final score in each of its trials.
   bool ExperimentDone() const;
+  // The course's sessions with a final score, by trainee then start time (the console's plot
+  // of past sessions). Throws ScoresDbError.
+  std::vector<scores::ScoredSession> FinalScores();
   const std::map<std::string, std::string>& assignment() const { return assignment_; }
 
  private:

@@ -420,6 +420,46 @@ class SessionPanel {
   }
 }
 
+// The final score of each trainee's past sessions (the scores database of microdex-instructor
+// --db, course by course): a line per trainee and scene, session by session in start order
+// (the latest ConsoleServer::kPastPerLine), with a dot per session. Shown once the console has
+// any.
+interface PastLineJson { trainee: string; scene: string; sessions: { id: string; started_ms: number; score: number }[] }
+class PastPlot {
+  lines: PastLineJson[] = [];
+  private json = '';
+  constructor(private readonly el: HTMLElement) {}
+
+  set(course: string, lines: PastLineJson[]): void {
+    const json = JSON.stringify(lines);
+    if (json === this.json) return;
+    this.json = json;
+    this.lines = lines;
+    const W = 640, H = 170, L = 34, R = 10, T = 8, B = 22;
+    let n = 2;
+    for (const l of lines) n = Math.max(n, l.sessions.length);
+    const x = (i: number) => L + (W - L - R) * i / (n - 1);
+    const y = (v: number) => T + (H - T - B) * (1 - Math.min(Math.max(v, 0), 100) / 100);
+    let svg = `<svg width="${W}" height="${H}" viewBox="0 0 ${W} ${H}" font-size="10" fill="#9aa">`;
+    for (const v of [0, 50, 100]) {
+      svg += `<line x1="${L}" x2="${W - R}" y1="${y(v)}" y2="${y(v)}" stroke="#333"/>` +
+          `<text x="${L - 4}" y="${y(v) + 3}" text-anchor="end">${v}</text>`;
+    }
+    svg += `<text x="${L}" y="${H - 6}">session 1</text><text x="${W - R}" y="${H - 6}" text-anchor="end">${n}</text>`;
+    let legend = '';
+    lines.forEach((l, k) => {
+      const colour = PALETTE[k % PALETTE.length];
+      const pts = l.sessions.map((s, i) => [x(i), y(s.score)]);
+      svg += `<polyline data-trainee="${esc(l.trainee)}" data-scene="${esc(l.scene)}" points="${pts.map(([a, b]) => `${a.toFixed(1)},${b.toFixed(1)}`).join(' ')}" fill="none" stroke="${colour}" stroke-width="1.5"/>`;
+      for (const [a, b] of pts) svg += `<circle cx="${a.toFixed(1)}" cy="${b.toFixed(1)}" r="2.5" fill="${colour}"/>`;
+      const last = l.sessions.at(-1)?.score;
+      legend += `<span style="color:${colour}">— ${esc(l.trainee)} · ${esc(sceneName(l.scene))}: ${l.sessions.length} session(s), last ${last?.toFixed(1) ?? '–'}</span>`;
+    });
+    this.el.innerHTML = lines.length === 0 ? ''
+        : `<div>final scores over past sessions (scores database, course ${esc(course)})</div>${svg}</svg><div class="legend">${legend}</div>`;
+  }
+}
+
 // A scene's name for a caption: its file name without the folder and the .yaml extension.
 function sceneName(path: string): string {
   return (path.split('/').pop() ?? '').replace(/\.ya?ml$/, '');
@@ -450,6 +490,8 @@ function main(): void {
   const allPanel = document.getElementById('all')!;
   let allBuilt = false;
   const plot = new ScorePlot(document.getElementById('plot')!);
+  const past = new PastPlot(document.getElementById('past')!);
+  (probe as any).past = past;
   const session = new SessionPanel(document.getElementById('session')!, (text) => link.send(text));
   (probe as any).session = null;
   (probe as any).sessionMessages = session.messages;
@@ -505,6 +547,8 @@ function main(): void {
         probe.errors.push(m.error);
         console.warn(`console: ${m.error}`);
         if (/^(record|replay|session)/.test(m.error)) session.note(m.error, true);
+      } else if (m.type === 'past_scores') {
+        past.set(String(m.course), m.lines as PastLineJson[]);
       } else if (m.type === 'recording_started') {
         session.note(`recording to ${m.file}`, false);
       } else if (m.type === 'recording_stopped') {

@@ -3,9 +3,10 @@
 // it; the recording is listed with its station and length. Playing it while the station is
 // live is refused with the reason shown on the page; once the station has left, playing it
 // brings the station back into the grid (alive, drawn, new frames), pause holds it, and it
-// plays to its end. A name that would leave DIR is refused.
+// plays to its end. A name that would leave DIR is refused. With --db, the final scores of two
+// earlier runs of a trainee are drawn as a line over past sessions, with their scores.
 // node console_session_test.mjs --bin BUILD/bin --out DIR
-import { mkdtempSync, readdirSync, rmSync } from 'node:fs';
+import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { launchBrowser, sourceDir } from './browser.mjs';
@@ -18,8 +19,20 @@ const work = mkdtempSync(join(tmpdir(), 'microdex-console-session-'));
 const recordings = join(work, 'recordings');
 const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
                                       ['--http', '0', '--record-dir', recordings, '--scene-dir',
-                                       join(sourceDir, 'assets/scenes'), '--duration', '200', ...dds],
+                                       join(sourceDir, 'assets/scenes'), '--db', join(work, 'scores.db'),
+                                       '--duration', '200', ...dds],
                                       /console: http:\/\/127\.0\.0\.1:(\d+)\//, { cwd: work });
+// Two earlier runs of one trainee, to their task's end (unpaced), each scored in the database.
+const pastScores = [];
+for (const [k, skill] of ['0.3', '0.9'].entries()) {
+  const out = join(work, `past-${k}.json`);
+  const run = await startProcess(join(a.bin, 'microdex-station'), [
+    '--scene', 'assets/scenes/tremor_hold.yaml', '--station-id', `web-past-${k}`, '--trainee', 'trainee P',
+    '--skill', skill, '--seed', String(k + 1), '--unpaced', '--wait-for-recorder', '20', '--score-out', out, ...dds,
+  ], /steps, score/, { cwd: sourceDir, timeoutMs: 40000 });
+  await stopProcess(run.child);
+  pastScores.push(JSON.parse(readFileSync(out, 'utf8')).score);
+}
 const station = await startProcess(join(a.bin, 'microdex-station'), [
   '--scene', 'assets/scenes/needle_tube.yaml', '--station-id', id, '--trainee', 'trainee R',
   '--no-realtime', '--duration', '120', ...dds,
@@ -39,8 +52,21 @@ try {
   await page.goto(url);
   await waitFor(() => page.evaluate(() => {
     const c = window.microdexConsole;
-    return c && c.session && c.stations.length === 1 && c.tilesDrawn === 1 && c.framesReceived > 20;
+    const s = c && c.stations.find((x) => x.id === 'web-session');
+    return c && c.session && s && s.presence === 'alive' && c.tilesDrawn >= 1 && c.framesReceived > 20;
   }), 'the live station drawn and the session controls listed', 40000);
+  // The past sessions' plot: trainee P's two runs, with the scores they wrote.
+  const past = await waitFor(() => page.evaluate(() => {
+    const l = window.microdexConsole.past.lines.find((x) => x.trainee === 'trainee P');
+    return l && l.sessions.length === 2 ? l : null;
+  }), 'trainee P\'s two past sessions on the plot', 20000);
+  const drawn = past.sessions.map((x) => x.score);
+  check(drawn.every((v, i) => Math.abs(v - pastScores[i]) < 0.05) && past.scene.endsWith('tremor_hold.yaml'),
+        `the past sessions' line holds the two runs' final scores in order (${drawn.map((v) => v.toFixed(1)).join(', ')} ` +
+        `against --score-out ${pastScores.map((v) => v.toFixed(1)).join(', ')})`);
+  check(await page.locator('#past polyline[data-trainee="trainee P"]').count() === 1 &&
+        await page.locator('#past circle').count() >= 2, 'the plot draws the line with a dot per session');
+  await page.locator('#past').screenshot({ path: join(a.out, 'console_past_scores.png') });
   check(await page.locator('#rec-start').isEnabled(), 'the record button is enabled');
   check(await page.locator('#rec-stop').isDisabled(), 'the stop button is disabled while not recording');
 
