@@ -11,6 +11,7 @@
 
 #include "common/record/recorded_topics.h"
 #include "common/scene/scene.h"
+#include "common/view/scene_description_msg.h"
 #include "common/view/scene_files.h"
 #include "cue_commandPubSubTypes.h"
 #include "cue_overlayPubSubTypes.h"
@@ -172,18 +173,8 @@ class Publishers {
       scenes_missing_.push_back(id + ": " + why);
       return;
     }
-    msg::SceneDescription d;
-    d.station_id(id);
-    d.session_id(s.session_id());
-    d.step(0);
-    d.stamp_ns(s.stamp_ns());
-    d.scene_path(files->scene_path);
-    d.hash(files->hash);
-    d.files().resize(files->files.size());
-    for (std::size_t i = 0; i < files->files.size(); ++i) {
-      d.files()[i].path(files->files[i].path);
-      d.files()[i].bytes().assign(files->files[i].bytes.begin(), files->files[i].bytes.end());
-    }
+    msg::SceneDescription d =
+        view::ToSceneDescription(*files, id, s.session_id().to_string(), s.stamp_ns());
     if (scene_ == nullptr) {
       scene_ = dds_.CreateWriter<msg::SceneDescriptionPubSubType>(net::kSceneDescriptionTopic);
     }

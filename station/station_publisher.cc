@@ -17,6 +17,7 @@
 #include "common/knot/recognition.h"
 #include "common/net/convert.h"
 #include "common/net/overlay_convert.h"
+#include "common/view/scene_description_msg.h"
 #include "common/view/scene_files.h"
 #include "cue_commandPubSubTypes.h"
 #include "cue_overlayPubSubTypes.h"
@@ -182,18 +183,8 @@ StationPublisher::StationPublisher(const PublisherConfig& config, const net::Dds
   if (!scene.path.empty()) {
     try {
       const view::SceneFiles files = view::CollectSceneFiles(scene);
-      msg::SceneDescription d;
-      d.station_id(config_.station_id);
-      d.session_id(config_.session_id);
-      d.step(0);
-      d.stamp_ns(info.header.stamp_ns);
-      d.scene_path(files.scene_path);
-      d.hash(files.hash);
-      d.files().resize(files.files.size());
-      for (std::size_t i = 0; i < files.files.size(); ++i) {
-        d.files()[i].path(files.files[i].path);
-        d.files()[i].bytes().assign(files.files[i].bytes.begin(), files.files[i].bytes.end());
-      }
+      msg::SceneDescription d = view::ToSceneDescription(files, config_.station_id,
+                                                         config_.session_id, info.header.stamp_ns);
       w_->scene = dds_->CreateWriter<msg::SceneDescriptionPubSubType>(net::kSceneDescriptionTopic);
       if (w_->scene->write(&d)) {
         info.scene_hash = files.hash;

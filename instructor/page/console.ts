@@ -328,6 +328,7 @@ interface SessionJson {
 const SPEEDS = [0.25, 0.5, 1, 2, 4, 8];
 class SessionPanel {
   private built = false;
+  private busy = false; // a replay is playing
   private listHtml = '';
   private statusHtml = '';
   private replayHtml = '';
@@ -370,7 +371,8 @@ class SessionPanel {
     const progress = body.querySelector('#rp-progress') as HTMLProgressElement;
     progress.max = r?.length_s || 1;
     progress.value = r ? (r.done && !r.stopped && !r.error ? r.length_s : r.position_s) : 0;
-    for (const id of ['#rp-pause', '#rp-speed', '#rp-stop']) {
+    this.busy = busy;
+    for (const id of ['#rp-pause', '#rp-stop']) {
       (body.querySelector(id) as HTMLInputElement).disabled = !busy;
     }
     (body.querySelector('#rp-pause') as HTMLButtonElement).textContent = r?.paused ? 'resume' : 'pause';
@@ -399,7 +401,8 @@ class SessionPanel {
     body.innerHTML =
         `<div class="row">record <input id="rec-name" size="24" placeholder="name (default: session-DATE-TIME)">` +
         `<button id="rec-start">● record</button><button id="rec-stop">■ stop</button><span id="rec-status"></span></div>` +
-        `<div class="row">replay <button id="rp-pause">pause</button><select id="rp-speed">` +
+        `<div class="row">replay from <input id="rp-from" type="number" min="0" step="any" value="0" style="width:56px"> s ` +
+        `<button id="rp-pause">pause</button><select id="rp-speed">` +
         SPEEDS.map((v) => `<option value="${v}"${v === 1 ? ' selected' : ''}>×${v}</option>`).join('') +
         `</select><button id="rp-stop">■ stop</button><progress id="rp-progress" value="0" max="1"></progress><span id="rp-status"></span></div>` +
         `<div class="msg"></div>` +
@@ -412,10 +415,14 @@ class SessionPanel {
     body.querySelector('#rec-stop')!.addEventListener('click', () => this.send('record stop'));
     body.querySelector('#rp-pause')!.addEventListener('click', () => this.send('replay pause'));
     body.querySelector('#rp-stop')!.addEventListener('click', () => this.send('replay stop'));
-    speed.addEventListener('change', () => this.send(`replay speed ${speed.value}`));
+    // The speed of the replay playing, or of the next one.
+    speed.addEventListener('change', () => {
+      if (this.busy) this.send(`replay speed ${speed.value}`);
+    });
     body.addEventListener('click', (e) => {
       const file = (e.target as HTMLElement).dataset?.play;
-      if (file) this.send(`replay play ${file} ${speed.value}`);
+      const from = Math.max(0, Number((body.querySelector('#rp-from') as HTMLInputElement).value) || 0);
+      if (file) this.send(`replay play ${file} ${speed.value} ${from}`);
     });
   }
 }

@@ -9,6 +9,7 @@
 #include "common/net/dds_context.h"
 #include "common/net/topics.h"
 #include "common/scene/scene.h"
+#include "common/view/scene_description_msg.h"
 #include "common/view/scene_files.h"
 #include "instructor/instructor.h"
 #include "scene_descriptionPubSubTypes.h"
@@ -23,17 +24,7 @@ using testing::WaitUntil;
 constexpr int kDomain = 87;
 
 msg::SceneDescription ToMsg(const std::string& station, const view::SceneFiles& d) {
-  msg::SceneDescription m;
-  m.station_id(station);
-  m.session_id("test");
-  m.scene_path(d.scene_path);
-  m.hash(d.hash);
-  m.files().resize(d.files.size());
-  for (std::size_t i = 0; i < d.files.size(); ++i) {
-    m.files()[i].path(d.files[i].path);
-    m.files()[i].bytes().assign(d.files[i].bytes.begin(), d.files[i].bytes.end());
-  }
-  return m;
+  return view::ToSceneDescription(d, station, "test", 0);
 }
 
 TEST(SceneDescription, KeptWhenSoundRefusedWithTheReasonOtherwise) {

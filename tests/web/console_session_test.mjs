@@ -3,7 +3,8 @@
 // it; the recording is listed with its station and length. Playing it while the station is
 // live is refused with the reason shown on the page; once the station has left, playing it
 // brings the station back into the grid (alive, drawn, new frames), pause holds it, and it
-// plays to its end. A name that would leave DIR is refused. With --db, the final scores of two
+// plays to its end; played again from 1.5 s at ×2 it starts there. A name that would leave
+// DIR is refused. With --db, the final scores of two
 // earlier runs of a trainee are drawn as a line over past sessions, with their scores.
 // node console_session_test.mjs --bin BUILD/bin --out DIR
 import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
@@ -146,6 +147,16 @@ try {
   await waitFor(async () => (await probe(page)).station?.presence === 'left',
                 'the replayed station left at the end', 10000);
   check(/played to the end/.test(await page.locator('#rp-status').textContent()), 'the page says it played to the end');
+  // Again, from 1.5 s into the recording, at ×2: it starts there.
+  await page.locator('#rp-from').fill('1.5');
+  await page.locator('#rp-speed').selectOption('2');
+  await row.locator('button[data-play]').click();
+  const from = await waitFor(async () => {
+    const r = (await probe(page)).session.replay;
+    return r && !r.done && r.position_s > 0 ? r : null;
+  }, 'the replay from 1.5 s playing', 10000);
+  check(from.position_s >= 1.5 && from.speed === 2, `played from ${from.position_s.toFixed(2)} s at ×${from.speed}`);
+  await waitFor(async () => (await probe(page)).session.replay.done, 'the second replay at its end', 15000);
   await page.locator('#session').screenshot({ path: join(a.out, 'console_session_played.png') });
   check(errors.length === 0, `no page errors (${errors.join('; ')})`);
 } finally {
