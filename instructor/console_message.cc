@@ -120,7 +120,18 @@ SessionCommand ParseSessionMessage(const std::string& message) {
       c.verb = SessionCommand::Verb::kRecordStop;
       return c;
     }
-    throw std::invalid_argument("record: expected 'record start [NAME]' or 'record stop'");
+    if (what == "delete") {
+      too_many(1);
+      if (rest.empty()) throw std::invalid_argument("record delete: expected FILE");
+      c.verb = SessionCommand::Verb::kRecordDelete;
+      c.file = rest[0];
+      if (const std::string why = CheckRecordingName(c.file); !why.empty()) {
+        throw std::invalid_argument("record delete: FILE '" + c.file.substr(0, 64) + "' " + why);
+      }
+      return c;
+    }
+    throw std::invalid_argument(
+        "record: expected 'record start [NAME]', 'record stop' or 'record delete FILE'");
   }
   if (verb == "replay") {
     if (what == "play") {
@@ -151,9 +162,17 @@ SessionCommand ParseSessionMessage(const std::string& message) {
       CheckSpeed(c.speed);
       return c;
     }
+    if (what == "seek") {
+      too_many(1);
+      if (rest.empty()) throw std::invalid_argument("replay seek: expected AT_S");
+      c.verb = SessionCommand::Verb::kReplaySeek;
+      c.from_s = ParseNumber(rest[0], "replay seek: AT_S");
+      if (c.from_s < 0) throw std::invalid_argument("replay seek: AT_S below 0");
+      return c;
+    }
     throw std::invalid_argument(
         "replay: expected 'replay play FILE [SPEED [FROM_S]]', 'replay pause', 'replay speed "
-        "SPEED' or 'replay stop'");
+        "SPEED', 'replay seek AT_S' or 'replay stop'");
   }
   throw std::invalid_argument("unknown message '" + verb.substr(0, 32) +
                               "' (expected record or replay)");

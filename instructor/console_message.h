@@ -22,20 +22,23 @@ struct ConsoleCue {
 ConsoleCue ParseConsoleMessage(const std::string& message);
 
 // The session controls' commands (console_session.h): "record start [NAME]", "record stop",
-// "replay play FILE [SPEED [FROM_S]]", "replay pause", "replay speed SPEED", "replay stop".
+// "record delete FILE", "replay play FILE [SPEED [FROM_S]]", "replay pause", "replay speed
+// SPEED", "replay seek AT_S", "replay stop".
 struct SessionCommand {
   enum class Verb {
     kRecordStart,
     kRecordStop,
+    kRecordDelete,
     kReplayPlay,
     kReplayPause,
     kReplaySpeed,
+    kReplaySeek,
     kReplayStop
   };
   Verb verb = Verb::kRecordStop;
-  std::string file;   // record start (may be ""), replay play
+  std::string file;   // record start (may be ""), record delete, replay play
   double speed = 1;   // replay play, replay speed
-  double from_s = 0;  // replay play
+  double from_s = 0;  // replay play (FROM_S), replay seek (AT_S)
 };
 
 // True when the message's verb is "record" or "replay".

@@ -96,15 +96,26 @@ std::string SessionControl::Handle(const SessionCommand& c) {
              ",\"written\":" + std::to_string(s.written) +
              ",\"dropped\":" + std::to_string(s.dropped) + ",\"error\":" + Quote(s.error) + "}";
     }
+    case Verb::kRecordDelete:
+      return DeleteRecording(c.file);
     case Verb::kReplayPlay:
       return StartReplay(c);
     case Verb::kReplayPause:
     case Verb::kReplaySpeed:
+    case Verb::kReplaySeek:
     case Verb::kReplayStop: {
       if (!replaying()) throw std::invalid_argument("replay: nothing is playing");
       PlayerClock& clock = *replay_->clock;
       if (c.verb == Verb::kReplayPause) clock.TogglePause();
       if (c.verb == Verb::kReplaySpeed) clock.SetSpeed(c.speed);
+      if (c.verb == Verb::kReplaySeek) {
+        const double length_s = static_cast<double>(replay_->last_ns - replay_->first_ns) * 1e-9;
+        if (c.from_s > length_s) {
+          throw std::invalid_argument("replay seek: " + Num(c.from_s) + " s is past the end (" +
+                                      Num(length_s) + " s)");
+        }
+        clock.Seek(replay_->first_ns + static_cast<std::int64_t>(c.from_s * 1e9));
+      }
       if (c.verb == Verb::kReplayStop) {
         replay_->stop = true;
         replay_->thread.join();
@@ -138,6 +149,31 @@ std::string SessionControl::StartRecording(const std::string& name) {
   next_list_ns_ = 0;
   spdlog::info("console: recording to {}", path.string());
   return "{\"type\":\"recording_started\",\"file\":" + Quote(name) + "}";
+}
+
+std::string SessionControl::DeleteRecording(const std::string& name) {
+  if (fs::path(instructor_.RecordingPath()).filename().string() == name) {
+    throw std::invalid_argument("record delete: " + name + " is being recorded; stop it first");
+  }
+  if (replaying() && replay_->file == name) {
+    throw std::invalid_argument("record delete: " + name + " is playing; stop it first");
+  }
+  const fs::path path = fs::path(dir_) / name;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw std::invalid_argument("record delete: no recording " + name + " in " + dir_);
+  }
+  const std::uintmax_t bytes = fs::file_size(path, ec);
+  if (!fs::remove(path, ec) || ec) {
+    throw std::runtime_error("record delete: " + path.string() + ": " + ec.message());
+  }
+  // SQLite's companions, left by a recorder that did not close.
+  for (const char* suffix : {"-wal", "-shm", "-journal"}) fs::remove(path.string() + suffix, ec);
+  cache_.erase(name);
+  next_list_ns_ = 0;
+  spdlog::info("console: deleted the recording {}", path.string());
+  return "{\"type\":\"recording_deleted\",\"file\":" + Quote(name) +
+         ",\"bytes\":" + std::to_string(bytes) + "}";
 }
 
 std::string SessionControl::StartReplay(const SessionCommand& c) {
@@ -288,6 +324,7 @@ std::string SessionControl::StatusJson() {
            ",\"length_s\":" + Num(length_s) + ",\"position_s\":" + Num(at_s) +
            ",\"speed\":" + Num(r.clock->speed()) +
            ",\"paused\":" + (r.clock->paused() ? "true" : "false") +
+           ",\"seeks\":" + std::to_string(r.clock->seeks()) +
            ",\"done\":" + (done ? "true" : "false");
     if (done) {
       out += ",\"published\":" + std::to_string(r.stats.published) +

@@ -5,9 +5,11 @@
 //
 //   record start [NAME]                 NAME.db in DIR (default session-YYYYMMDD-HHMMSS.db, UTC)
 //   record stop
+//   record delete FILE                  FILE (and SQLite's -wal, -shm) removed from DIR
 //   replay play FILE [SPEED [FROM_S]]   FILE: a recording in DIR, by name
 //   replay pause                        pause or resume
 //   replay speed SPEED                  1/64 … 1024
+//   replay seek AT_S                    on from AT_S s after the recording's start
 //   replay stop
 //
 // A replay republishes the recording over DDS (replay_player.h) from a participant of this
@@ -16,7 +18,8 @@
 // Refused, with the reason: a replay while recording or replaying, a recording while
 // replaying, a replay of a station that is alive here now (its samples would mix with the live
 // ones), a replay from a secure console (its participant has no identity of the course: use
-// microdex-replay), a name with a folder in it or that exists already.
+// microdex-replay), a name with a folder in it or that exists already, the deletion of the
+// file being recorded or replayed.
 //
 // Threads: Handle and StatusJson run on the view server's thread; the replay on a thread of
 // its own (Play), stopped by the destructor.
@@ -87,6 +90,7 @@ class SessionControl {
   void EndReplay();  // joins a finished or stopped replay
   std::string StartRecording(const std::string& name);
   std::string StartReplay(const SessionCommand& c);
+  std::string DeleteRecording(const std::string& name);
 
   Instructor& instructor_;
   std::string dir_;

@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <type_traits>
 #include <unordered_map>
+#include <utility>
 
 #include "common/base/check.h"
 #include "common/net/convert.h"
@@ -370,7 +371,10 @@ StationView& Instructor::ViewFor(const std::string& station_id) {
 void Instructor::Run() {
   dds::ConditionSeq active;
   while (!stop_.load()) {
-    dds_->waitset.wait(active, eprosima::fastrtps::Duration_t(0, 200'000'000));
+    // A backlog left by the last pass is taken at once; otherwise wait for data.
+    if (!std::exchange(backlog_, false)) {
+      dds_->waitset.wait(active, eprosima::fastrtps::Duration_t(0, 200'000'000));
+    }
     if (stop_.load()) break;
     dds_->guard.set_trigger_value(false);
     SendQueuedCues();
@@ -394,6 +398,22 @@ void Instructor::Run() {
   }
 }
 
+// One pass of Run() takes at most this many samples of each reader, so that a flood on one
+// topic (8 stations' 1 kHz DeviceInput on a starved host) never holds the others back past
+// their writers' history (the mirrored states keep 4 s: a longer wait is a sequence gap in a
+// recording). The rest are taken on the next pass, which comes at once.
+constexpr int kTakeBatch = 256;
+
+bool Instructor::TakeNext(void* reader, void* m, void* si, int& taken) {
+  if (taken == kTakeBatch) {
+    backlog_ = true;
+    return false;
+  }
+  ++taken;
+  return static_cast<dds::DataReader*>(reader)->take_next_sample(
+             m, static_cast<dds::SampleInfo*>(si)) == ReturnCode_t::RETCODE_OK;
+}
+
 void Instructor::CheckSilence() {
   const std::int64_t now = MonotonicNowNs();
   std::lock_guard<std::mutex> lock(mutex_);
@@ -406,7 +426,7 @@ void Instructor::CheckSilence() {
 void Instructor::HandleStationInfo() {
   msg::StationInfo m;
   dds::SampleInfo si;
-  while (dds_->info->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(dds_->info, &m, &si, taken);) {
     net::StationInfo info;
     if (si.valid_data) {
       if (!FromItsStation(&si, m.station_id().c_str(), "station_info")) continue;
@@ -521,7 +541,7 @@ void Instructor::TakeAll(void* reader_ptr, Mirror<Plain> StationView::*mirror, c
   auto* reader = static_cast<dds::DataReader*>(reader_ptr);
   Msg m;
   dds::SampleInfo si;
-  while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(reader, &m, &si, taken);) {
     if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), topic)) continue;
     Plain p;
     std::string why;
@@ -561,7 +581,7 @@ void Instructor::RecordOnly(void* reader_ptr, record::TopicIndex topic, const ch
   if (reader == nullptr) return;
   Msg m;
   dds::SampleInfo si;
-  while (reader->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(reader, &m, &si, taken);) {
     // DeviceForce: a bimanual station's second device writes under STATION/2.
     if (si.valid_data && FromItsStation(&si, m.station_id().c_str(), name,
                                         /*second_device_key=*/true)) {
@@ -575,7 +595,7 @@ void Instructor::HandleInputs() {
   dds::SampleInfo si;
   net::DeviceInput p;
   if (dds_->input == nullptr) return;  // not taken (InstructorOptions::receive_inputs)
-  while (dds_->input->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(dds_->input, &m, &si, taken);) {
     if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "device_input")) continue;
     std::string why;
     if (!net::FromMsg(m, p, &why)) {
@@ -617,7 +637,7 @@ void Instructor::HandleInputs() {
 void Instructor::HandleEvents() {
   msg::TaskEvent m;
   dds::SampleInfo si;
-  while (dds_->events->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(dds_->events, &m, &si, taken);) {
     if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "task_event")) continue;
     net::TaskEvent e;
     std::string why;
@@ -838,7 +858,7 @@ void Instructor::VisitStations(const std::function<void(const StationView&)>& f)
 void Instructor::HandleSceneDescriptions() {
   msg::SceneDescription m;
   dds::SampleInfo si;
-  while (dds_->scene->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(dds_->scene, &m, &si, taken);) {
     if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "scene_description")) {
       continue;
     }
@@ -889,7 +909,7 @@ void Instructor::HandleOverlays() {
   msg::CueOverlay m;
   dds::SampleInfo si;
   OverlayMirror o;
-  while (dds_->overlay->take_next_sample(&m, &si) == ReturnCode_t::RETCODE_OK) {
+  for (int taken = 0; TakeNext(dds_->overlay, &m, &si, taken);) {
     if (!si.valid_data || !FromItsStation(&si, m.station_id().c_str(), "cue_overlay")) continue;
     std::string why;
     if (!net::FromMsg(m, o.header, o.active_cues, o.overlay, &why)) {

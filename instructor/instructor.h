@@ -221,6 +221,10 @@ class Instructor {
   void Run();
   void HandleStationInfo();
   void HandleLiveliness();
+  // Takes the next sample of `reader` (a dds::DataReader) into `m` and `si`, at most
+  // kTakeBatch per reader and pass of Run(): a reader with more left marks a backlog, and
+  // the next pass comes at once.
+  bool TakeNext(void* reader, void* m, void* si, int& taken);
   template <class Msg, class Plain>
   void TakeAll(void* reader, Mirror<Plain> StationView::*mirror, const char* topic);
   // Takes every sample of a topic only recorded (no mirror): DeviceForce. `name`: the
@@ -274,6 +278,7 @@ class Instructor {
   std::shared_ptr<record::Recorder> CurrentRecorder() const;
   std::unique_ptr<Dds> dds_;
   std::atomic<bool> stop_{false};
+  bool backlog_ = false;  // DDS thread: a reader had more than one pass's batch
   std::atomic<std::uint64_t> next_cue_id_{1};
 
   mutable std::mutex mutex_;  // guards everything below

@@ -377,10 +377,11 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     }
     std::printf(
         "replaying %s: %.1f s at %gx on domain %d (keys: space pause, n step 0.1 s, "
-        "+/- speed, q quit)\n",
+        "[ / ] seek 5 s back / on, +/- speed, q quit)\n",
         file.c_str(), static_cast<double>(last_ns - first_ns) * 1e-9, speed, dds.domain_id);
     std::fflush(stdout);
     std::atomic<bool> done{false};
+    const std::int64_t session_first_ns = first_ns, session_last_ns = last_ns;
     std::thread keys([&] {
       RawTerminal term;
       if (!term.active()) return;
@@ -392,6 +393,12 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
           std::printf("%s\n", clock.paused() ? "paused" : "playing");
         } else if (c == 'n') {
           clock.Step(100'000'000);
+        } else if (c == '[' || c == ']') {
+          const std::int64_t to = std::clamp<std::int64_t>(
+              clock.SessionNowNs() + (c == '[' ? -5'000'000'000 : 5'000'000'000), session_first_ns,
+              session_last_ns);
+          clock.Seek(to);
+          std::printf("at %.1f s\n", static_cast<double>(to - session_first_ns) * 1e-9);
         } else if (c == '+') {
           clock.SetSpeed(clock.speed() * 2);
           std::printf("speed %gx\n", clock.speed());

@@ -184,6 +184,27 @@ class Publishers {
   const std::vector<std::string>& scenes_sent() const { return scenes_sent_; }
   const std::vector<std::string>& scenes_missing() const { return scenes_missing_; }
 
+  // After a seek: new StationInfo and DeviceInput writers, the old ones kept until
+  // DropOldWriters (so that the stations' instances always have a writer: a console sees no
+  // station lost). A console takes a StationInfo from another writer as a new run, and the
+  // DeviceInput steps that follow as that run's, not as repeats.
+  void RenewRunWriters() {
+    old_.push_back(info_);
+    for (auto& [s, w] : inputs_) {
+      old_.push_back(w);
+      w = dds_.CreateWriter<msg::DeviceInputPubSubType>(net::kDeviceInputTopic);
+    }
+    info_ = dds_.CreateWriter<msg::StationInfoPubSubType>(net::kStationInfoTopic);
+    writers_[TopicIndex::kStationInfo] = info_;
+    stations_.clear();
+  }
+  // Once the new StationInfo writer's announcements are acknowledged (up to 1 s).
+  void DropOldWriters() {
+    info_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(1, 0));
+    for (dds::DataWriter* w : old_) dds_.DeleteWriter(w);
+    old_.clear();
+  }
+
   // The replayed stations leave: their StationInfo instances are disposed.
   void DisposeStations() {
     for (auto& [id, s] : stations_) info_->dispose(&s, info_->lookup_instance(&s));
@@ -201,6 +222,7 @@ class Publishers {
   dds::DataWriter* info_ = nullptr;
   std::map<TopicIndex, dds::DataWriter*> writers_;
   std::map<std::string, dds::DataWriter*> inputs_;  // by station
+  std::vector<dds::DataWriter*> old_;               // replaced by a seek, not yet deleted
   std::map<std::string, msg::StationInfo> stations_;
   net::DdsContext& dds_;
   std::string scene_dir_;
@@ -302,6 +324,18 @@ bool PlayerClock::paused() const {
   return paused_;
 }
 
+void PlayerClock::Seek(std::int64_t session_ns) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  anchor_session_ns_ = session_ns;
+  anchor_wall_ns_ = now_();
+  ++seeks_;
+}
+
+std::uint64_t PlayerClock::seeks() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return seeks_;
+}
+
 void PlayerClock::Step(std::int64_t dt_ns) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (paused_) anchor_session_ns_ += dt_ns;
@@ -323,42 +357,61 @@ PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const 
         MonoNowNs() + static_cast<std::int64_t>(o.wait_for_console_s * 1e9), stop);
   }
   clock.Restart();
-  // A replay that starts later than the beginning still announces every station first: the
-  // latest StationInfo of each before `from`.
-  if (from_ns > first_ns) {
+  std::int64_t from = from_ns;
+  for (bool sought = false;;) {
+    const std::uint64_t seeks = clock.seeks();
+    // A replay that starts later than the beginning still announces every station first: the
+    // latest StationInfo of each before `from`.
+    // After a seek, the new writer announces them even at the session's start.
+    if (from > first_ns || sought) {
+      record::MessageFilter f;
+      f.topic = static_cast<int>(TopicIndex::kStationInfo);
+      f.to_ns = from;
+      reader.ForEach(f, [&](const record::MessageView& m) {
+        if (pub.Publish(m)) ++stats.published;
+        return true;
+      });
+    }
+    if (sought) pub.DropOldWriters();
+    sought = false;
     record::MessageFilter f;
-    f.topic = static_cast<int>(TopicIndex::kStationInfo);
-    f.to_ns = from_ns;
+    f.from_ns = from;
+    f.to_ns = to_ns;
+    std::int64_t reached = from;
     reader.ForEach(f, [&](const record::MessageView& m) {
-      if (pub.Publish(m)) ++stats.published;
+      if (m.topic == static_cast<int>(TopicIndex::kCueCommand) && !o.republish_cues) return true;
+      if (m.topic == static_cast<int>(TopicIndex::kDeviceForce)) return true;  // drives a device
+      // Wait until the clock reaches the message (sleeping in slices, so that pause, seek and
+      // stop work).
+      for (;;) {
+        if (stop.load()) return false;
+        if (clock.seeks() != seeks) {
+          sought = true;
+          return false;
+        }
+        const std::optional<std::int64_t> wall = clock.WallTimeOf(m.receive_ns);
+        const std::int64_t now = clock.WallNowNs();
+        if (wall && *wall <= now) break;
+        const std::int64_t wait =
+            wall ? std::min<std::int64_t>(*wall - now, 20'000'000) : 20'000'000;
+        std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
+      }
+      if (pub.Publish(m)) {
+        ++stats.published;
+      } else {
+        ++stats.undecodable;
+      }
+      reached = m.receive_ns;
       return true;
     });
+    stats.session_s += static_cast<double>(reached - from) * 1e-9;
+    if (!sought || stop.load()) break;
+    ++stats.seeks;
+    pub.RenewRunWriters();
+    pub.WaitForReaders(MonoNowNs() + 2'000'000'000, stop);
+    // Where the clock is now (the seek, and the little time the new writers took to match).
+    from = std::clamp(clock.SessionNowNs(), first_ns, to_ns);
   }
-  record::MessageFilter f;
-  f.from_ns = from_ns;
-  f.to_ns = to_ns;
-  std::int64_t reached = from_ns;
-  reader.ForEach(f, [&](const record::MessageView& m) {
-    if (m.topic == static_cast<int>(TopicIndex::kCueCommand) && !o.republish_cues) return true;
-    if (m.topic == static_cast<int>(TopicIndex::kDeviceForce)) return true;  // drives a device
-    // Wait until the clock reaches the message (sleeping in slices, so pause and stop work).
-    for (;;) {
-      if (stop.load()) return false;
-      const std::optional<std::int64_t> wall = clock.WallTimeOf(m.receive_ns);
-      const std::int64_t now = clock.WallNowNs();
-      if (wall && *wall <= now) break;
-      const std::int64_t wait = wall ? std::min<std::int64_t>(*wall - now, 20'000'000) : 20'000'000;
-      std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
-    }
-    if (pub.Publish(m)) {
-      ++stats.published;
-    } else {
-      ++stats.undecodable;
-    }
-    reached = m.receive_ns;
-    return true;
-  });
-  stats.session_s = static_cast<double>(reached - from_ns) * 1e-9;
   stats.scenes_sent = pub.scenes_sent();
   stats.scenes_missing = pub.scenes_missing();
   pub.DisposeStations();

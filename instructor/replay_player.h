@@ -36,6 +36,9 @@ class PlayerClock {
   bool paused() const;
   // While paused: advance the session time by dt and stay paused.
   void Step(std::int64_t dt_ns);
+  // Jumps to session time t, playing or paused; the player goes on from there (Play).
+  void Seek(std::int64_t session_ns);
+  std::uint64_t seeks() const;  // how many Seek calls so far
 
  private:
   std::int64_t SessionAtLocked(std::int64_t wall_ns) const;
@@ -45,6 +48,7 @@ class PlayerClock {
   std::int64_t anchor_wall_ns_;
   double speed_;
   bool paused_ = false;
+  std::uint64_t seeks_ = 0;
 };
 
 // Where a recorded station's scene is on this machine: its recorded path if that is a file,
@@ -71,14 +75,18 @@ struct PlayOptions {
 struct PlayStats {
   std::uint64_t published = 0;
   std::uint64_t undecodable = 0;
-  double session_s = 0;  // session time covered
+  double session_s = 0;  // session time covered (summed over the stretches between seeks)
+  std::uint64_t seeks = 0;
   bool console_found = false;
   // Stations whose scene was sent, and those whose scene was not found here or differs from
   // the recorded one ("STATION: why").
   std::vector<std::string> scenes_sent, scenes_missing;
 };
 
-// Plays the recording until its end, `stop`, or to_s. Throws std::runtime_error for DDS
+// Plays the recording until its end, `stop`, or to_s. A seek of the clock (PlayerClock::Seek)
+// goes on from the time sought, backwards or forwards: every station is announced again, from
+// a new StationInfo writer (so that a console takes the steps again as a new run's, not as
+// repeats), with its latest StationInfo before that time. Throws std::runtime_error for DDS
 // failures (profile, ...).
 PlayStats Play(record::SessionReader& reader, const net::DdsOptions& dds, const PlayOptions& o,
                PlayerClock& clock, const std::atomic<bool>& stop);

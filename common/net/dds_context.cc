@@ -185,6 +185,10 @@ dds::DataWriter* DdsContext::CreateWriterImpl(dds::Topic* topic, const TopicSpec
                             spec.writer_profile);
 }
 
+void DdsContext::DeleteWriter(dds::DataWriter* writer) {
+  if (writer != nullptr) publisher_->delete_datawriter(writer);
+}
+
 dds::DataReader* DdsContext::CreateReaderImpl(dds::Topic* topic, const TopicSpec& spec) {
   dds::DataReader* reader = subscriber_->create_datareader_with_profile(topic, spec.reader_profile);
   if (reader == nullptr && !options_.security_dir.empty()) {

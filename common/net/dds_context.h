@@ -93,6 +93,9 @@ class DdsContext {
     return CreateReaderImpl(GetTopic<PubSubType>(spec), spec);
   }
 
+  // Deletes a writer this context created (its readers see it go).
+  void DeleteWriter(dds::DataWriter* writer);
+
   dds::DomainParticipant* participant() { return participant_; }
   const DdsOptions& options() const { return options_; }
   // The participant profile the participant was created from.

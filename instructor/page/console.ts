@@ -322,13 +322,14 @@ interface SessionJson {
   recording: null | { file: string; seconds: number; written: number; dropped: number; error: string };
   last_recording: null | { file: string; written: number; dropped: number };
   replay: null | { file: string; stations: string[]; length_s: number; position_s: number; speed: number;
-    paused: boolean; done: boolean; published?: number; stopped?: boolean; error?: string; scenes_missing?: string[] };
+    paused: boolean; seeks: number; done: boolean; published?: number; stopped?: boolean; error?: string; scenes_missing?: string[] };
   recordings: RecordingJson[];
 }
 const SPEEDS = [0.25, 0.5, 1, 2, 4, 8];
 class SessionPanel {
   private built = false;
   private busy = false; // a replay is playing
+  private seeking = false; // the position slider is held: the updates leave it alone
   private listHtml = '';
   private statusHtml = '';
   private replayHtml = '';
@@ -368,9 +369,13 @@ class SessionPanel {
       this.replayHtml = replay;
       (body.querySelector('#rp-status') as HTMLElement).innerHTML = replay;
     }
-    const progress = body.querySelector('#rp-progress') as HTMLProgressElement;
-    progress.max = r?.length_s || 1;
-    progress.value = r ? (r.done && !r.stopped && !r.error ? r.length_s : r.position_s) : 0;
+    // The position, and the slider that seeks the replay playing.
+    const seek = body.querySelector('#rp-seek') as HTMLInputElement;
+    seek.disabled = !busy;
+    if (!this.seeking) {
+      seek.max = String(r?.length_s || 1);
+      seek.value = String(r ? (r.done && !r.stopped && !r.error ? r.length_s : r.position_s) : 0);
+    }
     this.busy = busy;
     for (const id of ['#rp-pause', '#rp-stop']) {
       (body.querySelector(id) as HTMLInputElement).disabled = !busy;
@@ -379,7 +384,8 @@ class SessionPanel {
     const rows = session.recordings.map((f) => `<tr data-file="${esc(f.file)}"><td>${esc(f.file)}</td>` +
         `<td>${f.recording ? '<span class="rec-on">recording…</span>' : f.error ? `<span class="lost">${esc(f.error)}</span>` : esc(f.stations.join(', '))}</td>` +
         `<td class="num">${f.recording ? '' : f.seconds.toFixed(1) + ' s'}</td><td class="num">${(f.bytes / 1e6).toFixed(2)} MB</td>` +
-        `<td>${f.recording || f.error || !session.can_replay ? '' : `<button data-play="${esc(f.file)}"${busy || rec ? ' disabled' : ''}>▶ play</button>`}</td></tr>`).join('');
+        `<td>${f.recording || f.error || !session.can_replay ? '' : `<button data-play="${esc(f.file)}"${busy || rec ? ' disabled' : ''}>▶ play</button>`}` +
+        `${f.recording ? '' : `<button data-delete="${esc(f.file)}"${busy && r?.file === f.file ? ' disabled' : ''}>✕ delete</button>`}</td></tr>`).join('');
     if (rows !== this.listHtml) {
       this.listHtml = rows;
       (body.querySelector('#recordings tbody') as HTMLElement).innerHTML =
@@ -404,7 +410,7 @@ class SessionPanel {
         `<div class="row">replay from <input id="rp-from" type="number" min="0" step="any" value="0" style="width:56px"> s ` +
         `<button id="rp-pause">pause</button><select id="rp-speed">` +
         SPEEDS.map((v) => `<option value="${v}"${v === 1 ? ' selected' : ''}>×${v}</option>`).join('') +
-        `</select><button id="rp-stop">■ stop</button><progress id="rp-progress" value="0" max="1"></progress><span id="rp-status"></span></div>` +
+        `</select><button id="rp-stop">■ stop</button><input id="rp-seek" type="range" min="0" max="1" step="0.1" value="0" title="position: drag to seek"><span id="rp-status"></span></div>` +
         `<div class="msg"></div>` +
         `<table id="recordings"><thead><tr><th>recording</th><th>stations</th><th>length</th><th>size</th><th></th></tr></thead><tbody></tbody></table>`;
     const name = body.querySelector('#rec-name') as HTMLInputElement;
@@ -419,10 +425,21 @@ class SessionPanel {
     speed.addEventListener('change', () => {
       if (this.busy) this.send(`replay speed ${speed.value}`);
     });
+    // Seek: while the slider is held its value is the user's; on release the replay goes on
+    // from there.
+    const seek = body.querySelector('#rp-seek') as HTMLInputElement;
+    seek.addEventListener('input', () => { this.seeking = true; });
+    seek.addEventListener('change', () => {
+      this.seeking = false;
+      if (this.busy) this.send(`replay seek ${Number(seek.value)}`);
+    });
     body.addEventListener('click', (e) => {
-      const file = (e.target as HTMLElement).dataset?.play;
+      const data = (e.target as HTMLElement).dataset ?? {};
       const from = Math.max(0, Number((body.querySelector('#rp-from') as HTMLInputElement).value) || 0);
-      if (file) this.send(`replay play ${file} ${speed.value} ${from}`);
+      if (data.play) this.send(`replay play ${data.play} ${speed.value} ${from}`);
+      if (data.delete && window.confirm(`Delete the recording ${data.delete}? This cannot be undone.`)) {
+        this.send(`record delete ${data.delete}`);
+      }
     });
   }
 }
@@ -560,6 +577,8 @@ function main(): void {
         session.note(`recording to ${m.file}`, false);
       } else if (m.type === 'recording_stopped') {
         session.note(`recorded ${m.written} samples to ${m.file} (${m.dropped} dropped)`, false);
+      } else if (m.type === 'recording_deleted') {
+        session.note(`deleted ${m.file} (${(Number(m.bytes) / 1e6).toFixed(2)} MB)`, false);
       } else if (m.type === 'replay_started') {
         session.note(`replaying ${m.file}: ${(m.stations as string[]).join(', ')}, ${Number(m.length_s).toFixed(1)} s`, false);
       }

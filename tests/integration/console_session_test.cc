@@ -3,7 +3,9 @@
 // holds its states; a second start and a replay of a live station are refused with the reason;
 // once the station has left, the recording replays into the same console (the station alive
 // again, with new states), paused and resumed, to its end, after which the station has left
-// again. A console not started ready to record refuses to start one.
+// again. A seek back goes on from the earlier time without the station being lost and without
+// its inputs refused as repeats. A recording is deleted, except while it plays. A console not
+// started ready to record refuses to start one.
 #include "instructor/console_session.h"
 
 #include <gtest/gtest.h>
@@ -112,6 +114,7 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
       WaitUntil([&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s));
   const std::uint64_t tools_before = Station(console).tool.count;
   const int comebacks_before = Station(console).comebacks;
+  const std::uint64_t inputs_before = Station(console).inputs_received;
 
   session.Handle(instructor::ParseSessionMessage("replay play first.db 1"));
   EXPECT_TRUE(session.replaying());
@@ -131,6 +134,26 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   std::this_thread::sleep_for(500ms);
   EXPECT_EQ(Station(console).tool.count, paused_at) << "nothing is replayed while paused";
   session.Handle(instructor::ParseSessionMessage("replay pause"));
+
+  // Seek back to near the start: the station is announced again by a new writer, so that its
+  // inputs, whose steps the console has taken already, count as a new run's.
+  ASSERT_TRUE(
+      WaitUntil([&] { return Station(console).inputs_received > inputs_before + 600; }, 10s));
+  EXPECT_NE(Refusal(session, "replay seek 99").find("past the end"), std::string::npos);
+  EXPECT_NE(Refusal(session, "record delete first.db").find("is playing"), std::string::npos);
+  const auto sought_from = Station(console);
+  const std::uint64_t rejected_before = console.Rejected().total;
+  session.Handle(instructor::ParseSessionMessage("replay seek 0.1"));
+  EXPECT_NE(session.StatusJson().find("\"seeks\":1"), std::string::npos);
+  ASSERT_TRUE(WaitUntil(
+      [&] { return Station(console).inputs_received > sought_from.inputs_received + 300; }, 10s))
+      << session.StatusJson();
+  const auto sought = Station(console);
+  EXPECT_EQ(sought.presence, instructor::Presence::kAlive);
+  EXPECT_EQ(sought.comebacks, sought_from.comebacks) << "the station was not lost on the seek";
+  EXPECT_EQ(console.Rejected().total, rejected_before) << console.Rejected().last_reason;
+  EXPECT_LT(sought.last_input_step, sought_from.last_input_step)
+      << "the inputs go on from the earlier time";
   session.Handle(instructor::ParseSessionMessage("replay speed 4"));
   ASSERT_TRUE(WaitUntil([&] { return !session.replaying(); }, 20s)) << session.StatusJson();
   const std::string done = session.StatusJson();
@@ -138,9 +161,21 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   EXPECT_NE(done.find("\"stopped\":false"), std::string::npos) << done;
   EXPECT_NE(done.find("\"error\":\"\""), std::string::npos) << done;
   EXPECT_GT(Station(console).tool.count, paused_at);
+  EXPECT_NE(done.find("\"seeks\":1"), std::string::npos) << done;
   EXPECT_TRUE(
       WaitUntil([&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s))
       << "the replayed station leaves at the end";
+
+  // Deleted once it is not playing.
+  EXPECT_NE(Refusal(session, "record delete none.db").find("no recording none.db"),
+            std::string::npos);
+  const std::string deleted =
+      session.Handle(instructor::ParseSessionMessage("record delete first.db"));
+  EXPECT_NE(deleted.find("\"type\":\"recording_deleted\""), std::string::npos) << deleted;
+  struct stat st {};
+  EXPECT_NE(stat((dir + "/recordings/first.db").c_str(), &st), 0);
+  EXPECT_TRUE(session.Recordings().empty());
+  EXPECT_EQ(session.StatusJson().find("first.db\",\"bytes"), std::string::npos);
   testing::KillAll(pids);
 }
 

@@ -135,6 +135,20 @@ try {
   check(Math.abs(still - at) < 0.05, `paused, the position holds (${at.toFixed(2)} → ${still.toFixed(2)} s)`);
   check((await page.locator('#rp-pause').textContent()) === 'resume', 'the pause button offers resume');
   await page.locator('#rp-pause').click();
+  // Dragged back on the position slider: the replay goes on from there, the station alive.
+  const before = (await probe(page)).session.replay.position_s;
+  await page.locator('#rp-seek').evaluate((el) => {
+    el.value = '0.3';
+    el.dispatchEvent(new Event('input'));
+    el.dispatchEvent(new Event('change'));
+  });
+  const sought = await waitFor(async () => {
+    const p = await probe(page);
+    const r = p.session.replay;
+    return r && !r.done && r.seeks === 1 ? { r, presence: p.station?.presence } : null;
+  }, 'the replay sought back', 5000);
+  check(sought.r.position_s < before && sought.r.position_s < 1.2 && sought.presence === 'alive',
+        `sought back from ${before.toFixed(2)} to ${sought.r.position_s.toFixed(2)} s, the station ${sought.presence}`);
   const ended = await waitFor(async () => {
     const r = (await probe(page)).session.replay;
     return r && r.done ? r : null;
@@ -158,6 +172,16 @@ try {
   check(from.position_s >= 1.5 && from.speed === 2, `played from ${from.position_s.toFixed(2)} s at ×${from.speed}`);
   await waitFor(async () => (await probe(page)).session.replay.done, 'the second replay at its end', 15000);
   await page.locator('#session').screenshot({ path: join(a.out, 'console_session_played.png') });
+  // Deleted from the table, once confirmed.
+  let asked = '';
+  page.once('dialog', (d) => { asked = d.message(); d.accept(); });
+  await row.locator('button[data-delete]').click();
+  await waitFor(async () => (await probe(page)).messages.find((x) => /^deleted lesson-1\.db/.test(x)) ?? null,
+                'the deletion confirmed', 10000);
+  check(/Delete the recording lesson-1\.db\?/.test(asked), `the page asked first ("${asked}")`);
+  check(!readdirSync(recordings).includes('lesson-1.db'), 'the file is gone from the folder');
+  await waitFor(async () => (await page.locator('#recordings tr[data-file="lesson-1.db"]').count()) === 0 || null,
+                'the row gone from the table', 5000);
   check(errors.length === 0, `no page errors (${errors.join('; ')})`);
 } finally {
   await close();

@@ -38,6 +38,21 @@ TEST(SessionMessage, ReplayTakesFileSpeedAndStart) {
   EXPECT_EQ(ParseSessionMessage("replay pause").verb, Verb::kReplayPause);
   EXPECT_EQ(ParseSessionMessage("replay stop").verb, Verb::kReplayStop);
   EXPECT_DOUBLE_EQ(ParseSessionMessage("replay speed 0.25").speed, 0.25);
+  const SessionCommand seek = ParseSessionMessage("replay seek 12.5");
+  EXPECT_EQ(seek.verb, Verb::kReplaySeek);
+  EXPECT_DOUBLE_EQ(seek.from_s, 12.5);
+  EXPECT_DOUBLE_EQ(ParseSessionMessage("replay seek 0").from_s, 0);
+}
+
+TEST(SessionMessage, RecordDeleteTakesOneRecordingOfTheFolder) {
+  const SessionCommand c = ParseSessionMessage("record delete lesson-1.db");
+  EXPECT_EQ(c.verb, Verb::kRecordDelete);
+  EXPECT_EQ(c.file, "lesson-1.db");
+  EXPECT_NE(Refusal("record delete").find("expected FILE"), std::string::npos);
+  EXPECT_NE(Refusal("record delete ../../etc/x.db").find("starts with '.'"), std::string::npos);
+  EXPECT_NE(Refusal("record delete /etc/passwd").find("has a character"), std::string::npos);
+  EXPECT_NE(Refusal("record delete notes.txt").find("does not end in .db"), std::string::npos);
+  EXPECT_NE(Refusal("record delete a.db b.db").find("unexpected 'b.db'"), std::string::npos);
 }
 
 TEST(SessionMessage, NamesThatLeaveTheFolderOrAreNotRecordingsAreRefused) {
@@ -60,6 +75,9 @@ TEST(SessionMessage, BadNumbersAndWordsAreRefusedWithTheReason) {
   EXPECT_NE(Refusal("replay speed 0").find("outside"), std::string::npos);
   EXPECT_NE(Refusal("replay play a.db 1 -3").find("below 0"), std::string::npos);
   EXPECT_NE(Refusal("replay play").find("expected FILE"), std::string::npos);
+  EXPECT_NE(Refusal("replay seek").find("expected AT_S"), std::string::npos);
+  EXPECT_NE(Refusal("replay seek -1").find("below 0"), std::string::npos);
+  EXPECT_NE(Refusal("replay seek end").find("AT_S 'end' is not a number"), std::string::npos);
   EXPECT_NE(Refusal("record stop now").find("unexpected 'now'"), std::string::npos);
   EXPECT_NE(Refusal("record begin").find("expected 'record start"), std::string::npos);
   EXPECT_NE(Refusal("replay rewind").find("expected 'replay play"), std::string::npos);
