@@ -56,6 +56,32 @@ TEST(PlayerClock, RunsAtItsSpeedPausesStepsAndChangesSpeedInPlace) {
   EXPECT_EQ(c.SessionNowNs(), kStart + 451 * kMs);
 }
 
+// A seek jumps to the time sought, back or on, and keeps the speed and the pause; every seek
+// is counted (the player restarts from the time on a new count).
+TEST(PlayerClock, SeekJumpsBackOrOnKeepingSpeedAndPause) {
+  g_now_ns = 7'000 * kMs;
+  PlayerClock c(kStart, 2.0, &FakeNow);
+  g_now_ns += 500 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 1'000 * kMs);
+  EXPECT_EQ(c.seeks(), 0u);
+  c.Seek(kStart + 200 * kMs);  // back
+  EXPECT_EQ(c.seeks(), 1u);
+  EXPECT_EQ(c.SessionNowNs(), kStart + 200 * kMs);
+  g_now_ns += 100 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 400 * kMs) << "at ×2 from the time sought";
+  EXPECT_EQ(c.WallTimeOf(kStart + 600 * kMs), g_now_ns + 100 * kMs);
+  c.TogglePause();
+  c.Seek(kStart + 5'000 * kMs);  // on, while paused
+  EXPECT_EQ(c.seeks(), 2u);
+  g_now_ns += 1'000 * kMs;
+  EXPECT_TRUE(c.paused());
+  EXPECT_EQ(c.SessionNowNs(), kStart + 5'000 * kMs) << "paused where it was sought to";
+  EXPECT_FALSE(c.WallTimeOf(kStart + 5'001 * kMs).has_value());
+  c.TogglePause();
+  g_now_ns += 50 * kMs;
+  EXPECT_EQ(c.SessionNowNs(), kStart + 5'100 * kMs);
+}
+
 // Where a replay looks for a recorded station's scene: the recorded path if it is a file, else
 // the file of that name in the scene folder; nothing for a folder, a missing file, or no path.
 TEST(FindRecordedScene, RecordedPathFirstThenByNameInTheSceneFolder) {
