@@ -103,6 +103,15 @@ SessionCommand ParseSessionMessage(const std::string& message) {
                                   "'");
     }
   };
+  // The command's FILE: the first argument, a recording's name.
+  const auto file = [&] {
+    if (rest.empty()) throw std::invalid_argument(verb + " " + what + ": expected FILE");
+    if (const std::string why = CheckRecordingName(rest[0]); !why.empty()) {
+      throw std::invalid_argument(verb + " " + what + ": FILE '" + rest[0].substr(0, 64) + "' " +
+                                  why);
+    }
+    return rest[0];
+  };
   if (verb == "record") {
     if (what == "start") {
       too_many(1);
@@ -122,12 +131,8 @@ SessionCommand ParseSessionMessage(const std::string& message) {
     }
     if (what == "delete") {
       too_many(1);
-      if (rest.empty()) throw std::invalid_argument("record delete: expected FILE");
       c.verb = SessionCommand::Verb::kRecordDelete;
-      c.file = rest[0];
-      if (const std::string why = CheckRecordingName(c.file); !why.empty()) {
-        throw std::invalid_argument("record delete: FILE '" + c.file.substr(0, 64) + "' " + why);
-      }
+      c.file = file();
       return c;
     }
     throw std::invalid_argument(
@@ -136,12 +141,8 @@ SessionCommand ParseSessionMessage(const std::string& message) {
   if (verb == "replay") {
     if (what == "play") {
       too_many(3);
-      if (rest.empty()) throw std::invalid_argument("replay play: expected FILE");
       c.verb = SessionCommand::Verb::kReplayPlay;
-      c.file = rest[0];
-      if (const std::string why = CheckRecordingName(c.file); !why.empty()) {
-        throw std::invalid_argument("replay play: FILE '" + c.file.substr(0, 64) + "' " + why);
-      }
+      c.file = file();
       if (rest.size() > 1) c.speed = ParseNumber(rest[1], "replay play: SPEED");
       CheckSpeed(c.speed);
       if (rest.size() > 2) c.from_s = ParseNumber(rest[2], "replay play: FROM_S");
@@ -162,6 +163,12 @@ SessionCommand ParseSessionMessage(const std::string& message) {
       CheckSpeed(c.speed);
       return c;
     }
+    if (what == "add") {
+      too_many(1);
+      c.verb = SessionCommand::Verb::kReplayAdd;
+      c.file = file();
+      return c;
+    }
     if (what == "seek") {
       too_many(1);
       if (rest.empty()) throw std::invalid_argument("replay seek: expected AT_S");
@@ -171,8 +178,8 @@ SessionCommand ParseSessionMessage(const std::string& message) {
       return c;
     }
     throw std::invalid_argument(
-        "replay: expected 'replay play FILE [SPEED [FROM_S]]', 'replay pause', 'replay speed "
-        "SPEED', 'replay seek AT_S' or 'replay stop'");
+        "replay: expected 'replay play FILE [SPEED [FROM_S]]', 'replay add FILE', 'replay pause', "
+        "'replay speed SPEED', 'replay seek AT_S' or 'replay stop'");
   }
   throw std::invalid_argument("unknown message '" + verb.substr(0, 32) +
                               "' (expected record or replay)");

@@ -65,17 +65,39 @@ SessionControl::SessionControl(Instructor& instructor, const std::string& record
   dds_.participant_name = "microdex-console-replay";
 }
 
-SessionControl::~SessionControl() {
-  if (replay_) {
-    replay_->stop = true;
-    if (replay_->thread.joinable()) replay_->thread.join();
+SessionControl::~SessionControl() { StopReplays(); }
+
+bool SessionControl::replaying() const {
+  return std::any_of(replays_.begin(), replays_.end(),
+                     [](const auto& r) { return !r->done.load(); });
+}
+
+void SessionControl::EndReplay() {
+  for (const auto& r : replays_) {
+    if (r->done.load() && r->thread.joinable()) r->thread.join();
   }
 }
 
-bool SessionControl::replaying() const { return replay_ && !replay_->done.load(); }
+void SessionControl::StopReplays() {
+  for (const auto& r : replays_) r->stop = true;
+  for (const auto& r : replays_) {
+    if (r->thread.joinable()) r->thread.join();
+  }
+}
 
-void SessionControl::EndReplay() {
-  if (replay_ && replay_->done.load() && replay_->thread.joinable()) replay_->thread.join();
+double SessionControl::Position() const {
+  double at = 0;
+  for (const auto& r : replays_) {
+    at = std::max(at, std::clamp(static_cast<double>(r->clock->SessionNowNs() - r->first_ns) * 1e-9,
+                                 0.0, r->length_s()));
+  }
+  return at;
+}
+
+double SessionControl::Length() const {
+  double length = 0;
+  for (const auto& r : replays_) length = std::max(length, r->length_s());
+  return length;
 }
 
 std::string SessionControl::Handle(const SessionCommand& c) {
@@ -100,38 +122,51 @@ std::string SessionControl::Handle(const SessionCommand& c) {
       return DeleteRecording(c.file);
     case Verb::kReplayPlay:
       return StartReplay(c);
+    case Verb::kReplayAdd:
+      return AddReplay(c);
     case Verb::kReplayPause:
     case Verb::kReplaySpeed:
     case Verb::kReplaySeek:
-    case Verb::kReplayStop: {
-      if (!replaying()) throw std::invalid_argument("replay: nothing is playing");
-      PlayerClock& clock = *replay_->clock;
-      if (c.verb == Verb::kReplayPause) clock.TogglePause();
-      if (c.verb == Verb::kReplaySpeed) clock.SetSpeed(c.speed);
-      if (c.verb == Verb::kReplaySeek) {
-        const double length_s = static_cast<double>(replay_->last_ns - replay_->first_ns) * 1e-9;
-        if (c.from_s > length_s) {
-          throw std::invalid_argument("replay seek: " + Num(c.from_s) + " s is past the end (" +
-                                      Num(length_s) + " s)");
-        }
-        clock.Seek(replay_->first_ns + static_cast<std::int64_t>(c.from_s * 1e9));
-      }
-      if (c.verb == Verb::kReplayStop) {
-        replay_->stop = true;
-        replay_->thread.join();
-      }
-      return "{\"type\":\"replay\",\"file\":" + Quote(replay_->file) +
-             ",\"paused\":" + (clock.paused() ? "true" : "false") +
-             ",\"speed\":" + Num(clock.speed()) +
-             ",\"stopped\":" + (c.verb == Verb::kReplayStop ? "true" : "false") + "}";
-    }
+    case Verb::kReplayStop:
+      return Transport(c);
   }
   throw std::invalid_argument("session: unknown command");
 }
 
+std::string SessionControl::Transport(const SessionCommand& c) {
+  using Verb = SessionCommand::Verb;
+  if (!replaying()) throw std::invalid_argument("replay: nothing is playing");
+  if (c.verb == Verb::kReplaySeek && c.from_s > Length()) {
+    throw std::invalid_argument("replay seek: " + Num(c.from_s) + " s is past the end (" +
+                                Num(Length()) + " s)");
+  }
+  if (c.verb == Verb::kReplayStop) StopReplays();
+  for (const auto& r : replays_) {
+    PlayerClock& clock = *r->clock;
+    if (c.verb == Verb::kReplayPause) clock.TogglePause();
+    if (c.verb == Verb::kReplaySpeed) clock.SetSpeed(c.speed);
+    if (c.verb != Verb::kReplaySeek) continue;
+    const std::int64_t at =
+        r->first_ns + static_cast<std::int64_t>(std::min(c.from_s, r->length_s()) * 1e9);
+    if (!r->done.load()) {
+      clock.Seek(at);
+    } else if (!r->stop.load() && r->error.empty() && c.from_s < r->length_s()) {
+      // It had played to its end: it plays again from there.
+      if (r->thread.joinable()) r->thread.join();
+      auto reader = OpenForReplay("replay seek", r->file, *r);
+      clock.Seek(at);
+      Launch(*r, std::move(reader), c.from_s);
+    }
+  }
+  const PlayerClock& clock = *replays_.front()->clock;
+  return "{\"type\":\"replay\",\"file\":" + Quote(replays_.front()->file) +
+         ",\"paused\":" + (clock.paused() ? "true" : "false") + ",\"speed\":" + Num(clock.speed()) +
+         ",\"stopped\":" + (c.verb == Verb::kReplayStop ? "true" : "false") + "}";
+}
+
 std::string SessionControl::StartRecording(const std::string& name) {
   if (replaying()) {
-    throw std::invalid_argument("record start: a replay is playing (" + replay_->file +
+    throw std::invalid_argument("record start: a replay is playing (" + replays_.front()->file +
                                 "); stop it first");
   }
   if (!instructor_.recording_ready()) {
@@ -155,7 +190,8 @@ std::string SessionControl::DeleteRecording(const std::string& name) {
   if (fs::path(instructor_.RecordingPath()).filename().string() == name) {
     throw std::invalid_argument("record delete: " + name + " is being recorded; stop it first");
   }
-  if (replaying() && replay_->file == name) {
+  if (std::any_of(replays_.begin(), replays_.end(),
+                  [&](const auto& r) { return r->file == name && !r->done.load(); })) {
     throw std::invalid_argument("record delete: " + name + " is playing; stop it first");
   }
   const fs::path path = fs::path(dir_) / name;
@@ -176,9 +212,63 @@ std::string SessionControl::DeleteRecording(const std::string& name) {
          ",\"bytes\":" + std::to_string(bytes) + "}";
 }
 
+std::unique_ptr<record::SessionReader> SessionControl::OpenForReplay(const std::string& verb,
+                                                                     const std::string& file,
+                                                                     Replay& r) {
+  const fs::path path = fs::path(dir_) / file;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw std::invalid_argument(verb + ": no recording " + file + " in " + dir_);
+  }
+  auto reader = std::make_unique<record::SessionReader>(path.string());  // RecordError
+  r.file = file;
+  r.stations = reader->Stations();
+  std::tie(r.first_ns, r.last_ns) = reader->TimeRange();
+  if (r.stations.empty()) throw std::invalid_argument(verb + ": " + file + " is empty");
+  // A station alive here now would get the recorded samples mixed into its own (a member
+  // played to its end and played again has left).
+  std::vector<std::string> live;
+  const std::set<std::string> recorded(r.stations.begin(), r.stations.end());
+  instructor_.VisitStations([&](const StationView& v) {
+    if (v.presence == Presence::kAlive && recorded.count(v.info.header.station_id) > 0) {
+      live.push_back(v.info.header.station_id);
+    }
+  });
+  if (!live.empty()) {
+    throw std::invalid_argument(verb + ": station " + Join(live) + " of " + file +
+                                " is live here; its replay would mix with it");
+  }
+  return reader;
+}
+
+void SessionControl::Launch(Replay& r, std::unique_ptr<record::SessionReader> reader,
+                            double from_s) {
+  PlayOptions o;
+  o.speed = r.clock->speed();
+  o.scene_dir = scene_dir_;
+  if (from_s > 0) o.from_s = from_s;
+  o.wait_for_console_s = 2;  // this console's readers are in this process
+  r.stop = false;
+  r.done = false;
+  r.error.clear();
+  Replay* p = &r;
+  r.thread = std::thread([this, p, reader = std::move(reader), o]() mutable {
+    try {
+      const PlayStats stats = Play(*reader, dds_, o, *p->clock, p->stop);
+      p->published += stats.published;
+      p->scenes_missing = stats.scenes_missing;
+    } catch (const std::exception& e) {
+      p->error = e.what();
+      spdlog::error("console: replay {}: {}", p->file, p->error);
+    }
+    p->done = true;
+  });
+}
+
 std::string SessionControl::StartReplay(const SessionCommand& c) {
   if (replaying()) {
-    throw std::invalid_argument("replay play: " + replay_->file + " is playing; stop it first");
+    throw std::invalid_argument("replay play: " + replays_.front()->file +
+                                " is playing; stop it first, or add to it (replay add FILE)");
   }
   if (!instructor_.RecordingPath().empty()) {
     throw std::invalid_argument("replay play: this console is recording; stop the recording first");
@@ -188,56 +278,62 @@ std::string SessionControl::StartReplay(const SessionCommand& c) {
         "replay play: not from a secure console (its replay participant has no identity of the "
         "course); use microdex-replay");
   }
-  const fs::path path = fs::path(dir_) / c.file;
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
-    throw std::invalid_argument("replay play: no recording " + c.file + " in " + dir_);
-  }
-  auto reader = std::make_unique<record::SessionReader>(path.string());  // RecordError
   auto replay = std::make_unique<Replay>();
-  replay->file = c.file;
-  replay->stations = reader->Stations();
-  std::tie(replay->first_ns, replay->last_ns) = reader->TimeRange();
-  if (replay->stations.empty()) throw std::invalid_argument("replay play: " + c.file + " is empty");
-  const double length_s = static_cast<double>(replay->last_ns - replay->first_ns) * 1e-9;
-  if (c.from_s >= length_s) {
+  auto reader = OpenForReplay("replay play", c.file, *replay);
+  if (c.from_s >= replay->length_s()) {
     throw std::invalid_argument("replay play: FROM_S " + Num(c.from_s) + " s is past the end (" +
-                                Num(length_s) + " s)");
+                                Num(replay->length_s()) + " s)");
   }
-  // A station alive here now would get the recorded samples mixed into its own.
-  std::vector<std::string> live;
-  const std::set<std::string> recorded(replay->stations.begin(), replay->stations.end());
-  instructor_.VisitStations([&](const StationView& v) {
-    if (v.presence == Presence::kAlive && recorded.count(v.info.header.station_id) > 0) {
-      live.push_back(v.info.header.station_id);
-    }
-  });
-  if (!live.empty()) {
-    throw std::invalid_argument("replay play: station " + Join(live) + " of " + c.file +
-                                " is live here; its replay would mix with it");
-  }
-  const std::int64_t from_ns = replay->first_ns + static_cast<std::int64_t>(c.from_s * 1e9);
-  replay->clock = std::make_unique<PlayerClock>(from_ns, c.speed);
-  PlayOptions o;
-  o.speed = c.speed;
-  o.scene_dir = scene_dir_;
-  if (c.from_s > 0) o.from_s = c.from_s;
-  o.wait_for_console_s = 2;  // this console's readers are in this process
-  Replay* r = replay.get();
-  replay->thread = std::thread([this, r, reader = std::move(reader), o]() mutable {
-    try {
-      r->stats = Play(*reader, dds_, o, *r->clock, r->stop);
-    } catch (const std::exception& e) {
-      r->error = e.what();
-      spdlog::error("console: replay {}: {}", r->file, r->error);
-    }
-    r->done = true;
-  });
+  replay->clock = std::make_unique<PlayerClock>(
+      replay->first_ns + static_cast<std::int64_t>(c.from_s * 1e9), c.speed);
   EndReplay();
-  replay_ = std::move(replay);
+  replays_.clear();
+  Launch(*replay, std::move(reader), c.from_s);
+  replays_.push_back(std::move(replay));
+  const Replay& r = *replays_.back();
   spdlog::info("console: replaying {} at {}x from {} s", c.file, c.speed, c.from_s);
   return "{\"type\":\"replay_started\",\"file\":" + Quote(c.file) +
-         ",\"stations\":" + StringList(replay_->stations) + ",\"length_s\":" + Num(length_s) + "}";
+         ",\"stations\":" + StringList(r.stations) + ",\"length_s\":" + Num(r.length_s()) + "}";
+}
+
+std::string SessionControl::AddReplay(const SessionCommand& c) {
+  if (!replaying()) {
+    throw std::invalid_argument("replay add: nothing is playing; start with replay play FILE");
+  }
+  std::set<std::string> playing;
+  for (const auto& r : replays_) {
+    if (r->file == c.file) {
+      throw std::invalid_argument("replay add: " + c.file + " is in this replay already");
+    }
+    playing.insert(r->stations.begin(), r->stations.end());
+  }
+  auto replay = std::make_unique<Replay>();
+  auto reader = OpenForReplay("replay add", c.file, *replay);
+  std::vector<std::string> shared;
+  for (const std::string& s : replay->stations) {
+    if (playing.count(s) > 0) shared.push_back(s);
+  }
+  if (!shared.empty()) {
+    throw std::invalid_argument("replay add: station " + Join(shared) + " of " + c.file +
+                                " is in this replay already; their samples would mix");
+  }
+  // From the replay's position, at its speed and pause.
+  const double at = Position();
+  if (at >= replay->length_s()) {
+    throw std::invalid_argument("replay add: " + c.file + " (" + Num(replay->length_s()) +
+                                " s) is shorter than the replay's position (" + Num(at) + " s)");
+  }
+  const PlayerClock& group = *replays_.front()->clock;
+  replay->clock = std::make_unique<PlayerClock>(
+      replay->first_ns + static_cast<std::int64_t>(at * 1e9), group.speed());
+  if (group.paused()) replay->clock->TogglePause();
+  Launch(*replay, std::move(reader), at);
+  replays_.push_back(std::move(replay));
+  const Replay& r = *replays_.back();
+  spdlog::info("console: replaying {} alongside, from {} s", c.file, at);
+  return "{\"type\":\"replay_added\",\"file\":" + Quote(c.file) +
+         ",\"stations\":" + StringList(r.stations) + ",\"length_s\":" + Num(r.length_s()) +
+         ",\"from_s\":" + Num(at) + "}";
 }
 
 std::vector<RecordingFile> SessionControl::Recordings() {
@@ -314,22 +410,29 @@ std::string SessionControl::StatusJson() {
     out += "null";
   }
   out += ",\"replay\":";
-  if (replay_) {
-    const Replay& r = *replay_;
-    const bool done = r.done.load();
-    const double length_s = static_cast<double>(r.last_ns - r.first_ns) * 1e-9;
-    const double at_s =
-        std::clamp(static_cast<double>(r.clock->SessionNowNs() - r.first_ns) * 1e-9, 0.0, length_s);
-    out += "{\"file\":" + Quote(r.file) + ",\"stations\":" + StringList(r.stations) +
-           ",\"length_s\":" + Num(length_s) + ",\"position_s\":" + Num(at_s) +
-           ",\"speed\":" + Num(r.clock->speed()) +
-           ",\"paused\":" + (r.clock->paused() ? "true" : "false") +
-           ",\"seeks\":" + std::to_string(r.clock->seeks()) +
-           ",\"done\":" + (done ? "true" : "false");
+  if (!replays_.empty()) {
+    const PlayerClock& clock = *replays_.front()->clock;
+    const bool done = !replaying();
+    std::vector<std::string> files, stations, missing, errors;
+    std::uint64_t published = 0;
+    bool stopped = false;
+    for (const auto& r : replays_) {
+      files.push_back(r->file);
+      stations.insert(stations.end(), r->stations.begin(), r->stations.end());
+      published += r->published;
+      stopped = stopped || r->stop.load();
+      if (!r->error.empty()) errors.push_back(r->file + ": " + r->error);
+      for (const std::string& m : r->scenes_missing) missing.push_back(m);
+    }
+    out += "{\"file\":" + Quote(files.front()) + ",\"files\":" + StringList(files) +
+           ",\"stations\":" + StringList(stations) + ",\"length_s\":" + Num(Length()) +
+           ",\"position_s\":" + Num(Position()) + ",\"speed\":" + Num(clock.speed()) +
+           ",\"paused\":" + (clock.paused() ? "true" : "false") +
+           ",\"seeks\":" + std::to_string(clock.seeks()) + ",\"done\":" + (done ? "true" : "false");
     if (done) {
-      out += ",\"published\":" + std::to_string(r.stats.published) +
-             ",\"stopped\":" + (r.stop.load() ? "true" : "false") + ",\"error\":" + Quote(r.error) +
-             ",\"scenes_missing\":" + StringList(r.stats.scenes_missing);
+      out += ",\"published\":" + std::to_string(published) +
+             ",\"stopped\":" + (stopped ? "true" : "false") + ",\"error\":" + Quote(Join(errors)) +
+             ",\"scenes_missing\":" + StringList(missing);
     }
     out += "}";
   } else {

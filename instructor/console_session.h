@@ -7,15 +7,22 @@
 //   record stop
 //   record delete FILE                  FILE (and SQLite's -wal, -shm) removed from DIR
 //   replay play FILE [SPEED [FROM_S]]   FILE: a recording in DIR, by name
+//   replay add FILE                     FILE plays alongside, from the replay's position
 //   replay pause                        pause or resume
 //   replay speed SPEED                  1/64 … 1024
-//   replay seek AT_S                    on from AT_S s after the recording's start
+//   replay seek AT_S                    on from AT_S s after the recordings' starts
 //   replay stop
+//
+// The files of one replay (play, then add) share its transport: each plays from its own
+// start, at one position, speed and pause; a seek moves them all (one that had ended plays
+// again when sought back into it), stop stops them all.
 //
 // A replay republishes the recording over DDS (replay_player.h) from a participant of this
 // process, in the console's domain and partition, so the console mirrors the recorded stations
 // as it mirrors live ones; the recorded scenes are sent when found (PlayOptions::scene_dir).
-// Refused, with the reason: a replay while recording or replaying, a recording while
+// Refused, with the reason: a replay while recording or replaying (add one to it instead), a
+// file added that is playing already, shares a station with the replay, or is shorter than its
+// position, a recording while
 // replaying, a replay of a station that is alive here now (its samples would mix with the live
 // ones), a replay from a secure console (its participant has no identity of the course: use
 // microdex-replay), a name with a folder in it or that exists already, the deletion of the
@@ -76,6 +83,7 @@ class SessionControl {
   bool replaying() const;
 
  private:
+  // One file of the replay.
   struct Replay {
     std::string file;
     std::int64_t first_ns = 0, last_ns = 0;
@@ -83,21 +91,34 @@ class SessionControl {
     std::unique_ptr<PlayerClock> clock;
     std::atomic<bool> stop{false};
     std::atomic<bool> done{false};
-    PlayStats stats;    // once done
-    std::string error;  // once done: why it failed ("" when it played)
+    std::uint64_t published = 0;  // over its plays (a seek back after its end plays it again)
+    std::vector<std::string> scenes_missing;  // once done
+    std::string error;                        // once done: why it failed ("" when it played)
     std::thread thread;
+    double length_s() const { return static_cast<double>(last_ns - first_ns) * 1e-9; }
   };
-  void EndReplay();  // joins a finished or stopped replay
+  void EndReplay();    // joins the finished members' threads
+  void StopReplays();  // stops and joins every member
+  // FILE of DIR opened for a replay, with the checks every member passes (a recording, not
+  // empty, no station alive here); `verb` names the command in the refusals.
+  std::unique_ptr<record::SessionReader> OpenForReplay(const std::string& verb,
+                                                       const std::string& file, Replay& r);
+  // Plays r from from_s on a thread of its own, paced by r.clock.
+  void Launch(Replay& r, std::unique_ptr<record::SessionReader> reader, double from_s);
+  double Position() const;  // of the replay: its members at one position
+  double Length() const;    // its longest member's
   std::string StartRecording(const std::string& name);
   std::string StartReplay(const SessionCommand& c);
+  std::string AddReplay(const SessionCommand& c);
+  std::string Transport(const SessionCommand& c);  // pause, speed, seek, stop
   std::string DeleteRecording(const std::string& name);
 
   Instructor& instructor_;
   std::string dir_;
   net::DdsOptions dds_;
   std::string scene_dir_;
-  std::unique_ptr<Replay> replay_;  // the running or the last replay
-  std::string last_recording_;      // the file of the last recording stopped
+  std::vector<std::unique_ptr<Replay>> replays_;  // the running or the last replay's files
+  std::string last_recording_;                    // the file of the last recording stopped
   std::optional<record::RecorderStats> last_recording_stats_;
   struct Cached {
     std::filesystem::file_time_type mtime;

@@ -321,7 +321,7 @@ interface SessionJson {
   record_dir: string; ready: boolean; can_replay: boolean;
   recording: null | { file: string; seconds: number; written: number; dropped: number; error: string };
   last_recording: null | { file: string; written: number; dropped: number };
-  replay: null | { file: string; stations: string[]; length_s: number; position_s: number; speed: number;
+  replay: null | { file: string; files: string[]; stations: string[]; length_s: number; position_s: number; speed: number;
     paused: boolean; seeks: number; done: boolean; published?: number; stopped?: boolean; error?: string; scenes_missing?: string[] };
   recordings: RecordingJson[];
 }
@@ -361,10 +361,10 @@ class SessionPanel {
     const r = session.replay;
     const replay = !r ? 'no replay'
         : r.done
-            ? `${esc(r.file)}: ${r.error ? `<span class="lost">failed: ${esc(r.error)}</span>` : r.stopped ? 'stopped' : 'played to the end'}` +
+            ? `${esc(r.files.join(' + '))}: ${r.error ? `<span class="lost">failed: ${esc(r.error)}</span>` : r.stopped ? 'stopped' : 'played to the end'}` +
               ` · ${r.published ?? 0} samples` +
               ((r.scenes_missing ?? []).length ? ` · <span class="lost">scene not found: ${esc((r.scenes_missing ?? []).join('; '))}</span>` : '')
-            : `▶ ${esc(r.file)} (${esc(r.stations.join(', '))}) · ${r.position_s.toFixed(1)} / ${r.length_s.toFixed(1)} s · ×${r.speed}${r.paused ? ' · paused' : ''}`;
+            : `▶ ${esc(r.files.join(' + '))} (${esc(r.stations.join(', '))}) · ${r.position_s.toFixed(1)} / ${r.length_s.toFixed(1)} s · ×${r.speed}${r.paused ? ' · paused' : ''}`;
     if (replay !== this.replayHtml) {
       this.replayHtml = replay;
       (body.querySelector('#rp-status') as HTMLElement).innerHTML = replay;
@@ -384,8 +384,12 @@ class SessionPanel {
     const rows = session.recordings.map((f) => `<tr data-file="${esc(f.file)}"><td>${esc(f.file)}</td>` +
         `<td>${f.recording ? '<span class="rec-on">recording…</span>' : f.error ? `<span class="lost">${esc(f.error)}</span>` : esc(f.stations.join(', '))}</td>` +
         `<td class="num">${f.recording ? '' : f.seconds.toFixed(1) + ' s'}</td><td class="num">${(f.bytes / 1e6).toFixed(2)} MB</td>` +
-        `<td>${f.recording || f.error || !session.can_replay ? '' : `<button data-play="${esc(f.file)}"${busy || rec ? ' disabled' : ''}>▶ play</button>`}` +
-        `${f.recording ? '' : `<button data-delete="${esc(f.file)}"${busy && r?.file === f.file ? ' disabled' : ''}>✕ delete</button>`}</td></tr>`).join('');
+        // While a replay plays, another file joins it ("+ alongside": from its position, on its
+        // transport) instead of starting one of its own.
+        `<td>${f.recording || f.error || !session.can_replay ? ''
+            : busy ? (r!.files.includes(f.file) ? '<span class="rec-on">playing</span>' : `<button data-add="${esc(f.file)}">+ alongside</button>`)
+            : `<button data-play="${esc(f.file)}"${rec ? ' disabled' : ''}>▶ play</button>`}` +
+        `${f.recording ? '' : ` <button data-delete="${esc(f.file)}"${busy && r!.files.includes(f.file) ? ' disabled' : ''}>✕ delete</button>`}</td></tr>`).join('');
     if (rows !== this.listHtml) {
       this.listHtml = rows;
       (body.querySelector('#recordings tbody') as HTMLElement).innerHTML =
@@ -437,6 +441,7 @@ class SessionPanel {
       const data = (e.target as HTMLElement).dataset ?? {};
       const from = Math.max(0, Number((body.querySelector('#rp-from') as HTMLInputElement).value) || 0);
       if (data.play) this.send(`replay play ${data.play} ${speed.value} ${from}`);
+      if (data.add) this.send(`replay add ${data.add}`);
       if (data.delete && window.confirm(`Delete the recording ${data.delete}? This cannot be undone.`)) {
         this.send(`record delete ${data.delete}`);
       }
@@ -579,6 +584,8 @@ function main(): void {
         session.note(`recorded ${m.written} samples to ${m.file} (${m.dropped} dropped)`, false);
       } else if (m.type === 'recording_deleted') {
         session.note(`deleted ${m.file} (${(Number(m.bytes) / 1e6).toFixed(2)} MB)`, false);
+      } else if (m.type === 'replay_added') {
+        session.note(`${m.file} plays alongside from ${Number(m.from_s).toFixed(1)} s: ${(m.stations as string[]).join(', ')}`, false);
       } else if (m.type === 'replay_started') {
         session.note(`replaying ${m.file}: ${(m.stations as string[]).join(', ')}, ${Number(m.length_s).toFixed(1)} s`, false);
       }

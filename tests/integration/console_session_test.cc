@@ -4,7 +4,9 @@
 // once the station has left, the recording replays into the same console (the station alive
 // again, with new states), paused and resumed, to its end, after which the station has left
 // again. A seek back goes on from the earlier time without the station being lost and without
-// its inputs refused as repeats. A recording is deleted, except while it plays. A console not
+// its inputs refused as repeats. A second station's recording plays alongside the first on one
+// transport (one pause holds both, one stop ends both). A recording is deleted, except while it
+// plays. A console not
 // started ready to record refuses to start one.
 #include "instructor/console_session.h"
 
@@ -39,8 +41,8 @@ std::string Refusal(instructor::SessionControl& s, const std::string& message) {
   return "";
 }
 
-instructor::StationView Station(instructor::Instructor& console) {
-  return console.Station(kStation).value_or(instructor::StationView{});
+instructor::StationView Station(instructor::Instructor& console, const char* id = kStation) {
+  return console.Station(id).value_or(instructor::StationView{});
 }
 
 TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole) {
@@ -112,6 +114,23 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   EXPECT_EQ(*status, 0) << testing::ReadFile(dir + "/station.log");
   ASSERT_TRUE(
       WaitUntil([&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s));
+
+  // A second station's run, recorded into a file of its own.
+  const char* const kOther = "sess-b";
+  pids.push_back(testing::Spawn(
+      "microdex-station",
+      {"--scene", testing::SourceDir() + "/assets/scenes/tremor_hold.yaml", "--station-id", kOther,
+       "--duration", "3", "--domain", std::to_string(kDomain), "--no-realtime"},
+      dir + "/station-b.log"));
+  ASSERT_TRUE(WaitUntil([&] { return Station(console, kOther).tool.count > 10; }, 20s))
+      << testing::ReadFile(dir + "/station-b.log");
+  session.Handle(instructor::ParseSessionMessage("record start second"));
+  std::this_thread::sleep_for(1200ms);
+  session.Handle(instructor::ParseSessionMessage("record stop"));
+  const auto status_b = testing::WaitExit(pids[1], 30s);
+  ASSERT_TRUE(status_b.has_value());
+  ASSERT_TRUE(WaitUntil(
+      [&] { return Station(console, kOther).presence == instructor::Presence::kDeparted; }, 10s));
   const std::uint64_t tools_before = Station(console).tool.count;
   const int comebacks_before = Station(console).comebacks;
   const std::uint64_t inputs_before = Station(console).inputs_received;
@@ -166,6 +185,42 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
       WaitUntil([&] { return Station(console).presence == instructor::Presence::kDeparted; }, 10s))
       << "the replayed station leaves at the end";
 
+  // Two files played together, on one transport: the second joins at the first's position.
+  EXPECT_NE(Refusal(session, "replay add second.db").find("nothing is playing"), std::string::npos);
+  session.Handle(instructor::ParseSessionMessage("replay play first.db 1"));
+  EXPECT_NE(Refusal(session, "replay add first.db").find("in this replay already"),
+            std::string::npos);
+  EXPECT_NE(Refusal(session, "replay play second.db").find("add to it"), std::string::npos);
+  const std::string added = session.Handle(instructor::ParseSessionMessage("replay add second.db"));
+  EXPECT_NE(added.find("\"type\":\"replay_added\""), std::string::npos) << added;
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        return Station(console).presence == instructor::Presence::kAlive &&
+               Station(console, kOther).presence == instructor::Presence::kAlive;
+      },
+      10s))
+      << session.StatusJson();
+  EXPECT_NE(session.StatusJson().find("\"files\":[\"first.db\",\"second.db\"]"), std::string::npos)
+      << session.StatusJson();
+  session.Handle(instructor::ParseSessionMessage("replay pause"));
+  std::this_thread::sleep_for(300ms);
+  const std::uint64_t a_paused = Station(console).tool.count;
+  const std::uint64_t b_paused = Station(console, kOther).tool.count;
+  std::this_thread::sleep_for(400ms);
+  EXPECT_EQ(Station(console).tool.count, a_paused) << "one pause holds both";
+  EXPECT_EQ(Station(console, kOther).tool.count, b_paused);
+  session.Handle(instructor::ParseSessionMessage("replay pause"));
+  ASSERT_TRUE(WaitUntil([&] { return Station(console, kOther).tool.count > b_paused + 5; }, 5s));
+  session.Handle(instructor::ParseSessionMessage("replay stop"));
+  EXPECT_FALSE(session.replaying());
+  EXPECT_TRUE(WaitUntil(
+      [&] {
+        return Station(console).presence == instructor::Presence::kDeparted &&
+               Station(console, kOther).presence == instructor::Presence::kDeparted;
+      },
+      10s))
+      << "one stop ends both";
+
   // Deleted once it is not playing.
   EXPECT_NE(Refusal(session, "record delete none.db").find("no recording none.db"),
             std::string::npos);
@@ -174,7 +229,8 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   EXPECT_NE(deleted.find("\"type\":\"recording_deleted\""), std::string::npos) << deleted;
   struct stat st {};
   EXPECT_NE(stat((dir + "/recordings/first.db").c_str(), &st), 0);
-  EXPECT_TRUE(session.Recordings().empty());
+  ASSERT_EQ(session.Recordings().size(), 1u);
+  EXPECT_EQ(session.Recordings()[0].name, "second.db");
   EXPECT_EQ(session.StatusJson().find("first.db\",\"bytes"), std::string::npos);
   testing::KillAll(pids);
 }

@@ -3,7 +3,9 @@
 // it; the recording is listed with its station and length. Playing it while the station is
 // live is refused with the reason shown on the page; once the station has left, playing it
 // brings the station back into the grid (alive, drawn, new frames), pause holds it, and it
-// plays to its end; played again from 1.5 s at ×2 it starts there. A name that would leave
+// plays to its end, and the position slider seeks it back; played again from 1.5 s at ×2 it
+// starts there. A second station's recording plays alongside ("+ alongside"), one stop ending
+// both. A recording is deleted once the page has asked. A name that would leave
 // DIR is refused. With --db, the final scores of two
 // earlier runs of a trainee are drawn as a line over past sessions, with their scores.
 // node console_session_test.mjs --bin BUILD/bin --out DIR
@@ -172,6 +174,40 @@ try {
   check(from.position_s >= 1.5 && from.speed === 2, `played from ${from.position_s.toFixed(2)} s at ×${from.speed}`);
   await waitFor(async () => (await probe(page)).session.replay.done, 'the second replay at its end', 15000);
   await page.locator('#session').screenshot({ path: join(a.out, 'console_session_played.png') });
+  // A second station's recording, played alongside the first from the page.
+  const other = await startProcess(join(a.bin, 'microdex-station'), [
+    '--scene', 'assets/scenes/tremor_hold.yaml', '--station-id', 'web-session-b', '--trainee', 'trainee S',
+    '--no-realtime', '--duration', '4', ...dds,
+  ], /station|info/, { cwd: sourceDir });
+  const presenceOf = async (sid) => page.evaluate((x) => window.microdexConsole.stations.find((s) => s.id === x)?.presence ?? null, sid);
+  await waitFor(async () => (await presenceOf('web-session-b')) === 'alive', 'the second station alive', 20000);
+  await page.locator('#rec-name').fill('lesson-2');
+  await page.locator('#rec-start').click();
+  await waitFor(async () => (await probe(page)).session.recording?.file === 'lesson-2.db', 'recording lesson-2', 5000);
+  await page.waitForTimeout(2000);
+  await page.locator('#rec-stop').click();
+  await waitFor(async () => (await presenceOf('web-session-b')) === 'left', 'the second station left', 15000);
+  await stopProcess(other.child);
+  await waitFor(async () => (await page.locator('#recordings tr[data-file="lesson-2.db"] button[data-play]').count()) === 1 || null,
+                'lesson-2 listed', 5000);
+  await page.locator('#rp-from').fill('0');
+  await page.locator('#rp-speed').selectOption('0.5');
+  await row.locator('button[data-play]').click();
+  await waitFor(async () => (await page.locator('#recordings tr[data-file="lesson-2.db"] button[data-add]').count()) === 1 || null,
+                'lesson-2 offered alongside', 10000);
+  await page.locator('#recordings tr[data-file="lesson-2.db"] button[data-add]').click();
+  const both = await waitFor(async () => {
+    const r = (await probe(page)).session.replay;
+    return r && !r.done && r.files.length === 2 && (await presenceOf('web-session')) === 'alive' &&
+        (await presenceOf('web-session-b')) === 'alive' ? r : null;
+  }, 'both recordings playing, both stations alive', 15000);
+  check(both.files.join(',') === 'lesson-1.db,lesson-2.db' && /lesson-1\.db \+ lesson-2\.db/.test(await page.locator('#rp-status').textContent()),
+        `one replay of two files (${both.files.join(' + ')}: ${both.stations.join(', ')})`);
+  await page.waitForTimeout(500);
+  await page.screenshot({ path: join(a.out, 'console_session_two.png') });
+  await page.locator('#rp-stop').click();
+  await waitFor(async () => (await presenceOf('web-session')) === 'left' && (await presenceOf('web-session-b')) === 'left',
+                'one stop ends both', 10000);
   // Deleted from the table, once confirmed.
   let asked = '';
   page.once('dialog', (d) => { asked = d.message(); d.accept(); });

@@ -42,6 +42,13 @@ TEST(SessionMessage, ReplayTakesFileSpeedAndStart) {
   EXPECT_EQ(seek.verb, Verb::kReplaySeek);
   EXPECT_DOUBLE_EQ(seek.from_s, 12.5);
   EXPECT_DOUBLE_EQ(ParseSessionMessage("replay seek 0").from_s, 0);
+  const SessionCommand add = ParseSessionMessage("replay add b.db");
+  EXPECT_EQ(add.verb, Verb::kReplayAdd);
+  EXPECT_EQ(add.file, "b.db");
+  EXPECT_NE(Refusal("replay add").find("replay add: expected FILE"), std::string::npos);
+  EXPECT_NE(Refusal("replay add ../b.db").find("replay add: FILE '../b.db' starts with '.'"),
+            std::string::npos);
+  EXPECT_NE(Refusal("replay add b.db 2").find("unexpected '2'"), std::string::npos);
 }
 
 TEST(SessionMessage, RecordDeleteTakesOneRecordingOfTheFolder) {
