@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "common/fem/tissue_step.h"
 
@@ -131,9 +134,12 @@ TEST(Navier, EndGradedMultiscaleForceWithinTwoPercent) {
 namespace microdex::fem {
 namespace {
 
-double MultiscaleForce_N(int level, ToolConstraint constraint, const ToolContact& tool) {
+// The resultant of one cold step (cholmod) on the multi-scale mesh (max_level two above) or the
+// fine mesh of `level`.
+double ForceOnMesh_N(MeshKind mesh, int level, ToolConstraint constraint, const ToolContact& tool) {
   TissueDef def;
-  def.max_level = level + 2;
+  def.mesh = mesh;
+  def.max_level = mesh == MeshKind::kFine ? level : level + 2;
   def.level = level;
   def.solver = SolverKind::kCholmod;
   def.tool_constraint = constraint;
@@ -143,6 +149,52 @@ double MultiscaleForce_N(int level, ToolConstraint constraint, const ToolContact
   StepTissue(model, tool, ws, state);
   EXPECT_EQ(state.status, TissueStatus::kOk);
   return state.f_T_S.z();
+}
+
+double MultiscaleForce_N(int level, ToolConstraint constraint, const ToolContact& tool) {
+  return ForceOnMesh_N(MeshKind::kMultiscale, level, constraint, tool);
+}
+
+double FineForce_N(int level, ToolConstraint constraint, const ToolContact& tool) {
+  return ForceOnMesh_N(MeshKind::kFine, level, constraint, tool);
+}
+
+// A reference for tools that are not axis-aligned bars, from fine uniform meshes that conform
+// to the tool: it runs along the cells' edges (grid lines and the lower-left to upper-right
+// diagonals, corners and ends on nodes of level 6) and its displacement is imposed on the nodes
+// under it. The Richardson value 2 F₈ − F₇ (the force error is O(h)) is the reference; its
+// change against 2 F₇ − F₆ bounds its own error. On G1 it is checked against Navier; for a 45°
+// bar and a polyline (45°, then along x) the multi-scale penalty-point resultant is within 2 %
+// of it at levels 5–7.
+TEST(Navier, ConformingFineReferenceForTiltedToolsAndTheTwoPercentAtLevelsFromFive) {
+  struct Case {
+    const char* name;
+    ToolContact tool;
+  };
+  const std::array<Eigen::Vector3d, 3> zed = {Eigen::Vector3d(0.05, 0.0625, -kPress_m),
+                                              Eigen::Vector3d(0.10, 0.1125, -kPress_m),
+                                              Eigen::Vector3d(0.15, 0.1125, -kPress_m)};
+  const Case cases[] = {
+      {"G1", MakeBarTool({0.05, 0.10, -kPress_m}, {0.15, 0.10, -kPress_m})},
+      {"D45", MakeBarTool({0.05, 0.05, -kPress_m}, {0.125, 0.125, -kPress_m})},
+      {"Z", MakePolylineTool(zed, 0.0)},
+  };
+  for (const Case& c : cases) {
+    double f[3];
+    for (int k = 0; k < 3; ++k) f[k] = FineForce_N(6 + k, ToolConstraint::kNearestNodes, c.tool);
+    const double reference = 2 * f[2] - f[1];
+    const double estimate = std::abs(reference - (2 * f[1] - f[0])) / reference;
+    EXPECT_LT(estimate, 2e-3) << c.name;
+    if (std::string(c.name) == "G1") {
+      const double navier =
+          -NavierBar(StudyDomain(), 0.05, 0.15, 0.10, -kPress_m, 40).TotalForce_N();
+      EXPECT_NEAR(reference, navier, 2e-3 * navier) << "the conforming reference against Navier";
+    }
+    for (int level = 5; level <= 7; ++level) {
+      const double ms = MultiscaleForce_N(level, ToolConstraint::kPenaltyPoints, c.tool);
+      EXPECT_NEAR(ms, reference, 0.02 * reference) << c.name << " at level " << level;
+    }
+  }
 }
 
 // Bars at seeded random positions (2–14 cm long, ends and line anywhere at least 2 mm from the
