@@ -691,12 +691,16 @@ void StationPublisher::Goodbye() {
   // matched (the reliable ones: a best-effort reader acknowledges nothing and is not waited
   // for), within one deadline for all: 150 ms, or input_ack_wait_s for a recorded station
   // (--wait-for-recorder) so that the recorder has every step, state, event and the final
-  // score even on a loaded machine. The final score and the task end first. A dead reader
-  // costs the deadline once (until its participant's lease drops it), not once per writer.
+  // score even on a loaded machine. The station's own StationInfo first: a reader that matched
+  // after it was written gets it as historical data, repaired on request, and a short run
+  // (unpaced, a fraction of a second) can end before that; its departure below would then be
+  // all that reader hears of it, and a recorder or a scores database could not name the run.
+  // Then the final score and the task end. A dead reader costs the deadline once (until its
+  // participant's lease drops it), not once per writer.
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::duration<double>(std::max(config_.input_ack_wait_s, 0.15));
-  for (dds::DataWriter* w : {w_->score, w_->events, w_->input, w_->tool, w_->overlay, w_->needle,
-                             w_->thread, w_->tissue, w_->telemetry}) {
+  for (dds::DataWriter* w : {w_->info, w_->score, w_->events, w_->input, w_->tool, w_->overlay,
+                             w_->needle, w_->thread, w_->tissue, w_->telemetry}) {
     if (w == nullptr) continue;
     const auto left_ns =
         std::max<std::int64_t>(0, std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -27,6 +27,7 @@ const instructor = await startProcess(join(a.bin, 'microdex-instructor'),
                                       /console: http:\/\/127\.0\.0\.1:(\d+)\//, { cwd: work });
 // Two earlier runs of one trainee, to their task's end (unpaced), each scored in the database.
 const pastScores = [];
+const pastOutputs = [];  // for the failure message
 for (const [k, skill] of ['0.3', '0.9'].entries()) {
   const out = join(work, `past-${k}.json`);
   const run = await startProcess(join(a.bin, 'microdex-station'), [
@@ -34,6 +35,7 @@ for (const [k, skill] of ['0.3', '0.9'].entries()) {
     '--skill', skill, '--seed', String(k + 1), '--unpaced', '--wait-for-recorder', '20', '--score-out', out, ...dds,
   ], /steps, score/, { cwd: sourceDir, timeoutMs: 40000 });
   await stopProcess(run.child);
+  pastOutputs.push(run.output());
   pastScores.push(JSON.parse(readFileSync(out, 'utf8')).score);
 }
 const station = await startProcess(join(a.bin, 'microdex-station'), [
@@ -62,7 +64,11 @@ try {
   const past = await waitFor(() => page.evaluate(() => {
     const l = window.microdexConsole.past.lines.find((x) => x.trainee === 'trainee P');
     return l && l.sessions.length === 2 ? l : null;
-  }), 'trainee P\'s two past sessions on the plot', 20000);
+  }), 'trainee P\'s two past sessions on the plot', 20000).catch(async (e) => {
+    const lines = await page.evaluate(() => JSON.stringify(window.microdexConsole.past.lines));
+    throw new Error(`${e.message}\nthe page's lines: ${lines}\ninstructor:\n${instructor.output().slice(-6000)}\n` +
+                    `past runs:\n${pastOutputs.map((o) => o.slice(-3000)).join('\n---\n')}`);
+  });
   const drawn = past.sessions.map((x) => x.score);
   check(drawn.every((v, i) => Math.abs(v - pastScores[i]) < 0.05) && past.scene.endsWith('tremor_hold.yaml'),
         `the past sessions' line holds the two runs' final scores in order (${drawn.map((v) => v.toFixed(1)).join(', ')} ` +
