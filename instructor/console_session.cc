@@ -419,8 +419,10 @@ std::string SessionControl::StatusJson() {
     for (const auto& r : replays_) {
       files.push_back(r->file);
       stations.insert(stations.end(), r->stations.begin(), r->stations.end());
-      published += r->published;
       stopped = stopped || r->stop.load();
+      // What its thread writes, read once it has ended (done: acquire).
+      if (!r->done.load()) continue;
+      published += r->published;
       if (!r->error.empty()) errors.push_back(r->file + ": " + r->error);
       for (const std::string& m : r->scenes_missing) missing.push_back(m);
     }
