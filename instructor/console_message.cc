@@ -135,8 +135,20 @@ SessionCommand ParseSessionMessage(const std::string& message) {
       c.file = file();
       return c;
     }
+    if (what == "rename") {
+      too_many(2);
+      c.verb = SessionCommand::Verb::kRecordRename;
+      c.file = file();
+      if (rest.size() < 2) throw std::invalid_argument("record rename: expected FILE NAME");
+      c.name = rest[1].ends_with(".db") ? rest[1] : rest[1] + ".db";
+      if (const std::string why = CheckRecordingName(c.name); !why.empty()) {
+        throw std::invalid_argument("record rename: NAME '" + rest[1].substr(0, 64) + "' " + why);
+      }
+      return c;
+    }
     throw std::invalid_argument(
-        "record: expected 'record start [NAME]', 'record stop' or 'record delete FILE'");
+        "record: expected 'record start [NAME]', 'record stop', 'record delete FILE' or 'record "
+        "rename FILE NAME'");
   }
   if (verb == "replay") {
     if (what == "play") {

@@ -22,13 +22,14 @@ struct ConsoleCue {
 ConsoleCue ParseConsoleMessage(const std::string& message);
 
 // The session controls' commands (console_session.h): "record start [NAME]", "record stop",
-// "record delete FILE", "replay play FILE [SPEED [FROM_S]]", "replay add FILE", "replay pause",
-// "replay speed SPEED", "replay seek AT_S", "replay stop".
+// "record delete FILE", "record rename FILE NAME", "replay play FILE [SPEED [FROM_S]]", "replay add
+// FILE", "replay pause", "replay speed SPEED", "replay seek AT_S", "replay stop".
 struct SessionCommand {
   enum class Verb {
     kRecordStart,
     kRecordStop,
     kRecordDelete,
+    kRecordRename,
     kReplayPlay,
     kReplayAdd,
     kReplayPause,
@@ -37,7 +38,8 @@ struct SessionCommand {
     kReplayStop
   };
   Verb verb = Verb::kRecordStop;
-  std::string file;   // record start (may be ""), record delete, replay play, replay add
+  std::string file;   // record start (may be ""), record delete/rename, replay play/add
+  std::string name;   // record rename: the new name (NAME.db)
   double speed = 1;   // replay play, replay speed
   double from_s = 0;  // replay play (FROM_S), replay seek (AT_S)
 };

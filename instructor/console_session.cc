@@ -120,6 +120,8 @@ std::string SessionControl::Handle(const SessionCommand& c) {
     }
     case Verb::kRecordDelete:
       return DeleteRecording(c.file);
+    case Verb::kRecordRename:
+      return RenameRecording(c.file, c.name);
     case Verb::kReplayPlay:
       return StartReplay(c);
     case Verb::kReplayAdd:
@@ -186,13 +188,43 @@ std::string SessionControl::StartRecording(const std::string& name) {
   return "{\"type\":\"recording_started\",\"file\":" + Quote(name) + "}";
 }
 
-std::string SessionControl::DeleteRecording(const std::string& name) {
+std::string SessionControl::InUse(const std::string& name) const {
   if (fs::path(instructor_.RecordingPath()).filename().string() == name) {
-    throw std::invalid_argument("record delete: " + name + " is being recorded; stop it first");
+    return name + " is being recorded; stop it first";
   }
   if (std::any_of(replays_.begin(), replays_.end(),
                   [&](const auto& r) { return r->file == name && !r->done.load(); })) {
-    throw std::invalid_argument("record delete: " + name + " is playing; stop it first");
+    return name + " is playing; stop it first";
+  }
+  return "";
+}
+
+std::string SessionControl::RenameRecording(const std::string& from, const std::string& to) {
+  if (const std::string why = InUse(from); !why.empty()) {
+    throw std::invalid_argument("record rename: " + why);
+  }
+  const fs::path src = fs::path(dir_) / from, dst = fs::path(dir_) / to;
+  std::error_code ec;
+  if (!fs::is_regular_file(src, ec)) {
+    throw std::invalid_argument("record rename: no recording " + from + " in " + dir_);
+  }
+  if (fs::exists(dst, ec)) throw std::invalid_argument("record rename: " + to + " exists already");
+  fs::rename(src, dst, ec);
+  if (ec) throw std::runtime_error("record rename: " + src.string() + ": " + ec.message());
+  // SQLite's companions, left by a recorder that did not close, go with it.
+  for (const char* suffix : {"-wal", "-shm", "-journal"}) {
+    if (fs::exists(src.string() + suffix, ec))
+      fs::rename(src.string() + suffix, dst.string() + suffix, ec);
+  }
+  cache_.erase(from);
+  next_list_ns_ = 0;
+  spdlog::info("console: renamed the recording {} to {}", src.string(), to);
+  return "{\"type\":\"recording_renamed\",\"file\":" + Quote(from) + ",\"name\":" + Quote(to) + "}";
+}
+
+std::string SessionControl::DeleteRecording(const std::string& name) {
+  if (const std::string why = InUse(name); !why.empty()) {
+    throw std::invalid_argument("record delete: " + why);
   }
   const fs::path path = fs::path(dir_) / name;
   std::error_code ec;

@@ -6,6 +6,7 @@
 //   record start [NAME]                 NAME.db in DIR (default session-YYYYMMDD-HHMMSS.db, UTC)
 //   record stop
 //   record delete FILE                  FILE (and SQLite's -wal, -shm) removed from DIR
+//   record rename FILE NAME             FILE renamed NAME.db in DIR
 //   replay play FILE [SPEED [FROM_S]]   FILE: a recording in DIR, by name
 //   replay add FILE                     FILE plays alongside, from the replay's position
 //   replay pause                        pause or resume
@@ -112,6 +113,9 @@ class SessionControl {
   std::string AddReplay(const SessionCommand& c);
   std::string Transport(const SessionCommand& c);  // pause, speed, seek, stop
   std::string DeleteRecording(const std::string& name);
+  std::string RenameRecording(const std::string& from, const std::string& to);
+  // Why FILE may not be deleted or renamed now ("" when it may): recorded or playing.
+  std::string InUse(const std::string& name) const;
 
   Instructor& instructor_;
   std::string dir_;

@@ -389,7 +389,8 @@ class SessionPanel {
         `<td>${f.recording || f.error || !session.can_replay ? ''
             : busy ? (r!.files.includes(f.file) ? '<span class="rec-on">playing</span>' : `<button data-add="${esc(f.file)}">+ alongside</button>`)
             : `<button data-play="${esc(f.file)}"${rec ? ' disabled' : ''}>▶ play</button>`}` +
-        `${f.recording ? '' : ` <button data-delete="${esc(f.file)}"${busy && r!.files.includes(f.file) ? ' disabled' : ''}>✕ delete</button>`}</td></tr>`).join('');
+        `${f.recording ? '' : ` <button data-rename="${esc(f.file)}"${busy && r!.files.includes(f.file) ? ' disabled' : ''}>✎ rename</button>` +
+            `<button data-delete="${esc(f.file)}"${busy && r!.files.includes(f.file) ? ' disabled' : ''}>✕ delete</button>`}</td></tr>`).join('');
     if (rows !== this.listHtml) {
       this.listHtml = rows;
       (body.querySelector('#recordings tbody') as HTMLElement).innerHTML =
@@ -442,6 +443,10 @@ class SessionPanel {
       const from = Math.max(0, Number((body.querySelector('#rp-from') as HTMLInputElement).value) || 0);
       if (data.play) this.send(`replay play ${data.play} ${speed.value} ${from}`);
       if (data.add) this.send(`replay add ${data.add}`);
+      if (data.rename) {
+        const to = window.prompt(`Rename the recording ${data.rename} to:`, data.rename.replace(/\.db$/, ''));
+        if (to && to.trim()) this.send(`record rename ${data.rename} ${to.trim()}`);
+      }
       if (data.delete && window.confirm(`Delete the recording ${data.delete}? This cannot be undone.`)) {
         this.send(`record delete ${data.delete}`);
       }
@@ -582,6 +587,8 @@ function main(): void {
         session.note(`recording to ${m.file}`, false);
       } else if (m.type === 'recording_stopped') {
         session.note(`recorded ${m.written} samples to ${m.file} (${m.dropped} dropped)`, false);
+      } else if (m.type === 'recording_renamed') {
+        session.note(`renamed ${m.file} to ${m.name}`, false);
       } else if (m.type === 'recording_deleted') {
         session.note(`deleted ${m.file} (${(Number(m.bytes) / 1e6).toFixed(2)} MB)`, false);
       } else if (m.type === 'replay_added') {

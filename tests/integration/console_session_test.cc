@@ -5,8 +5,8 @@
 // again, with new states), paused and resumed, to its end, after which the station has left
 // again. A seek back goes on from the earlier time without the station being lost and without
 // its inputs refused as repeats. A second station's recording plays alongside the first on one
-// transport (one pause holds both, one stop ends both). A recording is deleted, except while it
-// plays. A console not
+// transport (one pause holds both, one stop ends both). A recording is renamed (not while it is
+// recorded, nor onto another) and deleted, except while it plays. A console not
 // started ready to record refuses to start one.
 #include "instructor/console_session.h"
 
@@ -231,6 +231,21 @@ TEST(ConsoleSession, RecordsALiveStationFromTheMiddleAndReplaysItIntoTheConsole)
   EXPECT_NE(stat((dir + "/recordings/first.db").c_str(), &st), 0);
   ASSERT_EQ(session.Recordings().size(), 1u);
   EXPECT_EQ(session.Recordings()[0].name, "second.db");
+  // Renamed, and listed under its new name with its stations.
+  EXPECT_NE(Refusal(session, "record rename none.db x").find("no recording none.db"),
+            std::string::npos);
+  const std::string renamed =
+      session.Handle(instructor::ParseSessionMessage("record rename second.db lesson-b"));
+  EXPECT_NE(renamed.find("\"name\":\"lesson-b.db\""), std::string::npos) << renamed;
+  ASSERT_EQ(session.Recordings().size(), 1u);
+  EXPECT_EQ(session.Recordings()[0].name, "lesson-b.db");
+  EXPECT_EQ(session.Recordings()[0].stations, std::vector<std::string>{kOther});
+  session.Handle(instructor::ParseSessionMessage("record start third"));
+  EXPECT_NE(Refusal(session, "record rename third.db fourth").find("is being recorded"),
+            std::string::npos);
+  EXPECT_NE(Refusal(session, "record rename lesson-b.db third").find("third.db exists already"),
+            std::string::npos);
+  session.Handle(instructor::ParseSessionMessage("record stop"));
   EXPECT_EQ(session.StatusJson().find("first.db\",\"bytes"), std::string::npos);
   testing::KillAll(pids);
 }

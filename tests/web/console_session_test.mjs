@@ -5,7 +5,7 @@
 // brings the station back into the grid (alive, drawn, new frames), pause holds it, and it
 // plays to its end, and the position slider seeks it back; played again from 1.5 s at ×2 it
 // starts there. A second station's recording plays alongside ("+ alongside"), one stop ending
-// both. A recording is deleted once the page has asked. A name that would leave
+// both. A recording is renamed and deleted once the page has asked. A name that would leave
 // DIR is refused. With --db, the final scores of two
 // earlier runs of a trainee are drawn as a line over past sessions, with their scores.
 // node console_session_test.mjs --bin BUILD/bin --out DIR
@@ -214,6 +214,15 @@ try {
   await page.locator('#rp-stop').click();
   await waitFor(async () => (await presenceOf('web-session')) === 'left' && (await presenceOf('web-session-b')) === 'left',
                 'one stop ends both', 10000);
+  // Renamed from the table: the page asks for the new name.
+  page.once('dialog', (d) => d.accept('lesson-2b'));
+  await page.locator('#recordings tr[data-file="lesson-2.db"] button[data-rename]').click();
+  await waitFor(async () => (await probe(page)).messages.find((x) => /^renamed lesson-2\.db to lesson-2b\.db/.test(x)) ?? null,
+                'the rename confirmed', 10000);
+  check(readdirSync(recordings).includes('lesson-2b.db') && !readdirSync(recordings).includes('lesson-2.db'),
+        'lesson-2.db renamed lesson-2b.db in the folder');
+  await waitFor(async () => (await page.locator('#recordings tr[data-file="lesson-2b.db"]').count()) === 1 || null,
+                'the renamed row in the table', 5000);
   // Deleted from the table, once confirmed.
   let asked = '';
   page.once('dialog', (d) => { asked = d.message(); d.accept(); });

@@ -60,6 +60,15 @@ TEST(SessionMessage, RecordDeleteTakesOneRecordingOfTheFolder) {
   EXPECT_NE(Refusal("record delete /etc/passwd").find("has a character"), std::string::npos);
   EXPECT_NE(Refusal("record delete notes.txt").find("does not end in .db"), std::string::npos);
   EXPECT_NE(Refusal("record delete a.db b.db").find("unexpected 'b.db'"), std::string::npos);
+  const SessionCommand r = ParseSessionMessage("record rename a.db lesson-2");
+  EXPECT_EQ(r.verb, Verb::kRecordRename);
+  EXPECT_EQ(r.file, "a.db");
+  EXPECT_EQ(r.name, "lesson-2.db");
+  EXPECT_EQ(ParseSessionMessage("record rename a.db b.db").name, "b.db");
+  EXPECT_NE(Refusal("record rename a.db").find("expected FILE NAME"), std::string::npos);
+  EXPECT_NE(Refusal("record rename a.db ../b").find("NAME '../b' starts with '.'"),
+            std::string::npos);
+  EXPECT_NE(Refusal("record rename a.db b c").find("unexpected 'c'"), std::string::npos);
 }
 
 TEST(SessionMessage, NamesThatLeaveTheFolderOrAreNotRecordingsAreRefused) {
