@@ -112,16 +112,20 @@ SessionCommand ParseSessionMessage(const std::string& message) {
     }
     return rest[0];
   };
+  // Argument k as a new recording's NAME: ".db" added when missing.
+  const auto name = [&](std::size_t k) {
+    std::string n = rest[k].ends_with(".db") ? rest[k] : rest[k] + ".db";
+    if (const std::string why = CheckRecordingName(n); !why.empty()) {
+      throw std::invalid_argument(verb + " " + what + ": NAME '" + rest[k].substr(0, 64) + "' " +
+                                  why);
+    }
+    return n;
+  };
   if (verb == "record") {
     if (what == "start") {
       too_many(1);
       c.verb = SessionCommand::Verb::kRecordStart;
-      if (!rest.empty()) {
-        c.file = rest[0].ends_with(".db") ? rest[0] : rest[0] + ".db";
-        if (const std::string why = CheckRecordingName(c.file); !why.empty()) {
-          throw std::invalid_argument("record start: NAME '" + rest[0].substr(0, 64) + "' " + why);
-        }
-      }
+      if (!rest.empty()) c.file = name(0);
       return c;
     }
     if (what == "stop") {
@@ -140,10 +144,7 @@ SessionCommand ParseSessionMessage(const std::string& message) {
       c.verb = SessionCommand::Verb::kRecordRename;
       c.file = file();
       if (rest.size() < 2) throw std::invalid_argument("record rename: expected FILE NAME");
-      c.name = rest[1].ends_with(".db") ? rest[1] : rest[1] + ".db";
-      if (const std::string why = CheckRecordingName(c.name); !why.empty()) {
-        throw std::invalid_argument("record rename: NAME '" + rest[1].substr(0, 64) + "' " + why);
-      }
+      c.name = name(1);
       return c;
     }
     throw std::invalid_argument(
