@@ -3,11 +3,13 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <span>
 #include <stdexcept>
 
 #include "common/base/check.h"
 #include "common/thread/grasp.h"
+#include "common/thread/thread_contacts.h"
 #include "common/thread/thread_step.h"
 
 namespace microdex::station {
@@ -96,6 +98,26 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
     hold_options_.fixed_colliders = stitch_;
     p_W_tool_rest_ = scene.CalcIdealToolPose(0).translation();
     p_W_second_rest_ = scene.CalcIdealSecondToolPose(0).translation();
+    stitch_tissue_ = MakeStitchOnTissue(scene, 0);
+    if (stitch_tissue_) {
+      // The low-pass x_{n+1} = x_n + g (C k_t ... ) of the rods' displacement against the
+      // thread's stiffness k on them is stable while g (1 + c k) < 2 (c the largest
+      // compliance); the stiffest the thread holds a rod is two strands, each taut to a hand
+      // one guide offset away: k = 2 E A / guide_offset.
+      stitch_gain_ = model_.def.time_step_s / tie_->stitch_relax_s;
+      const double ea_N =
+          model_.def.youngs_modulus_Pa * std::numbers::pi * model_.radius_m * model_.radius_m;
+      const double k_N_per_m = 2 * ea_N / tie_->stitch.guide_offset_m;
+      const double c_m_per_N = stitch_tissue_->compliance.c_m_per_N.diagonal().maxCoeff();
+      const double min_relax_s = model_.def.time_step_s * (1 + c_m_per_N * k_N_per_m) / 2;
+      if (!(stitch_gain_ * (1 + c_m_per_N * k_N_per_m) < 2)) {
+        throw std::runtime_error(
+            scene.path + ": knot_tying.stitch_relax_s: " + std::to_string(tie_->stitch_relax_s) +
+            " s is too short for this tissue: the stitch would oscillate (its compliance " +
+            std::to_string(c_m_per_N) + " m/N against the thread's " + std::to_string(k_N_per_m) +
+            " N/m needs more than " + std::to_string(min_relax_s) + " s)");
+      }
+    }
   } else {
     initial_ = thread::MakeThreadState(
         model_, CalcSlackThreadNodes(d.p_W_anchor, scene.CalcIdealToolPose(0).translation(),
@@ -153,6 +175,40 @@ thread::KnotThrowOptions ThreadModule::ThrowOptions(const state::KnotTieState& t
   return o;
 }
 
+std::array<thread::Collider, kStitchRods> ThreadModule::MovedStitch(
+    const state::KnotTieState& tie) const {
+  std::array<thread::Collider, kStitchRods> rods{};
+  const Eigen::Vector3d w_m =
+      stitch_tissue_ ? stitch_tissue_->Displacement_m(tie.stitch_load_N) : Eigen::Vector3d::Zero();
+  for (int k = 0; k < kStitchRods; ++k) {
+    thread::Collider c = stitch_[static_cast<std::size_t>(k)];
+    if (stitch_tissue_) {
+      const Eigen::Vector3d d_W = w_m[k] * stitch_tissue_->n_W;
+      c.a_W += d_W;
+      c.b_W += d_W;
+    }
+    rods[static_cast<std::size_t>(k)] = c;
+  }
+  return rods;
+}
+
+void ThreadModule::UpdateStitchLoads(int num_colliders, const thread::ThreadState& thread,
+                                     state::KnotTieState& tie) const {
+  if (!stitch_tissue_) return;
+  // Each rod's load from the thread's pull where it leaves the rod, cut 0.5 mm away.
+  const int margin_links = std::max(
+      1, static_cast<int>(std::lround(0.5e-3 * (model_.num_nodes - 1) / model_.def.length_m)));
+  for (int k = 0; k < kStitchRods; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const Eigen::Vector3d f_W = thread::CalcColliderLoad(
+        model_, ws_, thread, num_colliders - kStitchRods + k, margin_links);
+    double f_N = f_W.dot(stitch_tissue_->n_W);
+    if (!std::isfinite(f_N)) f_N = 0;
+    tie.stitch_force_N[i] = f_N;
+    tie.stitch_load_N[i] += stitch_gain_ * (f_N - tie.stitch_load_N[i]);
+  }
+}
+
 void ThreadModule::StepKnotTying(const ToolInput& in, state::StationState& s) {
   state::ThreadModuleState& t = *s.thread;
   state::KnotTieState& k = t.tie;
@@ -194,7 +250,7 @@ void ThreadModule::StepKnotTying(const ToolInput& in, state::StationState& s) {
     thread::SetGraspTarget(th, anchor_slot_, th.grasps[anchor_slot_].p_WT - k.applied_second_W,
                            th.grasps[anchor_slot_].roll_rad);
     thread::KnotThrowOptions o = ThrowOptions(k, k.started);
-    k.script = thread::KnotThrowScript(model_, th, k.hands, o, stitch_);
+    k.script = thread::KnotThrowScript(model_, th, k.hands, o, MovedStitch(k));
     ++k.started;
     k.applied_tool_W.setZero();
     k.applied_second_W.setZero();
@@ -209,8 +265,15 @@ void ThreadModule::StepKnotTying(const ToolInput& in, state::StationState& s) {
   const Eigen::Vector3d applied_second_before = k.applied_second_W;
   k.applied_tool_W = d_tool;
   k.applied_second_W = d_second;
+  const std::array<thread::Collider, kStitchRods> rods = MovedStitch(k);
   if (!k.script.done()) {
-    if (!k.script.Step(model_, ws_, th, offsets(), tie_->speed_m_per_s * h)) {
+    for (int r = 0; r < kStitchRods; ++r) {
+      k.script.SetFixedCollider(k.script.num_fixed_colliders() - kStitchRods + r,
+                                rods[static_cast<std::size_t>(r)]);
+    }
+    const bool more = k.script.Step(model_, ws_, th, offsets(), tie_->speed_m_per_s * h);
+    UpdateStitchLoads(static_cast<int>(k.script.colliders().size()), th, k);
+    if (!more) {
       // Pulled: the next throw is tied with the other end.
       ++k.pulled;
       std::swap(k.hands.standing_slot, k.hands.driver_slot);
@@ -221,13 +284,19 @@ void ThreadModule::StepKnotTying(const ToolInput& in, state::StationState& s) {
                                  th.grasps[slot].roll_rad);
         }
         k.hold = thread::KnotHoldScript(model_, th, k.hands, hold_options_);
+        for (int r = 0; r < kStitchRods; ++r) {
+          k.hold.SetFixedCollider(r, rods[static_cast<std::size_t>(r)]);
+        }
         k.holding = 1;
       }
     }
     return;
   }
   if (k.holding && !k.done) {
+    for (int r = 0; r < kStitchRods; ++r)
+      k.hold.SetFixedCollider(r, rods[static_cast<std::size_t>(r)]);
     if (!k.hold.Step(model_, ws_, th, offsets())) k.done = 1;
+    UpdateStitchLoads(static_cast<int>(k.hold.colliders().size()), th, k);
     return;
   }
   // Before the first throw is chosen the suture lies as laid through the stitch (the tie's
@@ -244,7 +313,8 @@ void ThreadModule::StepKnotTying(const ToolInput& in, state::StationState& s) {
         std::tuple{anchor_slot_, applied_second_before, d_second}}) {
     thread::SetGraspTarget(th, slot, th.grasps[slot].p_WT - before + now, th.grasps[slot].roll_rad);
   }
-  thread::StepThread(model_, stitch_, ws_, th);
+  thread::StepThread(model_, rods, ws_, th);
+  UpdateStitchLoads(kStitchRods, th, k);
 }
 
 void ThreadModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& f_T_W) {

@@ -19,6 +19,10 @@
 // thread::KnotThrowScript (a value in state::KnotTieState), swaps the ends' roles after each
 // pull, then holds with thread::KnotHoldScript, the hands' deviations from their rest poses
 // then moving the ends. Nothing here allocates: the scripts are fixed-size values.
+// With the tissue module the stitch moves with the patch (station/stitch_tissue.h): each step
+// the rods sit at their rest plus the patch's displacement under the low-passed loads the
+// thread presses on them (state::KnotTieState::stitch_load_N), and after the step those loads
+// are updated from the thread's pull where it leaves each rod (thread::CalcColliderLoad).
 
 #include <array>
 #include <optional>
@@ -28,6 +32,7 @@
 #include "common/thread/knot_tie.h"
 #include "common/thread/thread_model.h"
 #include "station/module.h"
+#include "station/stitch_tissue.h"
 
 namespace microdex::station {
 
@@ -68,6 +73,12 @@ class ThreadModule final : public Module {
   void StepKnotTying(const ToolInput& in, state::StationState& state);
   // Knot tying: the options of throw k (0-based) as chosen in the state.
   thread::KnotThrowOptions ThrowOptions(const state::KnotTieState& tie, int k) const;
+  // Knot tying on the tissue: the rods where the patch has moved them for the state's loads.
+  std::array<thread::Collider, kStitchRods> MovedStitch(const state::KnotTieState& tie) const;
+  // ... and the loads updated from the step just taken, whose colliders' last kStitchRods
+  // were the rods.
+  void UpdateStitchLoads(int num_colliders, const thread::ThreadState& thread,
+                         state::KnotTieState& tie) const;
 
   thread::ThreadModel model_;
   thread::ThreadState initial_;  // at the task's start, both ends grasped
@@ -77,6 +88,8 @@ class ThreadModule final : public Module {
   std::optional<scene::KnotTyingSceneDef> tie_;
   std::vector<thread::Collider> stitch_;
   thread::KnotHoldOptions hold_options_;
+  std::optional<StitchOnTissue> stitch_tissue_;  // the stitch moves with the patch
+  double stitch_gain_ = 0;                       // per step: time step / stitch_relax_s
   Eigen::Vector3d p_W_tool_rest_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d p_W_second_rest_ = Eigen::Vector3d::Zero();
   int num_colliders_ = 0;

@@ -19,7 +19,8 @@ TissueModule::TissueModule(const scene::SceneModel& scene)
       contact_radius_m_(scene.tissue->contact_radius_m),
       half_bar_m_(0.5 * scene.tissue->bar_length_m),
       display_level_(scene.tissue->display_level),
-      max_force_N_(scene.tissue->max_force_N) {
+      max_force_N_(scene.tissue->max_force_N),
+      stitch_(MakeStitchOnTissue(scene, scene.tissue->display_level)) {
   const std::size_t side = (std::size_t{1} << display_level_) + 1;
   MICRODEX_CHECK(side * side <= kMaxFrameTissueNodes);  // display_level <= 6 (scene)
   grid_m_.assign(side * side, 0.0);
@@ -49,7 +50,18 @@ void TissueModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vect
     f_T_W += t.f_T_W;
     return;
   }
-  const Eigen::Vector3d p_ST = X_SW_ * in.X_WT.translation();
+  Eigen::Vector3d p_ST = X_SW_ * in.X_WT.translation();
+  if (stitch_ && s.thread) {
+    // The surface under the tool as the stitch's loads have displaced it.
+    const std::array<double, kStitchRods>& load_N = s.thread->tie.stitch_load_N;
+    double w_m = 0;
+    for (int k = 0; k < kStitchRods; ++k) {
+      w_m += load_N[static_cast<std::size_t>(k)] *
+             fem::SampleGrid(model_, stitch_->compliance.grid_m_per_N[static_cast<std::size_t>(k)],
+                             display_level_, p_ST.x(), p_ST.y());
+    }
+    if (std::isfinite(w_m)) p_ST.z() -= w_m;
+  }
   if (tool_kind_ == scene::TissueToolKind::kPoint) {
     tool_ = fem::MakePointTool(p_ST, contact_radius_m_);
   } else {
@@ -98,13 +110,25 @@ void TissueModule::WriteFrame(const state::StationState& s, std::uint64_t step,
   f.mesh_revision = mesh_revision_;
   f.unknowns = static_cast<std::uint32_t>(ws_.stats.unknowns);
   f.status = state.status;
-  for (std::size_t i = 0; i < grid_m_.size(); ++i) f.w_m[i] = static_cast<float>(grid_m_[i]);
   // The field is harmonic off the contact nodes and zero on the edges, so its largest
   // magnitude is at a contact node (maximum principle).
   double w_max = 0;
   for (int c = 0; c < state.num_contacts; ++c) {
     w_max = std::max(w_max, std::abs(field_scratch_m_[state.contact_nodes[c]]));
   }
+  if (stitch_ && s.thread) {
+    // Knot tying: the stitch's loads' field, whose largest magnitude is at a rod.
+    const std::array<double, kStitchRods>& load_N = s.thread->tie.stitch_load_N;
+    for (int k = 0; k < kStitchRods; ++k) {
+      const double f_N = load_N[static_cast<std::size_t>(k)];
+      const std::vector<double>& g = stitch_->compliance.grid_m_per_N[static_cast<std::size_t>(k)];
+      if (!std::isfinite(f_N) || f_N == 0) continue;
+      for (std::size_t i = 0; i < grid_m_.size(); ++i) grid_m_[i] += f_N * g[i];
+    }
+    const Eigen::Vector3d w_rods_m = stitch_->Displacement_m(load_N);
+    if (w_rods_m.allFinite()) w_max = std::max(w_max, w_rods_m.cwiseAbs().maxCoeff());
+  }
+  for (std::size_t i = 0; i < grid_m_.size(); ++i) f.w_m[i] = static_cast<float>(grid_m_[i]);
   f.max_displacement_m = w_max;
   frames.tissue.Publish();
 }

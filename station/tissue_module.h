@@ -12,6 +12,12 @@
 // Every mirror period the field is sampled on the display grid (uniform, level display_level) into
 // the tissue frame. State: state::TissueModuleState (the displacement field, the last mesh and
 // contacts, the force on the tool).
+//
+// Knot tying on the patch (station/stitch_tissue.h): the suture's loads on the stitch's rods
+// (low-passed, in the thread module's section of the state) displace the patch as well; their
+// field is added to the one drawn, and the instrument presses a patch displaced by it (the
+// superposition of the linear problem: the tool's solve prescribes its depth below the
+// displaced surface; the tool's own field does not move the rods).
 
 #include <optional>
 #include <vector>
@@ -19,6 +25,7 @@
 #include "common/fem/tissue_model.h"
 #include "common/fem/tissue_step.h"
 #include "station/module.h"
+#include "station/stitch_tissue.h"
 
 namespace microdex::station {
 
@@ -59,6 +66,7 @@ class TissueModule final : public Module {
   std::vector<double> grid_m_;           // display grid, sized once
   std::vector<double> field_scratch_m_;  // the field on the whole grid (ScatterField), sized once
   std::uint32_t mesh_revision_ = 0;
+  std::optional<StitchOnTissue> stitch_;  // knot tying: the stitch's loads on the patch
 };
 
 }  // namespace microdex::station

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -43,6 +44,26 @@ double NavierDoubleSeries_m(const NavierDomain& domain, const UniformLineLoad& l
     }
   }
   return w;
+}
+
+double NavierPointLoadDisplacement_m_per_N(const NavierDomain& domain, double xi_m, double eta_m,
+                                           double x_m, double y_m) {
+  if (x_m == xi_m) return std::numeric_limits<double>::quiet_NaN();
+  const double gt = domain.shear_modulus_Pa * domain.thickness_m;
+  const double lx = domain.length_x_m, ly = domain.length_y_m;
+  const double lo = std::min(x_m, xi_m), hi = std::max(x_m, xi_m);
+  double sum = 0;
+  for (int n = 1; n < 10000000; ++n) {
+    const double k = n * std::numbers::pi / ly;
+    const double a = k * lo, b = k * (lx - hi), c = k * lx;
+    // sinh a sinh b / sinh c without overflow.
+    const double decay = std::exp(a + b - c);
+    const double ratio =
+        decay * (1 - std::exp(-2 * a)) * (1 - std::exp(-2 * b)) / (2 * (1 - std::exp(-2 * c)));
+    sum += 2 * std::sin(k * eta_m) * std::sin(k * y_m) * ratio / (gt * ly * k);
+    if (decay < 1e-17) break;
+  }
+  return sum;
 }
 
 double NavierLineLoadDisplacement_m(const NavierDomain& domain, const UniformLineLoad& load,

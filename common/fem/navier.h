@@ -41,6 +41,15 @@ double NavierLineLoadDisplacement_m(const NavierDomain& domain, const UniformLin
                                     double x_m, double y_m, double rel_tol = 1e-12,
                                     int max_terms = 1000000, int* terms_used = nullptr);
 
+// A point load of 1 N at (ξ, η): the displacement at (x, y) per newton, the Green's function
+// of the rectangle. The Navier series with its sum over m done in closed form (roles of x and
+// y swapped against the line load's):
+//   w = Σ_n 2 sin(kη) sin(ky) sinh(k x<) sinh(k(L − x>)) / (G t B k sinh kL),  k = nπ/B,
+// whose terms fall like exp(−k|x − ξ|): geometric off the line x = ξ (logarithmic at the load
+// itself, which it does not take: x ≠ ξ is required, else NaN).
+double NavierPointLoadDisplacement_m_per_N(const NavierDomain& domain, double xi_m, double eta_m,
+                                           double x_m, double y_m);
+
 // The line load q(x) on the bar y = y₁, x₁ < x < x₂ for which the Navier solution has
 // w = w_bar all along the bar (the thesis's study presses a bar down 1 cm). q has inverse
 // square-root singularities at the bar ends, so it is expanded as

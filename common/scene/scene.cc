@@ -376,7 +376,7 @@ SceneModel ReadScene(const YamlReader& reader) {
   if (const std::optional<YamlSection> kt = root.OptionalMap("knot_tying")) {
     kt->CheckNoUnknownKeys({"stitch", "throws", "speed_m_per_s", "pull_tension_N",
                             "force_limited_pull", "throw_tension_N", "hold_tension_N", "hold_s",
-                            "first_jig_x_m", "next_jig_x_m", "surface_y_m"});
+                            "first_jig_x_m", "next_jig_x_m", "surface_y_m", "stitch_relax_s"});
     KnotTyingSceneDef d;
     if (const std::optional<YamlSection> st = kt->OptionalMap("stitch")) {
       st->CheckNoUnknownKeys(
@@ -404,6 +404,7 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.first_jig_x_m = kt->FiniteDouble("first_jig_x_m", d.first_jig_x_m);
     d.next_jig_x_m = kt->FiniteDouble("next_jig_x_m", d.next_jig_x_m);
     d.surface_y_m = kt->FiniteDouble("surface_y_m", d.surface_y_m);
+    d.stitch_relax_s = kt->FiniteDouble("stitch_relax_s", d.stitch_relax_s);
     s.knot_tying = d;
   }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
@@ -816,6 +817,9 @@ void ValidateScene(const SceneModel& s) {
     }
     if (!(k.hold_s >= 0 && k.hold_s < t.time_limit_s)) {
       Invalid("knot_tying.hold_s", "expected 0 <= hold_s < task.time_limit_s");
+    }
+    if (!(k.stitch_relax_s >= 0 && k.stitch_relax_s <= 10)) {
+      Invalid("knot_tying.stitch_relax_s", "expected a time in [0, 10] s (0: a rigid stitch)");
     }
   }
   if (t.kind == TaskKind::kKnotPlacement && !s.HasModule("placement")) {

@@ -221,6 +221,13 @@ struct KnotTyingSceneDef {
   double first_jig_x_m = 4e-3;
   double next_jig_x_m = 4.66e-3;
   double surface_y_m = -0.35e-3;
+  // With the tissue module: the stitch moves with the patch under the suture's pull. Each rod
+  // (the bite and the two punctures) takes the patch's normal displacement under the loads
+  // the thread presses on the rods, the patch's point compliance (fem::CalcPointCompliance)
+  // times those loads low-passed with this time constant (the tissue's relaxation), s. 0: a
+  // rigid stitch. Too short a time for the thread's stiffness on the patch's compliance is an
+  // error naming this field (station/thread_module.cc).
+  double stitch_relax_s = 0.5;
 };
 
 // Haptic rendering limits.

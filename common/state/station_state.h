@@ -208,6 +208,13 @@ struct KnotTieState {
   // The deviations applied at the last step, per grasp slot of the two ends (tool, second).
   Eigen::Vector3d applied_tool_W = Eigen::Vector3d::Zero();
   Eigen::Vector3d applied_second_W = Eigen::Vector3d::Zero();
+  // A stitch through the tissue module's patch: per rod (the first puncture, the bite, the
+  // second puncture: thread::KnotStitchDef::Colliders),
+  // the thread's load on it along the patch's normal (out of the tissue positive, N) at the
+  // last step, and that load low-passed (knot_tying.stitch_relax_s), which the patch's
+  // compliance turns into the rods' displacement and the tissue module into the patch's.
+  std::array<double, 3> stitch_force_N{};
+  std::array<double, 3> stitch_load_N{};
 };
 
 // The suture-thread module.

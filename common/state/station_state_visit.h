@@ -254,6 +254,8 @@ void Thread(S& m, V& v) {
   v("thread.tie.coupling", &k.coupling, 1);
   Matrix("thread.tie.applied_tool_W", k.applied_tool_W, v);
   Matrix("thread.tie.applied_second_W", k.applied_second_W, v);
+  v("thread.tie.stitch_force_N", k.stitch_force_N.data(), k.stitch_force_N.size());
+  v("thread.tie.stitch_load_N", k.stitch_load_N.data(), k.stitch_load_N.size());
 }
 
 template <typename S, typename V>

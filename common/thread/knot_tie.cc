@@ -174,6 +174,11 @@ void KnotThrowScript::KeepTension(const ThreadState& state, double h) {
   plan_standing_W_ += (sx_ * v * h) * Eigen::Vector3d::UnitX();
 }
 
+void KnotThrowScript::SetFixedCollider(int k, const Collider& c) {
+  MICRODEX_CHECK(k >= 0 && k < num_fixed_colliders());
+  colliders_[static_cast<std::size_t>(num_jig_) + static_cast<std::size_t>(k)] = c;
+}
+
 bool KnotThrowScript::Step(const ThreadModel& model, ThreadWorkspace& ws, ThreadState& state,
                            const KnotHandOffsets& offsets, double advance_m) {
   if (phase_ == Phase::kDone) return false;
@@ -277,6 +282,11 @@ KnotHoldScript::KnotHoldScript(const ThreadModel& model, const ThreadState& stat
   for (const Collider& c : options.fixed_colliders) colliders_[num_colliders_++] = c;
   plan_standing_W_ = state.grasps[hands.standing_slot].p_WT;
   plan_driver_W_ = state.grasps[hands.driver_slot].p_WT;
+}
+
+void KnotHoldScript::SetFixedCollider(int k, const Collider& c) {
+  MICRODEX_CHECK(k >= 0 && k < num_colliders_);
+  colliders_[static_cast<std::size_t>(k)] = c;
 }
 
 bool KnotHoldScript::Step(const ThreadModel& model, ThreadWorkspace& ws, ThreadState& state,

@@ -118,6 +118,10 @@ class KnotThrowScript {
     return {colliders_.data(), static_cast<std::size_t>(num_colliders_)};
   }
   const KnotTyingHands& hands() const { return hands_; }
+  // The fixed colliders (the options' followed by more_fixed) come last in colliders(); one of
+  // them replaced, as the tissue moves a stitch's rod (k < their count).
+  int num_fixed_colliders() const { return num_colliders_ - num_jig_; }
+  void SetFixedCollider(int k, const Collider& c);
   // Driver path length before the release, done and left, m.
   double path_done_m() const { return path_s_m_; }
   double path_total_m() const { return path_total_m_; }
@@ -216,6 +220,11 @@ class KnotHoldScript {
   bool Step(const ThreadModel& model, ThreadWorkspace& ws, ThreadState& state,
             const KnotHandOffsets& offsets = {});
   int steps_left() const { return steps_left_; }
+  // The fixed colliders (the options'), as the last step used them; one of them replaced.
+  std::span<const Collider> colliders() const {
+    return {colliders_.data(), static_cast<std::size_t>(num_colliders_)};
+  }
+  void SetFixedCollider(int k, const Collider& c);
 
   // As KnotThrowScript::VisitFields.
   template <typename Self, typename V>

@@ -141,6 +141,40 @@ void FindThreadContacts(const ThreadModel& model, std::span<const Collider> coll
   state.status.num_object_contacts = n_obj;
 }
 
+Eigen::Vector3d CalcColliderLoad(const ThreadModel& model, const ThreadWorkspace& w,
+                                 const ThreadState& state, int collider, int margin_links) {
+  const Eigen::Matrix3Xd& x = state.x_W;
+  // The stretch force along link j (node order), zero beyond the thread's ends.
+  const auto pull = [&](int j) -> Eigen::Vector3d {
+    if (j < 0 || j >= model.num_links) return Eigen::Vector3d::Zero();
+    const Eigen::Vector3d e = x.col(j + 1) - x.col(j);
+    const double l = e.norm();
+    if (!(l > 0.0)) return Eigen::Vector3d::Zero();
+    return (model.stretch_k_N_per_m[j] * (l - model.rest_length_m[j]) / l) * e;
+  };
+  const int m = std::max(margin_links, 0);
+  Eigen::Vector3d f_W = Eigen::Vector3d::Zero();
+  int first = 0, last = -1;  // the extended run being gathered (empty when last < first)
+  const auto cut = [&] {
+    if (last >= first) f_W += pull(last + 1) - pull(first - 1);
+  };
+  // The list holds each collider's contacts in link order (FindThreadContacts).
+  for (int c = 0; c < w.num_object_contacts; ++c) {
+    const ObjectContact& oc = w.object_contacts[c];
+    if (oc.collider != collider) continue;
+    const int a = std::max(oc.link - m, 0), b = std::min(oc.link + m, model.num_links - 1);
+    if (last >= first && a <= last + 1) {
+      last = std::max(last, b);
+      continue;
+    }
+    cut();
+    first = a;
+    last = b;
+  }
+  cut();
+  return f_W;
+}
+
 void AddContactForces(const ThreadModel& model, ThreadWorkspace& w, Eigen::Matrix3Xd& f_W,
                       bool with_stiffness, int exact_pairs) {
   const ThreadDef& def = model.def;

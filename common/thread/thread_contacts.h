@@ -62,6 +62,21 @@ ContactProjection ProjectContacts(const ThreadModel& model, std::span<const Coll
                                   double strain_limit, const Eigen::Matrix3Xd& x0,
                                   ThreadWorkspace& w, ThreadState& state);
 
+// The thread's load on colliders[collider], world, N, from the last FindThreadContacts (the
+// step's start) and the nodes in `state`: each run of links touching the collider, extended by
+// margin_links links on either side (runs whose extensions meet are one), is cut there, and the
+// thread beyond pulls it with the cut links' stretch force (5.4): T_{b+1} u_{b+1} − T_{a−1}
+// u_{a−1} for the extended run a..b (u along the node order; nothing beyond the thread's ends).
+// A massless thread at rest whose extended run touches nothing else is in equilibrium, so this
+// is what it presses on the collider, whatever carries that force: the contact law (5.9) or
+// the contact projection, whose position corrections are not forces (a thread pulled deep into
+// a rod sits where the law's exponential means nothing). Cut a few links away from the rod the
+// links are free and straight, their stretch a clean tension. Left out: the bending shear at
+// the cuts, inertia, and whatever else the extended run touches (a knot on the rod: its self
+// contacts with strands outside the run).
+Eigen::Vector3d CalcColliderLoad(const ThreadModel& model, const ThreadWorkspace& w,
+                                 const ThreadState& state, int collider, int margin_links);
+
 // Smallest centreline distance between non-adjacent links, over all pairs (O(n^2) reference).
 double CalcMinNonAdjacentDistance(const ThreadModel& model, const Eigen::Matrix3Xd& x_W);
 

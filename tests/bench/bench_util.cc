@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -26,6 +28,20 @@ double JsonNumber(const std::string& json, const std::string& key) {
 std::string ReadText(const std::string& path) {
   std::ifstream f(path);
   return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+void Progress(const char* what, int done, int total, std::chrono::steady_clock::time_point start) {
+  if (isatty(STDERR_FILENO) == 0) return;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double eta = done > 0 ? s * (total - done) / done : 0.0;
+  std::fprintf(stderr, "\r[%d/%d] %s, ETA %.0f s   ", done, total, what, eta);
+  if (done == total) std::fprintf(stderr, "\n");
 }
 
 }  // namespace microdex::bench

@@ -129,6 +129,22 @@ export function sampleTissue(w: Float32Array, nx: number, ny: number, stride: nu
   return { nx: kx, ny: ky };
 }
 
+// The field's value at (x, y) of a patch lx × ly (m) sampled on nx × ny nodes (x fastest):
+// bilinear between its nodes, the point clamped to the patch.
+export function sampleField(w: Float32Array, nx: number, ny: number, lx: number, ly: number,
+                            x: number, y: number): number {
+  if (nx < 2 || ny < 2 || w.length < nx * ny) return 0;
+  const u = Math.min(Math.max((x / lx) * (nx - 1), 0), nx - 1);
+  const v = Math.min(Math.max((y / ly) * (ny - 1), 0), ny - 1);
+  const i = Math.min(Math.floor(u), nx - 2);
+  const j = Math.min(Math.floor(v), ny - 2);
+  const a = u - i;
+  const b = v - j;
+  const at = (ii: number, jj: number) => w[jj * nx + ii];
+  return (1 - a) * (1 - b) * at(i, j) + a * (1 - b) * at(i + 1, j) +
+         (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
+}
+
 // Lambert shading: cheap per pixel (software WebGL draws every pixel on the CPU); metal
 // parts get a little emissive sheen instead of a PBR highlight.
 interface Look { transparent?: boolean; opacity?: number; side?: THREE.Side; depthWrite?: boolean;
@@ -246,6 +262,10 @@ export class SceneView {
   thread: PolylineTube | null = null;
   tissue: THREE.Mesh | null = null;
   private tissueKey = '';
+  // Knot tying: the stitch's rods, which move with the patch (applyTissue), and their centres
+  // at rest.
+  readonly stitchRods: THREE.Mesh[] = [];
+  private readonly stitchRodCentres: THREE.Vector3[] = [];
   knot: PolylineTube | null = null;
   knotItem = -1; // the quiz item drawn (-1 none; items.length: the quiz is done)
   // Knot placement: the stitches placed so far (hidden until placed), from the frames.
@@ -306,9 +326,13 @@ export class SceneView {
       // below the surface, so the bite under it shows through (when the scene has no FEM
       // tissue; with one, that patch is drawn translucent instead: applyTissue).
       for (const r of scene.stitch.rods) {
-        this.root.add(new THREE.Mesh(
+        const rod = new THREE.Mesh(
             new THREE.TubeGeometry(polylineCurve([r.a, r.b]), 4, r.radius, d.radial),
-            material(0xd88080)));
+            material(0xd88080));
+        this.stitchRods.push(rod);
+        this.stitchRodCentres.push(new THREE.Vector3(
+            (r.a[0] + r.b[0]) / 2, (r.a[1] + r.b[1]) / 2, (r.a[2] + r.b[2]) / 2));
+        this.root.add(rod);
       }
       if (!scene.tissue) {
       const xs = scene.stitch.rods.flatMap((r) => [r.a[0], r.b[0]]);
@@ -580,6 +604,18 @@ export class SceneView {
     tissueColours(attr.array as Float32Array, colour.array as Float32Array);
     colour.needsUpdate = true;
     this.tissue.geometry.computeVertexNormals();
+    // The stitch moves with the patch (the suture's pull on it is in the field): each rod by
+    // the field at its centre, along the patch's normal.
+    if (this.stitchRods.length > 0) {
+      this.tissue.updateMatrix();
+      const toPatch = this.tissue.matrix.clone().invert();
+      const normal = new THREE.Vector3(0, 0, 1).applyQuaternion(this.tissue.quaternion);
+      for (let k = 0; k < this.stitchRods.length; ++k) {
+        const p = this.stitchRodCentres[k].clone().applyMatrix4(toPatch);
+        const w = sampleField(f.tissue, f.tissueNodesX, f.tissueNodesY, lx, ly, p.x, p.y);
+        this.stitchRods[k].position.copy(normal).multiplyScalar(Number.isFinite(w) ? w : 0);
+      }
+    }
   }
 
   private placeShadow(): void {

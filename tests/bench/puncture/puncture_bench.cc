@@ -12,8 +12,6 @@
 //   p99 of StepPuncture while the tip presses (a new mesh every step);
 // pass: a whole pass along the needle's circle at the stations' level 6: median and p99 step
 //   time while pressing, while through the holes, and over all steps.
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -25,6 +23,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "bench_util.h"
 #include "common/fem/tissue_model.h"
 #include "tests/unit/puncture/puncture_scenarios.h"
 
@@ -34,22 +33,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using puncture::testing::ThroughScenario;
 
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-}
-
 double ElapsedNs(Clock::time_point t0) {
   return std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
-}
-
-void Progress(const char* what, int done, int total, Clock::time_point start) {
-  if (isatty(STDERR_FILENO) == 0) return;
-  const double s = std::chrono::duration<double>(Clock::now() - start).count();
-  const double eta = done > 0 ? s * (total - done) / done : 0.0;
-  std::fprintf(stderr, "\r[%d/%d] %s, ETA %.0f s   ", done, total, what, eta);
-  if (done == total) std::fprintf(stderr, "\n");
 }
 
 struct NearestRow {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -19,6 +20,7 @@
 #include "station/scene_run.h"
 #include "station/score.h"
 #include "station/station_step.h"
+#include "station/stitch_tissue.h"
 #include "station/tissue_module.h"
 
 namespace microdex::station {
@@ -67,15 +69,22 @@ TEST(KnotTyingScene, TheTraineeTiesASquareOrAGrannyAndTheRecogniserNamesIt) {
 
 // Throws chosen with the buttons, the hands at rest: 3 then 2 (a double right-handed throw,
 // then a single left) tie a surgeon's knot, which passes; 1 then 1 a granny, which fails.
-// Buttons that choose no throw (5) are ignored.
+// Buttons that choose no throw (5) are ignored. Both with the scene's stitch, which moves with
+// the tissue, and with a rigid one.
 TEST(KnotTyingScene, ButtonsChooseTheThrows) {
-  const scene::SceneModel scene = scene::LoadScene(ScenePath());
+  const scene::SceneModel coupled = scene::LoadScene(ScenePath());
+  scene::SceneModel rigid = coupled;
+  rigid.knot_tying->stitch_relax_s = 0;
   struct Case {
     std::uint32_t first, second;
     knot::StitchKnotType knot;
+    const scene::SceneModel* scene;
   };
-  for (const Case c :
-       {Case{3, 2, knot::StitchKnotType::kSurgeons}, Case{1, 1, knot::StitchKnotType::kGranny}}) {
+  for (const Case c : {Case{3, 2, knot::StitchKnotType::kSurgeons, &coupled},
+                       Case{1, 1, knot::StitchKnotType::kGranny, &coupled},
+                       Case{3, 2, knot::StitchKnotType::kSurgeons, &rigid}}) {
+    const scene::SceneModel& scene = *c.scene;
+    const bool moves = c.scene == &coupled;
     Simulation sim(scene);
     state::StationState state = sim.MakeInitialState(1);
     const auto limit = static_cast<std::uint64_t>(scene.task.time_limit_s / sim.dt_s());
@@ -105,16 +114,19 @@ TEST(KnotTyingScene, ButtonsChooseTheThrows) {
     EXPECT_EQ(RecogniseTiedKnot(scene, nodes), c.knot) << "tail lowered";
     EXPECT_LT(state.thread->thread.status.max_strain, scene.thread->max_strain);
     // Hands at rest: both ends sampled every step of the hold once the hands' deviations are
-    // coupled in (after 0.25 s), the pull within 0.5 % of the hold tension (the hands' servo
-    // alone; an expert's tremor and drift make it 1.5 %, a novice's 4.7 %).
+    // coupled in (after 0.25 s), the pull within 0.5 % of the hold tension with the rigid
+    // stitch (the hands' servo alone; an expert's tremor and drift make it 1.5 %, a novice's
+    // 4.7 %), and within 1 % with the stitch on the tissue, which creeps under the knot's pull
+    // through the hold (stitch_relax_s 0.5 s, the bite rising ~0.1 mm) as the servo follows.
     const auto sampled_steps =
         static_cast<std::uint64_t>((scene.knot_tying->hold_s - 0.25) / sim.dt_s());
     EXPECT_GE(state.score.tension_samples, 2 * sampled_steps - 4);
     EXPECT_LE(state.score.tension_samples, 2 * sampled_steps + 4);
     const double rms =
         std::sqrt(state.score.tension_sq_sum / static_cast<double>(state.score.tension_samples));
-    std::printf("%u, %u: hold tension error %.4f\n", c.first, c.second, rms);
-    EXPECT_LT(rms, 0.005);
+    std::printf("%u, %u (%s stitch): hold tension error %.4f\n", c.first, c.second,
+                moves ? "moving" : "rigid", rms);
+    EXPECT_LT(rms, moves ? 0.01 : 0.005);
   }
 }
 
@@ -126,8 +138,10 @@ TEST(KnotTyingScene, TheTissuePushesAnInstrumentBackAlongItsNormal) {
   ASSERT_TRUE(scene.HasModule("tissue"));
   ASSERT_TRUE(scene.tissue.has_value());
   scene::SceneModel flat = scene;
-  // The patch's corner at the origin, its normal +z: world = local.
+  // The patch's corner at the origin, its normal +z: world = local (the stitch, then off the
+  // patch, rigid; it carries no load here).
   flat.tissue->X_WS = Eigen::Isometry3d::Identity();
+  flat.knot_tying->stitch_relax_s = 0;
   const Eigen::Vector3d p_S(13e-3, 8e-3, 0);  // beside the stitch (x 6.5..11.5 mm in world)
   auto press = [](const scene::SceneModel& sc, const Eigen::Vector3d& p_WT) {
     TissueModule m(sc);
@@ -160,6 +174,112 @@ TEST(KnotTyingScene, TheTissuePushesAnInstrumentBackAlongItsNormal) {
   EXPECT_EQ(above, Eigen::Vector3d::Zero());
 }
 
+// Buttons 3 then 2 (a surgeon's knot), the hands at rest, to the end of the hold; the state at
+// the end, or the exception's message.
+struct TieRun {
+  state::StationState state;
+  std::string error;
+};
+TieRun TieSurgeons(const scene::SceneModel& scene) {
+  TieRun out;
+  try {
+    Simulation sim(scene);
+    out.state = sim.MakeInitialState(1);
+    const auto limit = static_cast<std::uint64_t>(scene.task.time_limit_s / sim.dt_s());
+    while (out.state.step < limit && out.state.score.outcome == 0) {
+      StationInput in;
+      in.device.X_WT = scene.CalcIdealToolPose(0);
+      in.second.X_WT = scene.CalcIdealSecondToolPose(0);
+      in.second.gripper = 1;
+      const std::uint64_t k = out.state.step;
+      in.device.buttons = k >= 300 && k < 400 ? 3u : k >= 500 && k < 600 ? 2u : 0u;
+      StepStation(sim, in, out.state);
+    }
+  } catch (const std::exception& e) {
+    out.error = e.what();
+  }
+  return out;
+}
+
+// The suture's pull moves the stitch with the patch: the loop through the tissue lifts the
+// bite out of it, and the patch around it. The rods' loads, each from the thread's pull where
+// it leaves the rod, balance the hands' pull on the thread (the held thread is at rest, without
+// gravity: its external forces sum to zero), an equilibrium that the contact model does not
+// enforce on them. By the end of the hold the low-passed loads have settled on the thread's,
+// and the knot is the one the buttons chose.
+TEST(KnotTyingScene, TheSuturesPullMovesTheStitchWithThePatch) {
+  const scene::SceneModel scene = scene::LoadScene(ScenePath());
+  const std::optional<StitchOnTissue> stitch = MakeStitchOnTissue(scene, 4);
+  ASSERT_TRUE(stitch.has_value());
+  const TieRun run = TieSurgeons(scene);
+  ASSERT_EQ(run.error, "");
+  ASSERT_EQ(run.state.score.outcome, 1);
+  const state::ThreadModuleState& t = *run.state.thread;
+  const state::KnotTieState& tie = t.tie;
+  const Eigen::Vector3d w_m = stitch->Displacement_m(tie.stitch_load_N);
+  double sum_N = 0, largest_N = 0;
+  for (int k = 0; k < kStitchRods; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    std::printf("rod %d: thread's load %+.3f mN, low-passed %+.3f mN, displacement %+.1f um\n", k,
+                tie.stitch_force_N[i] * 1e3, tie.stitch_load_N[i] * 1e3, w_m[k] * 1e6);
+    sum_N += tie.stitch_force_N[i];
+    largest_N = std::max(largest_N, std::abs(tie.stitch_force_N[i]));
+  }
+  for (int k = 0; k < kStitchRods; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    EXPECT_NEAR(tie.stitch_load_N[i], tie.stitch_force_N[i], 0.05 * largest_N) << k;
+  }
+  EXPECT_GT(tie.stitch_force_N[kBiteRod], 1e-3) << "the bite is lifted";
+  EXPECT_GT(w_m[kBiteRod], 10e-6);
+  const double hands_N = (t.f_T_W + t.f_T2_W).dot(stitch->n_W);
+  std::printf("sum over the rods %+.3f mN, the hands' pull on the thread %+.3f mN\n", sum_N * 1e3,
+              -hands_N * 1e3);
+  EXPECT_NEAR(sum_N, -hands_N, 0.05 * largest_N);
+  // The knot is tied as with a rigid stitch.
+  const Eigen::Matrix3Xd& x = t.thread.x_W;
+  std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(x.cols()));
+  for (Eigen::Index i = 0; i < x.cols(); ++i) nodes[static_cast<std::size_t>(i)] = x.col(i);
+  EXPECT_EQ(RecogniseTiedKnot(scene, nodes), knot::StitchKnotType::kSurgeons);
+}
+
+// Stiff and extreme patches: skin 10x stiffer and 4x softer; and 100x softer (brain-like), for
+// which the scene's relaxation is too short against the thread's stiffness: refused, naming
+// the field. The stitch settles (loads finite, tracked by the low-pass), and the softer patch
+// moves the bite more.
+TEST(KnotTyingScene, TheStitchStaysStableFromStiffToSoftTissue) {
+  const scene::SceneModel base = scene::LoadScene(ScenePath());
+  double bite_m[2] = {0, 0};
+  int n = 0;
+  {
+    scene::SceneModel scene = base;
+    scene.tissue->def.shear_modulus_Pa = 2e2;
+    const TieRun refused = TieSurgeons(scene);
+    EXPECT_NE(refused.error.find("knot_tying.stitch_relax_s"), std::string::npos) << refused.error;
+  }
+  for (const double g_Pa : {2e5, 5e3}) {
+    scene::SceneModel scene = base;
+    scene.tissue->def.shear_modulus_Pa = g_Pa;
+    const TieRun run = TieSurgeons(scene);
+    ASSERT_EQ(run.error, "") << g_Pa;
+    ASSERT_EQ(run.state.score.outcome, 1) << g_Pa;
+    const state::KnotTieState& tie = run.state.thread->tie;
+    const std::optional<StitchOnTissue> stitch = MakeStitchOnTissue(scene, 4);
+    ASSERT_TRUE(stitch.has_value());
+    const Eigen::Vector3d w_m = stitch->Displacement_m(tie.stitch_load_N);
+    std::printf("G %.0f Pa: bite load %+.3f mN (low-passed %+.3f), displacement %+.1f um\n", g_Pa,
+                tie.stitch_force_N[kBiteRod] * 1e3, tie.stitch_load_N[kBiteRod] * 1e3,
+                w_m[kBiteRod] * 1e6);
+    EXPECT_NEAR(tie.stitch_load_N[kBiteRod], tie.stitch_force_N[kBiteRod],
+                0.05 * std::abs(tie.stitch_force_N[kBiteRod]) + 1e-5)
+        << g_Pa;
+    EXPECT_TRUE(w_m.allFinite());
+    EXPECT_LT(w_m.cwiseAbs().maxCoeff(), base.knot_tying->stitch.depth_m) << g_Pa;
+    EXPECT_LT(run.state.thread->thread.status.max_strain, scene.thread->max_strain) << g_Pa;
+    bite_m[n++] = w_m[kBiteRod];
+  }
+  EXPECT_GT(bite_m[1], bite_m[0]);
+}
+
 // A bad value in the knot_tying section is named with the file, its line and the field.
 TEST(KnotTyingScene, BadFieldsAreNamed) {
   std::ifstream in(ScenePath());
@@ -177,6 +297,8 @@ TEST(KnotTyingScene, BadFieldsAreNamed) {
                        Case{"    depth_m: 1.0e-3", "    depth_m: 0.1e-3",
                             "knot_tying.stitch.depth_m: expected the bite rod"},
                        Case{"  hold_s: 2.0", "  hold_s: 60", "knot_tying.hold_s"},
+                       Case{"  hold_s: 2.0", "  hold_s: 2.0\n  stitch_relax_s: -1",
+                            "knot_tying.stitch_relax_s: expected a time"},
                        Case{"  kind: knot_tying", "  kind: tremor_hold", "knot_tying: section"}}) {
     std::string bad = text;
     const std::size_t at = bad.find(c.from);

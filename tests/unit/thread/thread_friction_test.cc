@@ -1,15 +1,17 @@
 // Contact friction and the exact pair coupling of the linearly implicit step, against
 // independent references: the capstan equation T_high / T_low = exp(mu theta) for a thread
-// slipping over a fixed cylinder, and rigid motion of two crossing strands in contact, which
-// only the fluid drag may resist.
+// slipping over a fixed cylinder (and the load it presses on the cylinder), and rigid motion of two
+// crossing strands in contact, which only the fluid drag may resist.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <vector>
 
 #include "common/thread/grasp.h"
+#include "common/thread/thread_contacts.h"
 #include "common/thread/thread_step.h"
 #include "tests/support/thread_scenarios.h"
 
@@ -37,6 +39,10 @@ struct CapstanResult {
   int slipping_steps = 0;  // steps with every friction contact at the cone's rim
   int stuck_steps = 0;     // steps before the first slip
   double max_strain = 0.0;
+  // The thread's load on the cylinder (CalcColliderLoad) against its tails' pulls, largest
+  // |F − (T_high t_high − T_low t_low)| / |F| over the slipping steps.
+  double load_error = 0.0;
+  int load_samples = 0;
 };
 
 // A thread over a fixed cylinder (capsule along z, radius 1 mm) wrapped by theta, both tails
@@ -100,8 +106,25 @@ CapstanResult RunCapstan(double mu, double theta) {
     const bool slipping = state.status.num_sliding_contacts == nf;
     if (!slipped && !slipping) ++r.stuck_steps;
     slipped = slipped || slipping;
+    // While both tails leave the cylinder 3 links or more from their ends (the slipping
+    // thread draws its low tail onto the cylinder).
+    int first = model.num_links, last = -1;
+    for (int c = 0; c < ws.num_object_contacts; ++c) {
+      first = std::min(first, ws.object_contacts[c].link);
+      last = std::max(last, ws.object_contacts[c].link);
+    }
+    if (k >= 300 && first > 4 && last < model.num_links - 5) {
+      const double t_hi = -state.grasps[high].f_T_W.dot(t_high);
+      const double t_lo = state.grasps[low].f_T_W.dot(t_low);
+      const Eigen::Vector3d expected = t_hi * t_high - t_lo * t_low;
+      const Eigen::Vector3d load = CalcColliderLoad(model, ws, state, 0, 3);
+      r.load_error = std::max(r.load_error, (load - expected).norm() / expected.norm());
+      ++r.load_samples;
+    }
     if (slipping && k >= 1500) {  // past the transient of the weight's hand
-      ratio_sum += -state.grasps[high].f_T_W.dot(t_high) / state.grasps[low].f_T_W.dot(t_low);
+      const double t_hi = -state.grasps[high].f_T_W.dot(t_high);
+      const double t_lo = state.grasps[low].f_T_W.dot(t_low);
+      ratio_sum += t_hi / t_lo;
       ++r.slipping_steps;
     }
   }
@@ -120,6 +143,12 @@ TEST(ThreadFriction, CapstanEquationAtTheOnsetOfSlip) {
       // at the pull speed are far smaller; the thread's residual bending is what remains.
       EXPECT_NEAR(r.ratio, expected, 0.02 * expected) << "mu " << mu << " theta " << theta;
       EXPECT_LT(r.max_strain, 0.05);
+      // What the thread presses on the cylinder, from its pull 3 links beyond the wrap, is
+      // what its tails pull with (2 T sin(theta / 2) without friction).
+      std::printf("mu %.1f theta %.2f: load error %.4f over %d steps\n", mu, theta, r.load_error,
+                  r.load_samples);
+      EXPECT_GT(r.load_samples, 100) << "mu " << mu << " theta " << theta;
+      EXPECT_LT(r.load_error, 0.03) << "mu " << mu << " theta " << theta;
     }
   }
 }
@@ -128,6 +157,8 @@ TEST(ThreadFriction, FrictionlessThreadSlipsWithEqualTensions) {
   const CapstanResult r = RunCapstan(0.0, std::numbers::pi);
   EXPECT_EQ(r.stuck_steps, 0);
   EXPECT_NEAR(r.ratio, 1.0, 0.03);
+  EXPECT_GT(r.load_samples, 100);
+  EXPECT_LT(r.load_error, 0.03);
 }
 
 // Two strands of one thread crossing at ~100 degrees, pressed into contact by four grasps near

@@ -6,7 +6,7 @@ import * as THREE from 'three';
 import { HAS_NEEDLE, HAS_SCORE, HAS_SECOND_TOOL, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame, Overlay } from '../../../common/view/src/frame';
 import {
   SceneJson, SceneView, HIGH_DETAIL, LOW_DETAIL, NEEDLE_COLOR, CONTACT_COLOR, gridIndices,
-  needleCurve, polylineCurve, sampleTissue, fieldOfView, TISSUE_REST,
+  needleCurve, polylineCurve, sampleTissue, sampleField, fieldOfView, TISSUE_REST,
 } from '../../../common/view/src/scene_objects';
 import { fitCamera, microscopeCamera } from '../../../common/view/src/microscope';
 
@@ -235,4 +235,40 @@ test('the microscope camera looks at look_at and shows the field of its magnific
   const up = new THREE.Vector3().setFromMatrixColumn(cam.matrixWorld, 1);
   const top = new THREE.Vector3(...scene.microscope.look_at).addScaledVector(up, field / 2).project(cam);
   assert.ok(Math.abs(top.y - 1) < 1e-6, `top at ${top.y}`);
+});
+
+test('knot tying: the stitch rods move with the patch along its normal', () => {
+  // The field: bilinear between the nodes, clamped to the patch.
+  const w = new Float32Array([0, 1, 2, 3]);  // 2 x 2 nodes over 0.02 x 0.01 m: w = 50 x + 200 y
+  assert.ok(Math.abs(sampleField(w, 2, 2, 0.02, 0.01, 0.01, 0.005) - 1.5) < 1e-9);
+  assert.ok(Math.abs(sampleField(w, 2, 2, 0.02, 0.01, 0.015, 0.0025) - 1.25) < 1e-9);
+  assert.equal(sampleField(w, 2, 2, 0.02, 0.01, -1, 5), 2);
+  // The knot-tying scene's frame: the patch's normal along +y (rotated -90 deg about x), its
+  // corner at (-1, -0.35, 10) mm; the rods along z at x = 6.5, 9, 11.5 mm.
+  const q = [Math.SQRT1_2, -Math.SQRT1_2, 0, 0];
+  const p = [-1e-3, -0.35e-3, 10e-3];
+  const rod = (x: number, y: number) => ({ a: [x, y, -4e-3] as [number, number, number],
+                                          b: [x, y, 4e-3] as [number, number, number],
+                                          radius: 1e-4 });
+  const v = new SceneView({
+    ...base, modules: ['thread', 'tissue'],
+    tissue: { lx: 0.02, ly: 0.02, pose: { p, q }, bar: 0 },
+    stitch: { rods: [rod(6.5e-3, -0.1e-3), rod(9e-3, -1e-3), rod(11.5e-3, -0.1e-3)],
+              surface_y: -0.35e-3 },
+  });
+  assert.equal(v.stitchRods.length, 3);
+  // 21 x 21 nodes (1 mm apart); the patch lifted 0.1 mm at the bite (its centre: patch x 10,
+  // y 10 mm), 0 elsewhere.
+  const field = Array.from({ length: 21 * 21 }, (_, i) => (i === 10 * 21 + 10 ? 1e-4 : 0));
+  v.apply(frame(HAS_TISSUE, {
+    [S.tissueLx]: 0.02, [S.tissueLy]: 0.02, [S.tissueP]: p[0], [S.tissueP + 1]: p[1],
+    [S.tissueP + 2]: p[2], [S.tissueQ]: q[0], [S.tissueQ + 1]: q[1], [S.tissueQ + 2]: q[2],
+    [S.tissueQ + 3]: q[3],
+  }, [], field, 21, 21));
+  const bite = v.stitchRods[1].position;
+  assert.ok(Math.abs(bite.y - 1e-4) < 1e-9, `the bite lifted along +y: ${bite.y}`);
+  assert.ok(Math.abs(bite.x) < 1e-12 && Math.abs(bite.z) < 1e-12);
+  // The punctures, 2.5 mm away, between nodes with w = 0: still.
+  assert.ok(v.stitchRods[0].position.length() < 1e-12);
+  assert.ok(v.stitchRods[2].position.length() < 1e-12);
 });

@@ -1,0 +1,264 @@
+// microdex-bench stitch: the knot-tying stitch moved by the tissue (station/stitch_tissue.h),
+// error against run time (assets/scenes/README.md, "The stitch on the tissue").
+//
+//   microdex-bench stitch [--json FILE] [--quick] [--scene FILE]
+//
+// compliance: the patch's point compliance at the stitch's three rods (fem::CalcPointCompliance)
+//   at tissue levels 5 … 8: its build time (median of 3), the largest relative error of the
+//   off-diagonal entries against the rectangle's Green's function (the Navier point-load
+//   series), of the diagonal against that function on the contact disc's rim, and the largest
+//   asymmetry |C_ij − C_ji| / C_ij;
+// coupling: the scene's surgeon's knot (buttons 3, 2, the hands at rest) to the end of the hold,
+//   rigid (stitch_relax_s 0), at the scene's relaxation time and at others: the station step's
+//   median and p99 with their ratio to the rigid run's in the same run, the bite's displacement at
+//   the end, how far the low-passed loads trail the thread's (largest |load − force| over the
+//   largest |force|), the balance of the rods' loads against the hands' pull along the normal,
+//   and the knot named.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bench_registry.h"
+#include "bench_util.h"
+#include "common/fem/navier.h"
+#include "common/fem/point_compliance.h"
+#include "common/knot/stitch_knot.h"
+#include "common/scene/scene.h"
+#include "station/score.h"
+#include "station/station_step.h"
+#include "station/stitch_tissue.h"
+
+namespace microdex::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct ComplianceRow {
+  int level = 0;
+  double build_ms = 0;
+  double off_diagonal_error = 0;
+  double diagonal_error = 0;
+  double asymmetry = 0;
+};
+
+ComplianceRow MeasureCompliance(const scene::SceneModel& scene, int level) {
+  const std::optional<station::StitchOnTissue> stitch = station::MakeStitchOnTissue(scene, 4);
+  fem::TissueDef def = scene.tissue->def;
+  def.level = level;
+  def.max_level = std::max(def.max_level, level);
+  const fem::TissueModel model = fem::BuildTissueModel(def);
+  const double radius_m = scene.tissue->contact_radius_m;
+  std::vector<double> ms;
+  fem::PointCompliance pc;
+  for (int rep = 0; rep < 3; ++rep) {
+    const auto t0 = Clock::now();
+    pc = fem::CalcPointCompliance(model, stitch->p_S, radius_m, 4);
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
+  fem::NavierDomain domain;
+  domain.length_x_m = def.length_x_m;
+  domain.length_y_m = def.length_y_m;
+  domain.shear_modulus_Pa = def.shear_modulus_Pa;
+  domain.thickness_m = def.thickness_m;
+  ComplianceRow row;
+  row.level = level;
+  row.build_ms = Percentile(ms, 0.5);
+  const auto& p = stitch->p_S;
+  for (int i = 0; i < station::kStitchRods; ++i) {
+    for (int j = 0; j < station::kStitchRods; ++j) {
+      const double c = pc.c_m_per_N(i, j);
+      if (i == j) {
+        const double ref = fem::NavierPointLoadDisplacement_m_per_N(domain, p[j].x(), p[j].y(),
+                                                                    p[j].x() + radius_m, p[j].y());
+        row.diagonal_error = std::max(row.diagonal_error, std::abs(c / ref - 1));
+      } else {
+        const double ref = fem::NavierPointLoadDisplacement_m_per_N(domain, p[j].x(), p[j].y(),
+                                                                    p[i].x(), p[i].y());
+        row.off_diagonal_error = std::max(row.off_diagonal_error, std::abs(c / ref - 1));
+        row.asymmetry = std::max(row.asymmetry, std::abs(c - pc.c_m_per_N(j, i)) / c);
+      }
+    }
+  }
+  return row;
+}
+
+struct CouplingRow {
+  double relax_s = 0;
+  double step_median_us = 0;
+  double step_p99_us = 0;
+  double median_ratio = 1;  // to the rigid run's
+  double p99_ratio = 1;
+  double bite_um = 0;
+  double trailing = 0;
+  double balance = 0;
+  std::string knot;
+  std::string error;
+};
+
+CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s) {
+  scene.knot_tying->stitch_relax_s = relax_s;
+  CouplingRow row;
+  row.relax_s = relax_s;
+  try {
+    station::Simulation sim(scene);
+    state::StationState s = sim.MakeInitialState(1);
+    const auto limit = static_cast<std::uint64_t>(scene.task.time_limit_s / sim.dt_s());
+    std::vector<double> us;
+    us.reserve(limit);
+    while (s.step < limit && s.score.outcome == 0) {
+      station::StationInput in;
+      in.device.X_WT = scene.CalcIdealToolPose(0);
+      in.second.X_WT = scene.CalcIdealSecondToolPose(0);
+      in.second.gripper = 1;
+      const std::uint64_t k = s.step;
+      in.device.buttons = k >= 300 && k < 400 ? 3u : k >= 500 && k < 600 ? 2u : 0u;
+      const auto t0 = Clock::now();
+      station::StepStation(sim, in, s);
+      us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+    }
+    row.step_median_us = Percentile(us, 0.5);
+    row.step_p99_us = Percentile(us, 0.99);
+    const state::ThreadModuleState& t = *s.thread;
+    const Eigen::Matrix3Xd& x = t.thread.x_W;
+    std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(x.cols()));
+    for (Eigen::Index i = 0; i < x.cols(); ++i) nodes[static_cast<std::size_t>(i)] = x.col(i);
+    row.knot = std::string(knot::StitchKnotName(station::RecogniseTiedKnot(scene, nodes)));
+    const std::optional<station::StitchOnTissue> stitch = station::MakeStitchOnTissue(scene, 4);
+    if (stitch) {
+      const state::KnotTieState& tie = t.tie;
+      row.bite_um = stitch->Displacement_m(tie.stitch_load_N)[1] * 1e6;
+      double largest = 0, sum = 0, trail = 0;
+      for (int k = 0; k < station::kStitchRods; ++k) {
+        const auto i = static_cast<std::size_t>(k);
+        largest = std::max(largest, std::abs(tie.stitch_force_N[i]));
+        trail = std::max(trail, std::abs(tie.stitch_load_N[i] - tie.stitch_force_N[i]));
+        sum += tie.stitch_force_N[i];
+      }
+      const double hands = (t.f_T_W + t.f_T2_W).dot(stitch->n_W);
+      row.trailing = largest > 0 ? trail / largest : 0;
+      row.balance = largest > 0 ? std::abs(sum + hands) / largest : 0;
+    }
+  } catch (const std::exception& e) {
+    row.error = e.what();
+  }
+  return row;
+}
+
+int Run(int argc, char** argv) {
+  std::string json_path;
+  bool quick = false;
+  const char* root = std::getenv("MICRODEX_SOURCE_DIR");
+  std::string scene_path =
+      std::string(root != nullptr ? root : ".") + "/assets/scenes/knot_tying.yaml";
+  CLI::App app{"microdex-bench stitch: the knot-tying stitch on the tissue, error and cost"};
+  app.add_option("--json", json_path, "write the report as JSON");
+  app.add_flag("--quick", quick, "levels 5-6, the rigid stitch and the scene's relaxation time");
+  app.add_option("--scene", scene_path, "the knot-tying scene");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  scene::SceneModel scene;
+  try {
+    scene = scene::LoadScene(scene_path);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-bench stitch: %s\n", e.what());
+    return 2;
+  }
+  if (!scene.knot_tying || !scene.tissue || !station::MakeStitchOnTissue(scene, 4)) {
+    std::fprintf(stderr,
+                 "microdex-bench stitch: %s: expected a knot_tying scene with a tissue module and "
+                 "knot_tying.stitch_relax_s > 0\n",
+                 scene_path.c_str());
+    return 2;
+  }
+  const std::vector<int> levels = quick ? std::vector<int>{5, 6} : std::vector<int>{5, 6, 7, 8};
+  // Rigid first (the baseline), then the scene's relaxation time, then the others.
+  const double scene_relax_s = scene.knot_tying->stitch_relax_s;
+  std::vector<double> relax = {0.0, scene_relax_s};
+  if (!quick) {
+    for (const double r : {0.05, 0.1, 0.2, 0.3, 1.0}) {
+      if (r != scene_relax_s) relax.push_back(r);
+    }
+  }
+  const int total = static_cast<int>(levels.size() + relax.size());
+  int done = 0;
+  const auto start = Clock::now();
+  std::vector<ComplianceRow> compliance;
+  for (const int level : levels) {
+    compliance.push_back(MeasureCompliance(scene, level));
+    Progress("compliance", ++done, total, start);
+  }
+  std::vector<CouplingRow> coupling;
+  for (const double r : relax) {
+    coupling.push_back(MeasureCoupling(scene, r));
+    Progress("coupling", ++done, total, start);
+  }
+  for (CouplingRow& c : coupling) {
+    c.median_ratio = c.step_median_us / coupling[0].step_median_us;
+    c.p99_ratio = c.step_p99_us / coupling[0].step_p99_us;
+  }
+  std::printf("compliance at the rods (%s)\n", scene_path.c_str());
+  std::printf("| level | build ms | off-diagonal error | diagonal error | asymmetry |\n");
+  std::printf("|---|---|---|---|---|\n");
+  for (const ComplianceRow& r : compliance) {
+    std::printf("| %d | %.1f | %.2f %% | %.2f %% | %.2f %% |\n", r.level, r.build_ms,
+                100 * r.off_diagonal_error, 100 * r.diagonal_error, 100 * r.asymmetry);
+  }
+  std::printf("\ncoupling (surgeon's knot, hands at rest; step: the whole station step)\n");
+  std::printf(
+      "| stitch_relax_s | step median us | p99 us | median / rigid | p99 / rigid | bite um | "
+      "trailing | balance | knot |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  for (const CouplingRow& r : coupling) {
+    if (!r.error.empty()) {
+      std::printf("| %.3g | refused: %s |\n", r.relax_s, r.error.c_str());
+      continue;
+    }
+    std::printf("| %.3g | %.1f | %.1f | %.3f | %.3f | %+.1f | %.3f | %.3f | %s |\n", r.relax_s,
+                r.step_median_us, r.step_p99_us, r.median_ratio, r.p99_ratio, r.bite_um, r.trailing,
+                r.balance, r.knot.c_str());
+  }
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    if (!out) {
+      std::fprintf(stderr, "microdex-bench stitch: %s: cannot write\n", json_path.c_str());
+      return 2;
+    }
+    out << "{\"scene\": \"" << scene_path << "\", \"compliance\": [";
+    for (std::size_t i = 0; i < compliance.size(); ++i) {
+      const ComplianceRow& r = compliance[i];
+      out << (i ? ", " : "") << "{\"level\": " << r.level << ", \"build_ms\": " << r.build_ms
+          << ", \"off_diagonal_error\": " << r.off_diagonal_error
+          << ", \"diagonal_error\": " << r.diagonal_error << ", \"asymmetry\": " << r.asymmetry
+          << "}";
+    }
+    out << "], \"coupling\": [";
+    for (std::size_t i = 0; i < coupling.size(); ++i) {
+      const CouplingRow& r = coupling[i];
+      out << (i ? ", " : "") << "{\"stitch_relax_s\": " << r.relax_s
+          << ", \"step_median_us\": " << r.step_median_us << ", \"step_p99_us\": " << r.step_p99_us
+          << ", \"median_ratio\": " << r.median_ratio << ", \"p99_ratio\": " << r.p99_ratio
+          << ", \"bite_um\": " << r.bite_um << ", \"trailing\": " << r.trailing
+          << ", \"balance\": " << r.balance << ", \"knot\": \"" << r.knot << "\""
+          << ", \"refused\": " << (r.error.empty() ? "false" : "true") << "}";
+    }
+    out << "]}\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+MICRODEX_REGISTER_BENCH(
+    stitch, "stitch", "the knot-tying stitch moved by the tissue: compliance error, coupling cost",
+    Run);
+
+}  // namespace microdex::bench
