@@ -15,6 +15,8 @@
 #include <sstream>
 #include <string>
 
+#include "common/fem/point_compliance.h"
+#include "common/fem/tissue_model.h"
 #include "common/knot/stitch_knot.h"
 #include "common/scene/scene.h"
 #include "station/scene_run.h"
@@ -278,6 +280,56 @@ TEST(KnotTyingScene, TheStitchStaysStableFromStiffToSoftTissue) {
     bite_m[n++] = w_m[kBiteRod];
   }
   EXPECT_GT(bite_m[1], bite_m[0]);
+}
+
+// The instrument presses the patch as the stitch's loads have displaced it (the superposition
+// of the linear problem): with the bite lifted by a load, an instrument beside it at a depth
+// below the surface at rest meets the patch that much nearer, and feels the reaction of the
+// flat patch pressed to its depth plus the lift there. Without a load, the same as before.
+TEST(KnotTyingScene, TheInstrumentPressesThePatchTheStitchHasDisplaced) {
+  const scene::SceneModel scene = scene::LoadScene(ScenePath());
+  const std::optional<StitchOnTissue> stitch =
+      MakeStitchOnTissue(scene, scene.tissue->display_level);
+  ASSERT_TRUE(stitch.has_value());
+  scene::SceneModel flat = scene;
+  flat.tissue->X_WS = Eigen::Isometry3d::Identity();
+  flat.knot_tying->stitch_relax_s = 0;
+  const Eigen::Vector3d p_S(11e-3, 11e-3, 0);  // 1.4 mm from the bite (patch x 10, y 10 mm)
+  const double depth_m = 0.3e-3;
+  auto press = [](const scene::SceneModel& sc, const Eigen::Vector3d& p_WT, double bite_load_N) {
+    TissueModule m(sc);
+    state::StationState s;
+    m.InitState(s);
+    s.thread = state::ThreadModuleState{};
+    s.thread->tie.stitch_load_N[kBiteRod] = bite_load_N;
+    ToolInput in;
+    in.X_WT = Eigen::Isometry3d::Identity();
+    in.X_WT.translation() = p_WT;
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      f.setZero();
+      in.step = static_cast<std::uint64_t>(k);
+      m.Step(in, s, f);
+    }
+    return f;
+  };
+  const Eigen::Vector3d p_W = scene.tissue->X_WS * (p_S - Eigen::Vector3d(0, 0, depth_m));
+  const double load_N = 10e-3;
+  const fem::TissueModel model = fem::BuildTissueModel(scene.tissue->def);
+  const double lift_m = load_N * fem::SampleGrid(model, stitch->compliance.grid_m_per_N[kBiteRod],
+                                                 scene.tissue->display_level, p_S.x(), p_S.y());
+  const Eigen::Vector3d f0 = press(scene, p_W, 0);
+  const Eigen::Vector3d f1 = press(scene, p_W, load_N);
+  const Eigen::Vector3d flat0 = press(flat, p_S - Eigen::Vector3d(0, 0, depth_m), 0);
+  const Eigen::Vector3d flat1 = press(flat, p_S - Eigen::Vector3d(0, 0, depth_m + lift_m), 0);
+  std::printf(
+      "lift %.1f um: reaction %.4f N (unloaded %.4f N), flat at the depth plus the lift "
+      "%.4f N\n",
+      lift_m * 1e6, f1.y(), f0.y(), flat1.z());
+  EXPECT_GT(lift_m, 10e-6);
+  EXPECT_NEAR(f0.y(), flat0.z(), 1e-9 * flat0.z());
+  EXPECT_GT(f1.y(), f0.y() * (1 + 0.5 * lift_m / depth_m));
+  EXPECT_NEAR(f1.y(), flat1.z(), 1e-9 * flat1.z());
 }
 
 // A bad value in the knot_tying section is named with the file, its line and the field.
