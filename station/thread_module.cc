@@ -100,10 +100,11 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
     p_W_second_rest_ = scene.CalcIdealSecondToolPose(0).translation();
     stitch_tissue_ = MakeStitchOnTissue(scene, 0);
     if (stitch_tissue_) {
-      // The low-pass x_{n+1} = x_n + g (C k_t ... ) of the rods' displacement against the
-      // thread's stiffness k on them is stable while g (1 + c k) < 2 (c the largest
-      // compliance); the stiffest the thread holds a rod is two strands, each taut to a hand
-      // one guide offset away: k = 2 E A / guide_offset.
+      // The rod's displacement follows u <- u + g (c F(u) - u), g = h / stitch_relax_s, where
+      // the thread's load F(u) = F0 - k u falls as the rod gives: the error shrinks by
+      // 1 - g (1 + c k) a step, stable while g (1 + c k) < 2 (c the largest compliance). The
+      // stiffest the thread holds a rod is two strands, each taut to a hand one guide offset
+      // away: k = 2 E A / guide_offset.
       stitch_gain_ = model_.def.time_step_s / tie_->stitch_relax_s;
       const double ea_N =
           model_.def.youngs_modulus_Pa * std::numbers::pi * model_.radius_m * model_.radius_m;
