@@ -47,8 +47,8 @@ struct ComplianceRow {
   double asymmetry = 0;
 };
 
-ComplianceRow MeasureCompliance(const scene::SceneModel& scene, int level) {
-  const std::optional<station::StitchOnTissue> stitch = station::MakeStitchOnTissue(scene, 4);
+ComplianceRow MeasureCompliance(const scene::SceneModel& scene,
+                                const station::StitchOnTissue& stitch, int level) {
   fem::TissueDef def = scene.tissue->def;
   def.level = level;
   def.max_level = std::max(def.max_level, level);
@@ -58,7 +58,7 @@ ComplianceRow MeasureCompliance(const scene::SceneModel& scene, int level) {
   fem::PointCompliance pc;
   for (int rep = 0; rep < 3; ++rep) {
     const auto t0 = Clock::now();
-    pc = fem::CalcPointCompliance(model, stitch->p_S, radius_m, 4);
+    pc = fem::CalcPointCompliance(model, stitch.p_S, radius_m, 4);
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
   fem::NavierDomain domain;
@@ -69,7 +69,7 @@ ComplianceRow MeasureCompliance(const scene::SceneModel& scene, int level) {
   ComplianceRow row;
   row.level = level;
   row.build_ms = Percentile(ms, 0.5);
-  const auto& p = stitch->p_S;
+  const auto& p = stitch.p_S;
   for (int i = 0; i < station::kStitchRods; ++i) {
     for (int j = 0; j < station::kStitchRods; ++j) {
       const double c = pc.c_m_per_N(i, j);
@@ -166,13 +166,15 @@ int Run(int argc, char** argv) {
     return app.exit(e);
   }
   scene::SceneModel scene;
+  std::optional<station::StitchOnTissue> stitch;
   try {
     scene = scene::LoadScene(scene_path);
+    stitch = station::MakeStitchOnTissue(scene, 4);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "microdex-bench stitch: %s\n", e.what());
     return 2;
   }
-  if (!scene.knot_tying || !scene.tissue || !station::MakeStitchOnTissue(scene, 4)) {
+  if (!stitch) {
     std::fprintf(stderr,
                  "microdex-bench stitch: %s: expected a knot_tying scene with a tissue module and "
                  "knot_tying.stitch_relax_s > 0\n",
@@ -193,7 +195,7 @@ int Run(int argc, char** argv) {
   const auto start = Clock::now();
   std::vector<ComplianceRow> compliance;
   for (const int level : levels) {
-    compliance.push_back(MeasureCompliance(scene, level));
+    compliance.push_back(MeasureCompliance(scene, *stitch, level));
     Progress("compliance", ++done, total, start);
   }
   std::vector<CouplingRow> coupling;

@@ -41,6 +41,27 @@ double Term(const net::Score& s, const std::string& metric) {
   return -1;
 }
 
+// The tissue module's reaction on an instrument at p_WT (world), after three steps, with the
+// suture's load on the bite (the thread module's section of the state) at bite_load_N.
+Eigen::Vector3d PressTissue(const scene::SceneModel& sc, const Eigen::Vector3d& p_WT,
+                            double bite_load_N = 0) {
+  TissueModule m(sc);
+  state::StationState s;
+  m.InitState(s);
+  s.thread = state::ThreadModuleState{};
+  s.thread->tie.stitch_load_N[kBiteRod] = bite_load_N;
+  ToolInput in;
+  in.X_WT = Eigen::Isometry3d::Identity();
+  in.X_WT.translation() = p_WT;
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    f.setZero();
+    in.step = static_cast<std::uint64_t>(k);
+    m.Step(in, s, f);
+  }
+  return f;
+}
+
 TEST(KnotTyingScene, TheTraineeTiesASquareOrAGrannyAndTheRecogniserNamesIt) {
   const scene::SceneModel scene = scene::LoadScene(ScenePath());
   struct Case {
@@ -145,34 +166,19 @@ TEST(KnotTyingScene, TheTissuePushesAnInstrumentBackAlongItsNormal) {
   flat.tissue->X_WS = Eigen::Isometry3d::Identity();
   flat.knot_tying->stitch_relax_s = 0;
   const Eigen::Vector3d p_S(13e-3, 8e-3, 0);  // beside the stitch (x 6.5..11.5 mm in world)
-  auto press = [](const scene::SceneModel& sc, const Eigen::Vector3d& p_WT) {
-    TissueModule m(sc);
-    state::StationState s;
-    m.InitState(s);
-    ToolInput in;
-    in.X_WT = Eigen::Isometry3d::Identity();
-    in.X_WT.translation() = p_WT;
-    Eigen::Vector3d f = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      f.setZero();
-      in.step = static_cast<std::uint64_t>(k);
-      m.Step(in, s, f);
-    }
-    return f;
-  };
   const Eigen::Isometry3d& X_WS = scene.tissue->X_WS;
   for (const double depth_m : {0.4e-3, 0.8e-3}) {
     const Eigen::Vector3d p_W = X_WS * (p_S - Eigen::Vector3d(0, 0, depth_m));
     EXPECT_NEAR(p_W.y(), -0.35e-3 - depth_m, 1e-12) << "the patch's surface is y = -0.35 mm";
-    const Eigen::Vector3d f = press(scene, p_W);
-    const Eigen::Vector3d f_flat = press(flat, p_S - Eigen::Vector3d(0, 0, depth_m));
+    const Eigen::Vector3d f = PressTissue(scene, p_W);
+    const Eigen::Vector3d f_flat = PressTissue(flat, p_S - Eigen::Vector3d(0, 0, depth_m));
     std::printf("depth %.1f mm: f = (%.3g, %.4g, %.3g) N, flat %.4g N\n", depth_m * 1e3, f.x(),
                 f.y(), f.z(), f_flat.z());
     EXPECT_GT(f.y(), 0.01) << "pushed back out of the tissue";
     EXPECT_NEAR(f.y(), f_flat.z(), 1e-9 * f_flat.z());
     EXPECT_NEAR(std::hypot(f.x(), f.z()), 0, 1e-9 * f.y());
   }
-  const Eigen::Vector3d above = press(scene, X_WS * (p_S + Eigen::Vector3d(0, 0, 0.1e-3)));
+  const Eigen::Vector3d above = PressTissue(scene, X_WS * (p_S + Eigen::Vector3d(0, 0, 0.1e-3)));
   EXPECT_EQ(above, Eigen::Vector3d::Zero());
 }
 
@@ -296,32 +302,15 @@ TEST(KnotTyingScene, TheInstrumentPressesThePatchTheStitchHasDisplaced) {
   flat.knot_tying->stitch_relax_s = 0;
   const Eigen::Vector3d p_S(11e-3, 11e-3, 0);  // 1.4 mm from the bite (patch x 10, y 10 mm)
   const double depth_m = 0.3e-3;
-  auto press = [](const scene::SceneModel& sc, const Eigen::Vector3d& p_WT, double bite_load_N) {
-    TissueModule m(sc);
-    state::StationState s;
-    m.InitState(s);
-    s.thread = state::ThreadModuleState{};
-    s.thread->tie.stitch_load_N[kBiteRod] = bite_load_N;
-    ToolInput in;
-    in.X_WT = Eigen::Isometry3d::Identity();
-    in.X_WT.translation() = p_WT;
-    Eigen::Vector3d f = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      f.setZero();
-      in.step = static_cast<std::uint64_t>(k);
-      m.Step(in, s, f);
-    }
-    return f;
-  };
   const Eigen::Vector3d p_W = scene.tissue->X_WS * (p_S - Eigen::Vector3d(0, 0, depth_m));
   const double load_N = 10e-3;
   const fem::TissueModel model = fem::BuildTissueModel(scene.tissue->def);
   const double lift_m = load_N * fem::SampleGrid(model, stitch->compliance.grid_m_per_N[kBiteRod],
                                                  scene.tissue->display_level, p_S.x(), p_S.y());
-  const Eigen::Vector3d f0 = press(scene, p_W, 0);
-  const Eigen::Vector3d f1 = press(scene, p_W, load_N);
-  const Eigen::Vector3d flat0 = press(flat, p_S - Eigen::Vector3d(0, 0, depth_m), 0);
-  const Eigen::Vector3d flat1 = press(flat, p_S - Eigen::Vector3d(0, 0, depth_m + lift_m), 0);
+  const Eigen::Vector3d f0 = PressTissue(scene, p_W, 0);
+  const Eigen::Vector3d f1 = PressTissue(scene, p_W, load_N);
+  const Eigen::Vector3d flat0 = PressTissue(flat, p_S - Eigen::Vector3d(0, 0, depth_m), 0);
+  const Eigen::Vector3d flat1 = PressTissue(flat, p_S - Eigen::Vector3d(0, 0, depth_m + lift_m), 0);
   std::printf(
       "lift %.1f um: reaction %.4f N (unloaded %.4f N), flat at the depth plus the lift "
       "%.4f N\n",
