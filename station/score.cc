@@ -70,8 +70,9 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   if (metric == "bite_error_m") return t.bite_error_m;
   if (metric == "shape_error_m") return t.shape_error_m;
   // Knot tying: a square or surgeon's knot passes; any other (granny, slip, none) fails, as
-  // does a knot not yet recognised.
+  // does a knot not yet recognised or one whose stitch has torn out of the tissue.
   if (metric == "knot_wrong") {
+    if (t.bite_pulled_out != 0) return 1.0;
     const auto square = static_cast<std::int32_t>(knot::StitchKnotType::kSquare);
     const auto surgeons = static_cast<std::int32_t>(knot::StitchKnotType::kSurgeons);
     return t.tied_knot == square || t.tied_knot == surgeons ? 0.0 : 1.0;
@@ -101,9 +102,9 @@ double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& 
   return kNaN;
 }
 
-knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
-                                       std::span<const Eigen::Vector3d> x_W) {
-  if (!scene.knot_tying || !scene.thread) return knot::StitchKnotType::kUnknown;
+std::vector<Eigen::Vector3d> CalcStitchKnotPolyline(const scene::SceneModel& scene,
+                                                    std::span<const Eigen::Vector3d> x_W) {
+  if (!scene.knot_tying) return {};
   // The scene's frame (y up, the tissue the plane y = surface_y_m) to the recogniser's (the
   // tissue the plane z = 0, z out of it): a rotation about x and a shift.
   const double surface_y = scene.knot_tying->surface_y_m;
@@ -127,6 +128,13 @@ knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
       if ((i < first || i > last) && p[i].z() < kAbove_m) p[i].z() = kAbove_m;
     }
   }
+  return p;
+}
+
+knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
+                                       std::span<const Eigen::Vector3d> x_W) {
+  if (!scene.knot_tying || !scene.thread) return knot::StitchKnotType::kUnknown;
+  const std::vector<Eigen::Vector3d> p = CalcStitchKnotPolyline(scene, x_W);
   if (!knot::IsStitchPolyline(p)) return knot::StitchKnotType::kUnknown;
   knot::StitchKnotOptions options;
   options.thread_diameter_m = scene.thread->def.diameter_m;

@@ -48,6 +48,7 @@
 //   other modules: 100 (1 − c)
 
 #include <span>
+#include <vector>
 
 #include "common/knot/stitch_knot.h"
 #include "common/net/messages.h"
@@ -63,6 +64,11 @@ net::Score CalcScore(const scene::SceneModel& scene, const state::ScoreState& to
 // not through the tissue). Allocates and takes milliseconds: never in the haptic thread.
 knot::StitchKnotType RecogniseTiedKnot(const scene::SceneModel& scene,
                                        std::span<const Eigen::Vector3d> x_W);
+// The thread's nodes x_W as the recogniser reads them: in the tissue's frame (the surface z = 0,
+// z out of the tissue), tails that lie below the surface away from the stitch lifted onto it
+// (the polyline of `microdex-bench knot` and of knots.tied; empty without knot_tying).
+std::vector<Eigen::Vector3d> CalcStitchKnotPolyline(const scene::SceneModel& scene,
+                                                    std::span<const Eigen::Vector3d> x_W);
 
 // The value of a named metric (the list above); NaN for an unknown name.
 double CalcScoreMetric(const scene::SceneModel& scene, const state::ScoreState& totals,

@@ -300,6 +300,8 @@ void UpdateTask(const scene::SceneModel& scene, const cues::IdealPath& path, dou
     const state::KnotTieState& k = s.thread->tie;
     const scene::KnotTyingSceneDef& kt = *scene.knot_tying;
     t.throws_pulled = k.pulled;
+    t.torn_m = k.bite_cut_m;
+    t.bite_pulled_out = k.bite_pulled_out;
     // The hold: the hands keep the hold tension on both ends, through the trainee's deviations
     // (sampled once these are fully coupled in, 0.25 s into the hold).
     if (k.holding != 0 && k.done == 0 && k.coupling >= 1.0) {

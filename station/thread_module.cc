@@ -95,6 +95,7 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
     stitch_ = tie_->stitch.Colliders(model_.radius_m);
     hold_options_.tension_N = tie_->hold_tension_N;
     hold_options_.duration_s = tie_->hold_s;
+    hold_options_.pull_gain_N_per_m = tie_->hold_pull_N_per_m;
     hold_options_.fixed_colliders = stitch_;
     p_W_tool_rest_ = scene.CalcIdealToolPose(0).translation();
     p_W_second_rest_ = scene.CalcIdealSecondToolPose(0).translation();
@@ -117,6 +118,21 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
             " s is too short for this tissue: the stitch would oscillate (its compliance " +
             std::to_string(c_m_per_N) + " m/N against the thread's " + std::to_string(k_N_per_m) +
             " N/m needs more than " + std::to_string(min_relax_s) + " s)");
+      }
+      // Cut-through: while the bite's low-passed load L exceeds the threshold F, the cut w
+      // grows by g c_b (L - F) a step, at the rate the patch's elastic displacement follows the
+      // load, and never heals. The pair (L, w) then steps by [[1 - g (1 + c k), -g k],
+      // [g c, 1]], stable under the same bound g (1 + c k) < 2: the cut makes the load settle
+      // on F where the thread's pull relaxes as the bite rises, and cuts on while the hands keep
+      // pulling harder than F.
+      bite_tear_N_ = tie_->bite_tear_N;
+      bite_compliance_m_per_N_ = stitch_tissue_->compliance.c_m_per_N(kBiteRod, kBiteRod);
+      bite_pull_out_m_ =
+          tie_->stitch.depth_m + tie_->stitch.rod_radius_m + model_.radius_m + tie_->surface_y_m;
+      if (bite_tear_N_ > 0 && !(bite_pull_out_m_ > 0)) {
+        throw std::runtime_error(scene.path +
+                                 ": knot_tying.stitch.depth_m: the bite must lie under the "
+                                 "surface (surface_y_m) for it to tear (bite_tear_N)");
       }
     }
   } else {
@@ -184,7 +200,8 @@ std::array<thread::Collider, kStitchRods> ThreadModule::MovedStitch(
   for (int k = 0; k < kStitchRods; ++k) {
     thread::Collider c = stitch_[static_cast<std::size_t>(k)];
     if (stitch_tissue_) {
-      const Eigen::Vector3d d_W = w_m[k] * stitch_tissue_->n_W;
+      const double cut_m = k == kBiteRod ? tie.bite_cut_m : 0.0;
+      const Eigen::Vector3d d_W = (w_m[k] + cut_m) * stitch_tissue_->n_W;
       c.a_W += d_W;
       c.b_W += d_W;
     }
@@ -207,6 +224,14 @@ void ThreadModule::UpdateStitchLoads(int num_colliders, const thread::ThreadStat
     if (!std::isfinite(f_N)) f_N = 0;
     tie.stitch_force_N[i] = f_N;
     tie.stitch_load_N[i] += stitch_gain_ * (f_N - tie.stitch_load_N[i]);
+  }
+  // The bite cuts up through the tissue while its load exceeds the tear threshold (the
+  // constructor's comment); pulled out once the thread under it has reached the surface.
+  const double excess_N = tie.stitch_load_N[kBiteRod] - bite_tear_N_;
+  if (bite_tear_N_ > 0 && tie.bite_pulled_out == 0 && excess_N > 0) {
+    tie.bite_cut_m = std::min(bite_pull_out_m_,
+                              tie.bite_cut_m + stitch_gain_ * bite_compliance_m_per_N_ * excess_N);
+    if (tie.bite_cut_m >= bite_pull_out_m_) tie.bite_pulled_out = 1;
   }
 }
 

@@ -90,6 +90,11 @@ class ThreadModule final : public Module {
   thread::KnotHoldOptions hold_options_;
   std::optional<StitchOnTissue> stitch_tissue_;  // the stitch moves with the patch
   double stitch_gain_ = 0;                       // per step: time step / stitch_relax_s
+  // The bite's cut-through (knot_tying.bite_tear_N, 0: none): its threshold, the patch's
+  // compliance at the bite, and the cut at which the thread under the bite reaches the surface.
+  double bite_tear_N_ = 0;
+  double bite_compliance_m_per_N_ = 0;
+  double bite_pull_out_m_ = 0;
   Eigen::Vector3d p_W_tool_rest_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d p_W_second_rest_ = Eigen::Vector3d::Zero();
   int num_colliders_ = 0;

@@ -376,7 +376,8 @@ SceneModel ReadScene(const YamlReader& reader) {
   if (const std::optional<YamlSection> kt = root.OptionalMap("knot_tying")) {
     kt->CheckNoUnknownKeys({"stitch", "throws", "speed_m_per_s", "pull_tension_N",
                             "force_limited_pull", "throw_tension_N", "hold_tension_N", "hold_s",
-                            "first_jig_x_m", "next_jig_x_m", "surface_y_m", "stitch_relax_s"});
+                            "first_jig_x_m", "next_jig_x_m", "surface_y_m", "stitch_relax_s",
+                            "bite_tear_N", "hold_pull_N_per_m"});
     KnotTyingSceneDef d;
     if (const std::optional<YamlSection> st = kt->OptionalMap("stitch")) {
       st->CheckNoUnknownKeys(
@@ -401,10 +402,12 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.throw_tension_N = kt->FiniteDouble("throw_tension_N", d.throw_tension_N);
     d.hold_tension_N = kt->FiniteDouble("hold_tension_N", d.hold_tension_N);
     d.hold_s = kt->FiniteDouble("hold_s", d.hold_s);
+    d.hold_pull_N_per_m = kt->FiniteDouble("hold_pull_N_per_m", d.hold_pull_N_per_m);
     d.first_jig_x_m = kt->FiniteDouble("first_jig_x_m", d.first_jig_x_m);
     d.next_jig_x_m = kt->FiniteDouble("next_jig_x_m", d.next_jig_x_m);
     d.surface_y_m = kt->FiniteDouble("surface_y_m", d.surface_y_m);
     d.stitch_relax_s = kt->FiniteDouble("stitch_relax_s", d.stitch_relax_s);
+    d.bite_tear_N = kt->FiniteDouble("bite_tear_N", d.bite_tear_N);
     s.knot_tying = d;
   }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
@@ -820,6 +823,16 @@ void ValidateScene(const SceneModel& s) {
     }
     if (!(k.stitch_relax_s >= 0 && k.stitch_relax_s <= 10)) {
       Invalid("knot_tying.stitch_relax_s", "expected a time in [0, 10] s (0: a rigid stitch)");
+    }
+    if (!(k.hold_pull_N_per_m >= 0 && k.hold_pull_N_per_m < 1e4)) {
+      Invalid("knot_tying.hold_pull_N_per_m", "expected a gain in [0, 10000) N/m");
+    }
+    if (!(k.bite_tear_N >= 0 && k.bite_tear_N < 1)) {
+      Invalid("knot_tying.bite_tear_N", "expected a load in [0, 1) N (0: the bite never tears)");
+    }
+    if (k.bite_tear_N > 0 && !(k.stitch_relax_s > 0 && s.HasModule("tissue"))) {
+      Invalid("knot_tying.bite_tear_N",
+              "the bite tears the tissue patch: needs the tissue module and stitch_relax_s > 0");
     }
   }
   if (t.kind == TaskKind::kKnotPlacement && !s.HasModule("placement")) {

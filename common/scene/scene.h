@@ -217,6 +217,10 @@ struct KnotTyingSceneDef {
   bool force_limited_pull = true;
   double throw_tension_N = 2e-3;  // the standing hand's tension while a throw is wrapped
   double hold_tension_N = 20e-3;
+  // In the hold, a hand held d further out along the thread than its rest pulls its end with
+  // hold_tension_N + hold_pull_N_per_m d (thread::KnotHoldOptions::pull_gain_N_per_m): the
+  // trainee sets the tension. 0: the hands keep hold_tension_N whatever the trainee does.
+  double hold_pull_N_per_m = 0.0;
   double hold_s = 2.0;
   double first_jig_x_m = 4e-3;
   double next_jig_x_m = 4.66e-3;
@@ -228,6 +232,12 @@ struct KnotTyingSceneDef {
   // rigid stitch. Too short a time for the thread's stiffness on the patch's compliance is an
   // error naming this field (station/thread_module.cc).
   double stitch_relax_s = 0.5;
+  // The bite cuts through the tissue (cheese-wiring) while the suture's low-passed load on it
+  // along the patch's normal exceeds this, N: the cut grows at the rate the patch would follow
+  // the excess (its compliance at the bite times the excess, over stitch_relax_s), and the
+  // bite is pulled out once the thread under it has cut up to the surface. 0: it never tears.
+  // Needs the stitch on the tissue (stitch_relax_s > 0).
+  double bite_tear_N = 0.0;
 };
 
 // Haptic rendering limits.

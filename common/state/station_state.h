@@ -154,6 +154,7 @@ struct ScoreState {
   // thread at the task's end (knot::StitchKnotType; -1 until recognised, off the haptic thread).
   std::int32_t throws_pulled = 0;
   std::int32_t tied_knot = -1;
+  std::uint8_t bite_pulled_out = 0;  // the stitch has torn out of the tissue: the knot fails
   // Knot tying, in the hold after the last throw: the ends' pull against the scene's hold
   // tension, squared relative errors summed over both ends, and the samples (two per step).
   double tension_sq_sum = 0;
@@ -163,7 +164,7 @@ struct ScoreState {
   double entry_error_m = 1;
   double exit_error_m = 1;
   double peak_strain = 0;
-  double torn_m = 0;
+  double torn_m = 0;  // also knot tying: how far the bite has cut through (KnotTieState)
   double off_circle_m = 0;
   std::int32_t punctures = 0;
   // This step.
@@ -215,6 +216,10 @@ struct KnotTieState {
   // compliance turns into the rods' displacement and the tissue module into the patch's.
   std::array<double, 3> stitch_force_N{};
   std::array<double, 3> stitch_load_N{};
+  // How far the bite has cut up through the tissue along the normal (knot_tying.bite_tear_N),
+  // m, and whether it has been pulled out (the thread under it has reached the surface).
+  double bite_cut_m = 0;
+  std::uint8_t bite_pulled_out = 0;
 };
 
 // The suture-thread module.

@@ -156,6 +156,7 @@ void Score(S& s, V& v) {
   v("score.shape_error_m", &s.shape_error_m, 1);
   v("score.throws_pulled", &s.throws_pulled, 1);
   v("score.tied_knot", &s.tied_knot, 1);
+  v("score.bite_pulled_out", &s.bite_pulled_out, 1);
   v("score.tension_sq_sum", &s.tension_sq_sum, 1);
   v("score.tension_samples", &s.tension_samples, 1);
   v("score.entry_error_m", &s.entry_error_m, 1);
@@ -256,6 +257,8 @@ void Thread(S& m, V& v) {
   Matrix("thread.tie.applied_second_W", k.applied_second_W, v);
   v("thread.tie.stitch_force_N", k.stitch_force_N.data(), k.stitch_force_N.size());
   v("thread.tie.stitch_load_N", k.stitch_load_N.data(), k.stitch_load_N.size());
+  v("thread.tie.bite_cut_m", &k.bite_cut_m, 1);
+  v("thread.tie.bite_pulled_out", &k.bite_pulled_out, 1);
 }
 
 template <typename S, typename V>

@@ -269,6 +269,10 @@ void KnotHoldOptions::Validate() const {
   if (!(duration_s >= 0.0 && duration_s < 1e3)) {
     throw std::invalid_argument("KnotHoldOptions.duration_s: expected a duration in [0, 1000) s");
   }
+  if (!(pull_gain_N_per_m >= 0.0 && pull_gain_N_per_m < 1e4)) {
+    throw std::invalid_argument(
+        "KnotHoldOptions.pull_gain_N_per_m: expected a gain in [0, 10000) N/m");
+  }
   CheckFixed(fixed_colliders.size(), "KnotHoldOptions");
 }
 
@@ -276,6 +280,7 @@ KnotHoldScript::KnotHoldScript(const ThreadModel& model, const ThreadState& stat
                                KnotTyingHands hands, const KnotHoldOptions& options)
     : hands_(hands),
       tension_N_(options.tension_N),
+      pull_gain_N_per_m_(options.pull_gain_N_per_m),
       steps_left_(static_cast<int>(std::lround(options.duration_s / model.def.time_step_s))) {
   options.Validate();
   MICRODEX_CHECK(hands.standing_slot >= 0 && hands.driver_slot >= 0);
@@ -300,10 +305,13 @@ bool KnotHoldScript::Step(const ThreadModel& model, ThreadWorkspace& ws, ThreadS
     Eigen::Vector3d& plan = is_standing ? plan_standing_W_ : plan_driver_W_;
     const Eigen::Vector3d& other = is_standing ? plan_driver_W_ : plan_standing_W_;
     const Grasp& g = state.grasps[slot];
+    const Eigen::Vector3d& offset = is_standing ? offsets.standing_W : offsets.driver_W;
     // Outward: away from the other hand, along x (the thread's direction when pulled).
     const double out = plan.x() >= other.x() ? 1.0 : -1.0;
     const double tension = -out * g.f_T_W.x();
-    const double v = std::clamp(kTensionGain_m_per_s_N * (tension_N_ - tension),
+    const double target_N =
+        std::max(0.1 * tension_N_, tension_N_ + pull_gain_N_per_m_ * out * offset.x());
+    const double v = std::clamp(kTensionGain_m_per_s_N * (target_N - tension),
                                 -kMaxHandSpeed_m_per_s, kMaxHandSpeed_m_per_s);
     plan += (out * v * h) * Eigen::Vector3d::UnitX();
     SetGraspTarget(state, slot, plan + (is_standing ? offsets.standing_W : offsets.driver_W),

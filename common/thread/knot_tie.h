@@ -205,6 +205,10 @@ class KnotThrowScript {
 struct KnotHoldOptions {
   double tension_N = 20e-3;
   double duration_s = 2.0;
+  // The hands' own pull: a hand offset (KnotHandOffsets) by d outward along x, away from the
+  // other hand, keeps tension_N + pull_gain_N_per_m d instead (never below 0.1 tension_N): a
+  // trainee pulling an end further out pulls it harder. 0: the offsets move the ends only.
+  double pull_gain_N_per_m = 0.0;
   std::vector<Collider> fixed_colliders;  // e.g. the stitch; at most kMaxKnotFixedColliders
   // Throws std::invalid_argument naming the bad field.
   void Validate() const;
@@ -232,6 +236,7 @@ class KnotHoldScript {
     v("slots", &s.hands_.standing_slot, 1);
     v("slots", &s.hands_.driver_slot, 1);
     v("tension_N", &s.tension_N_, 1);
+    v("pull_gain_N_per_m", &s.pull_gain_N_per_m_, 1);
     v("num_colliders", &s.num_colliders_, 1);
     for (int k = 0; k < std::clamp(s.num_colliders_, 0, kMaxKnotFixedColliders); ++k) {
       VisitCollider(s.colliders_[k], v);
@@ -244,6 +249,7 @@ class KnotHoldScript {
  private:
   KnotTyingHands hands_;
   double tension_N_ = 0.0;
+  double pull_gain_N_per_m_ = 0.0;
   std::array<Collider, kMaxKnotFixedColliders> colliders_{};
   int num_colliders_ = 0;
   int steps_left_ = 0;

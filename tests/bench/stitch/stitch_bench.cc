@@ -13,13 +13,19 @@
 //   median and p99 with their ratio to the rigid run's in the same run, the bite's displacement at
 //   the end, how far the low-passed loads trail the thread's (largest |load − force| over the
 //   largest |force|), the balance of the rods' loads against the hands' pull along the normal,
-//   and the knot named.
+//   and the knot named;
+// cut-through: the same tie with the hands pulling the held ends 0 … 5 mm further out
+//   (knot_tying.hold_pull_N_per_m sets the tension they then keep), with the scene's
+//   bite_tear_N and without it: the hands' tension at the end, the bite's largest low-passed
+//   load, how far the bite cut and whether it was pulled out, the rods' balance against the
+//   hands' pull at the end, and the step median against the run without tearing.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -28,6 +34,7 @@
 #include "bench_util.h"
 #include "common/fem/navier.h"
 #include "common/fem/point_compliance.h"
+#include "common/knot/obj.h"
 #include "common/knot/stitch_knot.h"
 #include "common/scene/scene.h"
 #include "station/score.h"
@@ -38,6 +45,12 @@ namespace microdex::bench {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+std::string Fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
 
 struct ComplianceRow {
   int level = 0;
@@ -90,6 +103,13 @@ ComplianceRow MeasureCompliance(const scene::SceneModel& scene,
 
 struct CouplingRow {
   double relax_s = 0;
+  double hold_pull_m = 0;  // the hands' extra pull in the hold
+  double tear_N = 0;       // knot_tying.bite_tear_N
+  double hold_N = 0;       // the larger of the hands' pulls at the end
+  double bite_load_max_N = 0;
+  double cut_um = 0;
+  bool pulled_out = false;
+  std::vector<Eigen::Vector3d> polyline;  // the thread at the end, as the recogniser reads it
   double step_median_us = 0;
   double step_p99_us = 0;
   double median_ratio = 1;  // to the rigid run's
@@ -101,10 +121,14 @@ struct CouplingRow {
   std::string error;
 };
 
-CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s) {
+CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s, double hold_pull_m = 0,
+                            double tear_N = 0) {
   scene.knot_tying->stitch_relax_s = relax_s;
+  scene.knot_tying->bite_tear_N = tear_N;
   CouplingRow row;
   row.relax_s = relax_s;
+  row.hold_pull_m = hold_pull_m;
+  row.tear_N = tear_N;
   try {
     station::Simulation sim(scene);
     state::StationState s = sim.MakeInitialState(1);
@@ -118,17 +142,27 @@ CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s) {
       in.second.gripper = 1;
       const std::uint64_t k = s.step;
       in.device.buttons = k >= 300 && k < 400 ? 3u : k >= 500 && k < 600 ? 2u : 0u;
+      if (s.thread->tie.holding != 0) {
+        in.device.X_WT.translation().x() += hold_pull_m;
+        in.second.X_WT.translation().x() -= hold_pull_m;
+      }
       const auto t0 = Clock::now();
       station::StepStation(sim, in, s);
       us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+      row.bite_load_max_N =
+          std::max(row.bite_load_max_N, s.thread->tie.stitch_load_N[station::kBiteRod]);
     }
     row.step_median_us = Percentile(us, 0.5);
     row.step_p99_us = Percentile(us, 0.99);
     const state::ThreadModuleState& t = *s.thread;
+    row.hold_N = std::max(t.f_T_W.norm(), t.f_T2_W.norm());
+    row.cut_um = t.tie.bite_cut_m * 1e6;
+    row.pulled_out = t.tie.bite_pulled_out != 0;
     const Eigen::Matrix3Xd& x = t.thread.x_W;
     std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(x.cols()));
     for (Eigen::Index i = 0; i < x.cols(); ++i) nodes[static_cast<std::size_t>(i)] = x.col(i);
     row.knot = std::string(knot::StitchKnotName(station::RecogniseTiedKnot(scene, nodes)));
+    row.polyline = station::CalcStitchKnotPolyline(scene, nodes);
     const std::optional<station::StitchOnTissue> stitch = station::MakeStitchOnTissue(scene, 4);
     if (stitch) {
       const state::KnotTieState& tie = t.tie;
@@ -160,6 +194,10 @@ int Run(int argc, char** argv) {
   app.add_option("--json", json_path, "write the report as JSON");
   app.add_flag("--quick", quick, "levels 5-6, the rigid stitch and the scene's relaxation time");
   app.add_option("--scene", scene_path, "the knot-tying scene");
+  std::string obj_dir;
+  app.add_option("--obj-dir", obj_dir,
+                 "write each cut-through run's thread at the end as an OBJ polyline in the "
+                 "tissue's frame (cut_PULLmm_TEAR.obj), for microdex-bench knot and knots.tied");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -190,7 +228,12 @@ int Run(int argc, char** argv) {
       if (r != scene_relax_s) relax.push_back(r);
     }
   }
-  const int total = static_cast<int>(levels.size() + relax.size());
+  // Cut-through: each pull without tearing (the baseline) and with the scene's threshold.
+  const double scene_tear_N = scene.knot_tying->bite_tear_N;
+  const std::vector<double> pulls_m =
+      quick ? std::vector<double>{3e-3} : std::vector<double>{0.0, 1e-3, 2e-3, 3e-3, 5e-3};
+  const int total =
+      static_cast<int>(levels.size() + relax.size() + (scene_tear_N > 0 ? 2 * pulls_m.size() : 0));
   int done = 0;
   const auto start = Clock::now();
   std::vector<ComplianceRow> compliance;
@@ -206,6 +249,33 @@ int Run(int argc, char** argv) {
   for (CouplingRow& c : coupling) {
     c.median_ratio = c.step_median_us / coupling[0].step_median_us;
     c.p99_ratio = c.step_p99_us / coupling[0].step_p99_us;
+  }
+  std::vector<CouplingRow> cut;
+  for (const double pull_m : scene_tear_N > 0 ? pulls_m : std::vector<double>{}) {
+    const CouplingRow whole = MeasureCoupling(scene, scene_relax_s, pull_m, 0.0);
+    Progress("cut-through", ++done, total, start);
+    CouplingRow torn = MeasureCoupling(scene, scene_relax_s, pull_m, scene_tear_N);
+    Progress("cut-through", ++done, total, start);
+    torn.median_ratio = torn.step_median_us / whole.step_median_us;
+    torn.p99_ratio = torn.step_p99_us / whole.step_p99_us;
+    cut.push_back(whole);
+    cut.push_back(torn);
+  }
+  for (const CouplingRow& r : obj_dir.empty() ? std::vector<CouplingRow>{} : cut) {
+    if (r.polyline.empty()) continue;
+    const std::string name = "cut_" + Fmt(r.hold_pull_m * 1e3) + "mm_" +
+                             (r.tear_N > 0 ? Fmt(r.tear_N * 1e3) + "mN" : "none") + ".obj";
+    try {
+      knot::WriteObjPolyline(
+          std::filesystem::path(obj_dir) / name, r.polyline,
+          {"microdex-bench stitch --obj-dir: " + scene_path + ", the surgeon's knot, the hands " +
+               Fmt(r.hold_pull_m * 1e3) + " mm further out in the hold, bite_tear_N " +
+               (r.tear_N > 0 ? Fmt(r.tear_N) : "0") + ": " + r.knot,
+           "the tissue's frame: surface z = 0, z out of the tissue, metres"});
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "microdex-bench stitch: --obj-dir: %s\n", e.what());
+      return 2;
+    }
   }
   std::printf("compliance at the rods (%s)\n", scene_path.c_str());
   std::printf("| level | build ms | off-diagonal error | diagonal error | asymmetry |\n");
@@ -227,6 +297,22 @@ int Run(int argc, char** argv) {
     std::printf("| %.3g | %.1f | %.1f | %.3f | %.3f | %+.1f | %.3f | %.3f | %s |\n", r.relax_s,
                 r.step_median_us, r.step_p99_us, r.median_ratio, r.p99_ratio, r.bite_um, r.trailing,
                 r.balance, r.knot.c_str());
+  }
+  if (!cut.empty()) {
+    std::printf(
+        "\ncut-through (the hands pulling the held ends further out; median / untorn: the run "
+        "without tearing at the same pull)\n");
+    std::printf(
+        "| hold pull mm | bite_tear_N mN | hands mN | bite load max mN | cut um | pulled out | "
+        "balance | step median us | median / untorn | knot |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const CouplingRow& r : cut) {
+      std::printf("| %.1f | %s | %.1f | %.2f | %.1f | %s | %.3f | %.1f | %s | %s |\n",
+                  r.hold_pull_m * 1e3, r.tear_N > 0 ? Fmt(r.tear_N * 1e3).c_str() : "none",
+                  r.hold_N * 1e3, r.bite_load_max_N * 1e3, r.cut_um, r.pulled_out ? "yes" : "no",
+                  r.balance, r.step_median_us, r.tear_N > 0 ? Fmt(r.median_ratio).c_str() : "1",
+                  r.knot.c_str());
+    }
   }
   if (!json_path.empty()) {
     std::ofstream out(json_path);
@@ -251,6 +337,16 @@ int Run(int argc, char** argv) {
           << ", \"bite_um\": " << r.bite_um << ", \"trailing\": " << r.trailing
           << ", \"balance\": " << r.balance << ", \"knot\": \"" << r.knot << "\""
           << ", \"refused\": " << (r.error.empty() ? "false" : "true") << "}";
+    }
+    out << "], \"cut_through\": [";
+    for (std::size_t i = 0; i < cut.size(); ++i) {
+      const CouplingRow& r = cut[i];
+      out << (i ? ", " : "") << "{\"hold_pull_m\": " << r.hold_pull_m
+          << ", \"bite_tear_N\": " << r.tear_N << ", \"hands_N\": " << r.hold_N
+          << ", \"bite_load_max_N\": " << r.bite_load_max_N << ", \"cut_m\": " << r.cut_um * 1e-6
+          << ", \"pulled_out\": " << (r.pulled_out ? "true" : "false")
+          << ", \"balance\": " << r.balance << ", \"step_median_us\": " << r.step_median_us
+          << ", \"median_ratio\": " << r.median_ratio << ", \"knot\": \"" << r.knot << "\"}";
     }
     out << "]}\n";
   }

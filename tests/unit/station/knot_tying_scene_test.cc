@@ -187,8 +187,13 @@ TEST(KnotTyingScene, TheTissuePushesAnInstrumentBackAlongItsNormal) {
 struct TieRun {
   state::StationState state;
   std::string error;
+  double max_bite_load_N = 0;        // the low-passed load on the bite, largest over the run
+  std::uint64_t cut_start_step = 0;  // the first step the bite cut (0: never)
+  double max_cut_load_N = 0;         // the largest low-passed bite load once it has begun to cut
 };
-TieRun TieSurgeons(const scene::SceneModel& scene) {
+// hold_pull_m: each hand, in the hold, pulls that much further out along the thread (x) than
+// its servo's plan (a trainee pulling harder).
+TieRun TieSurgeons(const scene::SceneModel& scene, double hold_pull_m = 0) {
   TieRun out;
   try {
     Simulation sim(scene);
@@ -201,7 +206,16 @@ TieRun TieSurgeons(const scene::SceneModel& scene) {
       in.second.gripper = 1;
       const std::uint64_t k = out.state.step;
       in.device.buttons = k >= 300 && k < 400 ? 3u : k >= 500 && k < 600 ? 2u : 0u;
+      if (out.state.thread->tie.holding != 0) {
+        in.device.X_WT.translation().x() += hold_pull_m;
+        in.second.X_WT.translation().x() -= hold_pull_m;
+      }
       StepStation(sim, in, out.state);
+      const state::KnotTieState& tie = out.state.thread->tie;
+      const double load_N = tie.stitch_load_N[kBiteRod];
+      out.max_bite_load_N = std::max(out.max_bite_load_N, load_N);
+      if (tie.bite_cut_m > 0 && out.cut_start_step == 0) out.cut_start_step = out.state.step;
+      if (out.cut_start_step != 0) out.max_cut_load_N = std::max(out.max_cut_load_N, load_N);
     }
   } catch (const std::exception& e) {
     out.error = e.what();
@@ -288,6 +302,96 @@ TEST(KnotTyingScene, TheStitchStaysStableFromStiffToSoftTissue) {
   EXPECT_GT(bite_m[1], bite_m[0]);
 }
 
+// Cheese-wiring (knot_tying.bite_tear_N) and the trainee's pull in the hold
+// (knot_tying.hold_pull_N_per_m). Hands held 1 mm further out keep 10 mN more, and the bite
+// holds the tie's loads (below 20 mN). Held 3 mm out they pull 50 mN; the bite's load passes
+// the threshold and the bite cuts up through the patch, which relaxes the pull on it: its load
+// at the end is below the untorn bite's, and the cut is the score's torn_m. Pulled long and
+// hard enough the bite comes out of the tissue, and the knot fails whatever it is. Stiff and
+// soft patches: the cut grows with the patch's compliance at the bite.
+TEST(KnotTyingScene, TheBiteCutsThroughWhenTheSuturePullsHarderThanTheTissueHolds) {
+  const scene::SceneModel base = scene::LoadScene(ScenePath());
+  ASSERT_EQ(base.knot_tying->bite_tear_N, 20e-3);
+  ASSERT_EQ(base.knot_tying->hold_pull_N_per_m, 10.0);
+  auto report = [](const char* what, const TieRun& run) {
+    const state::KnotTieState& tie = run.state.thread->tie;
+    std::printf("%s: hands %.2f / %.2f mN, bite load max %.2f mN, end %.2f mN, cut %.1f um%s\n",
+                what, run.state.thread->f_T_W.norm() * 1e3, run.state.thread->f_T2_W.norm() * 1e3,
+                run.max_bite_load_N * 1e3, tie.stitch_load_N[kBiteRod] * 1e3, tie.bite_cut_m * 1e6,
+                tie.bite_pulled_out != 0 ? ", pulled out" : "");
+  };
+  {
+    const TieRun run = TieSurgeons(base, 1e-3);
+    ASSERT_EQ(run.error, "");
+    report("pull 1 mm", run);
+    const state::ThreadModuleState& t = *run.state.thread;
+    EXPECT_NEAR(t.f_T_W.norm(), 30e-3, 1e-3);
+    EXPECT_NEAR(t.f_T2_W.norm(), 30e-3, 1e-3);
+    EXPECT_LT(run.max_bite_load_N, base.knot_tying->bite_tear_N);
+    EXPECT_EQ(t.tie.bite_cut_m, 0.0);
+  }
+  const double pull_out_m = base.knot_tying->stitch.depth_m + base.knot_tying->stitch.rod_radius_m +
+                            0.5 * base.thread->def.diameter_m + base.knot_tying->surface_y_m;
+  {
+    scene::SceneModel untorn = base;
+    untorn.knot_tying->bite_tear_N = 0;
+    const TieRun whole = TieSurgeons(untorn, 3e-3);
+    const TieRun torn = TieSurgeons(base, 3e-3);
+    ASSERT_EQ(whole.error, "");
+    ASSERT_EQ(torn.error, "");
+    report("pull 3 mm, untorn", whole);
+    report("pull 3 mm", torn);
+    const state::KnotTieState& tie = torn.state.thread->tie;
+    EXPECT_NEAR(torn.state.thread->f_T_W.norm(), 50e-3, 2e-3);
+    EXPECT_GT(whole.max_bite_load_N, base.knot_tying->bite_tear_N);
+    EXPECT_EQ(whole.state.thread->tie.bite_cut_m, 0.0);
+    EXPECT_GT(tie.bite_cut_m, 100e-6);
+    EXPECT_LT(tie.bite_cut_m, pull_out_m);
+    EXPECT_EQ(tie.bite_pulled_out, 0);
+    EXPECT_LT(tie.stitch_load_N[kBiteRod], whole.state.thread->tie.stitch_load_N[kBiteRod] - 3e-3);
+    EXPECT_EQ(CalcScoreMetric(base, torn.state.score, "torn_m"), tie.bite_cut_m);
+    EXPECT_LT(torn.state.thread->thread.status.max_strain, base.thread->max_strain);
+  }
+  // Held long, the cut relaxes the bite's load onto the threshold (the tissue yields); a weaker
+  // tissue lets the bite out.
+  for (const double tear_N : {20e-3, 5e-3}) {
+    scene::SceneModel scene = base;
+    scene.knot_tying->hold_s = 12;
+    scene.knot_tying->bite_tear_N = tear_N;
+    const TieRun run = TieSurgeons(scene, 5e-3);
+    ASSERT_EQ(run.error, "");
+    report(tear_N > 10e-3 ? "pull 5 mm for 12 s" : "pull 5 mm for 12 s, tear 5 mN", run);
+    const state::KnotTieState& tie = run.state.thread->tie;
+    if (tear_N > 10e-3) {
+      EXPECT_NEAR(tie.stitch_load_N[kBiteRod], tear_N, 0.02 * tear_N);
+      EXPECT_LT(tie.bite_cut_m, pull_out_m);
+      EXPECT_EQ(tie.bite_pulled_out, 0);
+    } else {
+      EXPECT_EQ(tie.bite_pulled_out, 1);
+      EXPECT_DOUBLE_EQ(tie.bite_cut_m, pull_out_m);
+      EXPECT_EQ(CalcScoreMetric(scene, run.state.score, "knot_wrong"), 1.0);
+    }
+  }
+  // A patch 10x stiffer and one 4x softer, the threshold below both's loads: each cuts, and the
+  // softer (more compliant at the bite) cuts faster.
+  double cuts_m[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    scene::SceneModel scene = base;
+    scene.tissue->def.shear_modulus_Pa *= k == 0 ? 10.0 : 0.25;
+    scene.knot_tying->bite_tear_N = 5e-3;
+    const TieRun run = TieSurgeons(scene, 1e-3);
+    ASSERT_EQ(run.error, "") << k;
+    report(k == 0 ? "pull 1 mm, 10x stiffer, tear 5 mN" : "pull 1 mm, 4x softer, tear 5 mN", run);
+    const state::KnotTieState& tie = run.state.thread->tie;
+    EXPECT_GT(tie.bite_cut_m, 10e-6) << k;
+    EXPECT_LT(tie.bite_cut_m, pull_out_m) << k;
+    EXPECT_LE(tie.stitch_load_N[kBiteRod], run.max_bite_load_N) << k;
+    EXPECT_LT(run.state.thread->thread.status.max_strain, scene.thread->max_strain) << k;
+    cuts_m[k] = tie.bite_cut_m;
+  }
+  EXPECT_GT(cuts_m[1], 2 * cuts_m[0]);
+}
+
 // The instrument presses the patch as the stitch's loads have displaced it (the superposition
 // of the linear problem): with the bite lifted by a load, an instrument beside it at a depth
 // below the surface at rest meets the patch that much nearer, and feels the reaction of the
@@ -340,6 +444,12 @@ TEST(KnotTyingScene, BadFieldsAreNamed) {
                        Case{"  hold_s: 2.0", "  hold_s: 60", "knot_tying.hold_s"},
                        Case{"  hold_s: 2.0", "  hold_s: 2.0\n  stitch_relax_s: -1",
                             "knot_tying.stitch_relax_s: expected a time"},
+                       Case{"  bite_tear_N: 20.0e-3", "  bite_tear_N: 2",
+                            "knot_tying.bite_tear_N: expected a load in [0, 1) N"},
+                       Case{"  stitch_relax_s: 0.5", "  stitch_relax_s: 0",
+                            "knot_tying.bite_tear_N: the bite tears the tissue patch"},
+                       Case{"  hold_pull_N_per_m: 10.0", "  hold_pull_N_per_m: -1",
+                            "knot_tying.hold_pull_N_per_m: expected a gain"},
                        Case{"  kind: knot_tying", "  kind: tremor_hold", "knot_tying: section"}}) {
     std::string bad = text;
     const std::size_t at = bad.find(c.from);
