@@ -99,18 +99,22 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
     hold_options_.fixed_colliders = stitch_;
     p_W_tool_rest_ = scene.CalcIdealToolPose(0).translation();
     p_W_second_rest_ = scene.CalcIdealSecondToolPose(0).translation();
-    stitch_tissue_ = MakeStitchOnTissue(scene, 0);
+    stitch_tissue_ = MakeStitchOnTissue(scene, 0, /*with_in_plane=*/true);
     if (stitch_tissue_) {
       // The rod's displacement follows u <- u + g (c F(u) - u), g = h / stitch_relax_s, where
       // the thread's load F(u) = F0 - k u falls as the rod gives: the error shrinks by
       // 1 - g (1 + c k) a step, stable while g (1 + c k) < 2 (c the largest compliance). The
       // stiffest the thread holds a rod is two strands, each taut to a hand one guide offset
-      // away: k = 2 E A / guide_offset.
+      // away: k = 2 E A / guide_offset. The in-plane displacement follows the same law with the
+      // in-plane compliance, so c is the largest of both.
       stitch_gain_ = model_.def.time_step_s / tie_->stitch_relax_s;
       const double ea_N =
           model_.def.youngs_modulus_Pa * std::numbers::pi * model_.radius_m * model_.radius_m;
       const double k_N_per_m = 2 * ea_N / tie_->stitch.guide_offset_m;
-      const double c_m_per_N = stitch_tissue_->compliance.c_m_per_N.diagonal().maxCoeff();
+      const double c_m_per_N = std::max(
+          stitch_tissue_->compliance.c_m_per_N.diagonal().maxCoeff(),
+          stitch_tissue_->HasInPlane() ? stitch_tissue_->in_plane.c_m_per_N.diagonal().maxCoeff()
+                                       : 0.0);
       const double min_relax_s = model_.def.time_step_s * (1 + c_m_per_N * k_N_per_m) / 2;
       if (!(stitch_gain_ * (1 + c_m_per_N * k_N_per_m) < 2)) {
         throw std::runtime_error(
@@ -201,7 +205,10 @@ std::array<thread::Collider, kStitchRods> ThreadModule::MovedStitch(
     thread::Collider c = stitch_[static_cast<std::size_t>(k)];
     if (stitch_tissue_) {
       const double cut_m = k == kBiteRod ? tie.bite_cut_m : 0.0;
-      const Eigen::Vector3d d_W = (w_m[k] + cut_m) * stitch_tissue_->n_W;
+      Eigen::Vector3d d_W = (w_m[k] + cut_m) * stitch_tissue_->n_W;
+      if (stitch_tissue_->HasInPlane()) {
+        d_W += stitch_tissue_->InPlaneDisplacement_W(tie.stitch_in_plane_load_N, k);
+      }
       c.a_W += d_W;
       c.b_W += d_W;
     }
@@ -224,6 +231,14 @@ void ThreadModule::UpdateStitchLoads(int num_colliders, const thread::ThreadStat
     if (!std::isfinite(f_N)) f_N = 0;
     tie.stitch_force_N[i] = f_N;
     tie.stitch_load_N[i] += stitch_gain_ * (f_N - tie.stitch_load_N[i]);
+    if (stitch_tissue_->HasInPlane()) {
+      Eigen::Vector2d f_S = stitch_tissue_->t_W.transpose() * f_W;
+      if (!f_S.allFinite()) f_S.setZero();
+      for (int d = 0; d < 2; ++d) {
+        double& load_N = tie.stitch_in_plane_load_N[2 * i + static_cast<std::size_t>(d)];
+        load_N += stitch_gain_ * (f_S[d] - load_N);
+      }
+    }
   }
   // The bite cuts up through the tissue while its load exceeds the tear threshold (the
   // constructor's comment); pulled out once the thread under it has reached the surface.

@@ -74,6 +74,8 @@ void TissueDef::Validate() const {
   Require(std::isfinite(shear_modulus_Pa) && shear_modulus_Pa > 0, "shear_modulus_Pa",
           "a positive modulus in Pa");
   Require(std::isfinite(thickness_m) && thickness_m > 0, "thickness_m", "a positive length in m");
+  Require(std::isfinite(poisson_ratio) && poisson_ratio >= 0 && poisson_ratio <= 0.5,
+          "poisson_ratio", "a ratio in [0, 0.5]");
   Require(max_level >= 1 && max_level <= 10, "max_level", "an integer in [1, 10]");
   Require(level >= 1 && level <= max_level, "level", "an integer in [1, max_level]");
   Require(std::isfinite(grading) && grading >= 1.5 && grading <= 64, "grading",
@@ -123,6 +125,7 @@ TissueDef LoadTissueDef(const std::string& path) {
                              "length_y_m",
                              "shear_modulus_Pa",
                              "thickness_m",
+                             "poisson_ratio",
                              "max_level",
                              "level",
                              "mesh",
@@ -151,6 +154,7 @@ TissueDef LoadTissueDef(const std::string& path) {
   def.length_y_m = tissue.FiniteDouble("length_y_m", def.length_y_m);
   def.shear_modulus_Pa = tissue.FiniteDouble("shear_modulus_Pa", def.shear_modulus_Pa);
   def.thickness_m = tissue.FiniteDouble("thickness_m", def.thickness_m);
+  def.poisson_ratio = tissue.FiniteDouble("poisson_ratio", def.poisson_ratio);
   def.max_level = tissue.Int("max_level", def.max_level);
   def.level = tissue.Int("level", def.level);
   def.mesh = ReadEnum(tissue, "mesh", &ParseMeshKind, def.mesh);

@@ -64,6 +64,9 @@ struct TissueDef {
   // Thickness of the slab. The 2-D problem's stiffness is G·t ∫∇Nᵢ·∇Nⱼ dA, so forces come
   // out in newtons; 1 cm makes the thesis's study (G in N/cm², w in cm) read in newtons.
   double thickness_m = 0.01;
+  // Poisson's ratio of the in-plane (plane-stress) problem only (in_plane_compliance.h): the
+  // antiplane problem has none. Soft tissues are nearly incompressible: 0.45-0.5.
+  double poisson_ratio = 0.45;
   int max_level = 9;  // finest level of the hierarchy: level l has 2^l × 2^l cells
   // Level of the step's mesh: every cell the tool touches is at this level (kFine: every
   // cell; the multi-scale mesh goes finer only in the end zones, see end_resolution).

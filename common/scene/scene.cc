@@ -377,7 +377,7 @@ SceneModel ReadScene(const YamlReader& reader) {
     kt->CheckNoUnknownKeys({"stitch", "throws", "speed_m_per_s", "pull_tension_N",
                             "force_limited_pull", "throw_tension_N", "hold_tension_N", "hold_s",
                             "first_jig_x_m", "next_jig_x_m", "surface_y_m", "stitch_relax_s",
-                            "bite_tear_N", "hold_pull_N_per_m"});
+                            "bite_tear_N", "hold_pull_N_per_m", "stitch_in_plane"});
     KnotTyingSceneDef d;
     if (const std::optional<YamlSection> st = kt->OptionalMap("stitch")) {
       st->CheckNoUnknownKeys(
@@ -408,6 +408,7 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.surface_y_m = kt->FiniteDouble("surface_y_m", d.surface_y_m);
     d.stitch_relax_s = kt->FiniteDouble("stitch_relax_s", d.stitch_relax_s);
     d.bite_tear_N = kt->FiniteDouble("bite_tear_N", d.bite_tear_N);
+    d.stitch_in_plane = kt->Bool("stitch_in_plane", d.stitch_in_plane);
     s.knot_tying = d;
   }
   if (const std::optional<YamlSection> sc = root.OptionalMap("scoring")) {
@@ -829,6 +830,11 @@ void ValidateScene(const SceneModel& s) {
     }
     if (!(k.bite_tear_N >= 0 && k.bite_tear_N < 1)) {
       Invalid("knot_tying.bite_tear_N", "expected a load in [0, 1) N (0: the bite never tears)");
+    }
+    if (k.stitch_in_plane && !(k.stitch_relax_s > 0 && s.HasModule("tissue"))) {
+      Invalid("knot_tying.stitch_in_plane",
+              "the stitch moves in the tissue patch's plane: needs the tissue module and "
+              "stitch_relax_s > 0");
     }
     if (k.bite_tear_N > 0 && !(k.stitch_relax_s > 0 && s.HasModule("tissue"))) {
       Invalid("knot_tying.bite_tear_N",

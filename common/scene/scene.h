@@ -238,6 +238,11 @@ struct KnotTyingSceneDef {
   // bite is pulled out once the thread under it has cut up to the surface. 0: it never tears.
   // Needs the stitch on the tissue (stitch_relax_s > 0).
   double bite_tear_N = 0.0;
+  // The stitch also moves in the patch's plane: the thread's loads along the surface (the legs
+  // drawing the punctures together) displace the rods by the patch's in-plane (plane-stress)
+  // compliance (fem::CalcInPlaneCompliance, Poisson's ratio from the tissue file), low-passed
+  // alike. Needs the stitch on the tissue (stitch_relax_s > 0).
+  bool stitch_in_plane = false;
 };
 
 // Haptic rendering limits.

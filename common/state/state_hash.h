@@ -20,7 +20,7 @@
 
 namespace microdex::state {
 
-inline constexpr std::uint32_t kStateHashVersion = 10;
+inline constexpr std::uint32_t kStateHashVersion = 11;
 
 std::uint64_t CalcStateHash(const StationState& state);
 

@@ -216,6 +216,9 @@ struct KnotTieState {
   // compliance turns into the rods' displacement and the tissue module into the patch's.
   std::array<double, 3> stitch_force_N{};
   std::array<double, 3> stitch_load_N{};
+  // knot_tying.stitch_in_plane: the thread's load on each rod along the patch's surface,
+  // low-passed alike, (x, y) of the patch's frame per rod, N.
+  std::array<double, 6> stitch_in_plane_load_N{};
   // How far the bite has cut up through the tissue along the normal (knot_tying.bite_tear_N),
   // m, and whether it has been pulled out (the thread under it has reached the surface).
   double bite_cut_m = 0;

@@ -257,6 +257,8 @@ void Thread(S& m, V& v) {
   Matrix("thread.tie.applied_second_W", k.applied_second_W, v);
   v("thread.tie.stitch_force_N", k.stitch_force_N.data(), k.stitch_force_N.size());
   v("thread.tie.stitch_load_N", k.stitch_load_N.data(), k.stitch_load_N.size());
+  v("thread.tie.stitch_in_plane_load_N", k.stitch_in_plane_load_N.data(),
+    k.stitch_in_plane_load_N.size());
   v("thread.tie.bite_cut_m", &k.bite_cut_m, 1);
   v("thread.tie.bite_pulled_out", &k.bite_pulled_out, 1);
 }

@@ -448,6 +448,9 @@ TEST(KnotTyingScene, BadFieldsAreNamed) {
                             "knot_tying.bite_tear_N: expected a load in [0, 1) N"},
                        Case{"  stitch_relax_s: 0.5", "  stitch_relax_s: 0",
                             "knot_tying.bite_tear_N: the bite tears the tissue patch"},
+                       Case{"  stitch_relax_s: 0.5", "  stitch_relax_s: 0\n  stitch_in_plane: true",
+                            "knot_tying.stitch_in_plane: the stitch moves in the tissue patch's "
+                            "plane"},
                        Case{"  hold_pull_N_per_m: 10.0", "  hold_pull_N_per_m: -1",
                             "knot_tying.hold_pull_N_per_m: expected a gain"},
                        Case{"  kind: knot_tying", "  kind: tremor_hold", "knot_tying: section"}}) {
