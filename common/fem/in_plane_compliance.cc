@@ -157,8 +157,8 @@ DiscsSolution SolveDiscs(const TissueDef& def, int level, std::span<const Eigen:
   int num_free = 0;
   for (int n = 0; n < nodes; ++n) {
     if (kind[static_cast<std::size_t>(n)] != kFree) continue;
-    free_index[static_cast<std::size_t>(2 * n)] = num_free++;
-    free_index[static_cast<std::size_t>(2 * n + 1)] = num_free++;
+    free_index[2 * static_cast<std::size_t>(n)] = num_free++;
+    free_index[2 * static_cast<std::size_t>(n) + 1] = num_free++;
   }
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(static_cast<std::size_t>(g.cells) * g.cells * 2 * 36);
@@ -269,6 +269,7 @@ InPlaneCompliance CalcInPlaneCompliance(const TissueDef& def, int level,
   // one case per unknown; then C = S⁻¹ (any displacement gives the same: linear elasticity).
   constexpr double kProbe_m = 1e-4;
   std::vector<Eigen::VectorXd> cases;
+  cases.reserve(2 * points_S.size());
   for (int k = 0; k < 2 * n; ++k) cases.push_back(Eigen::VectorXd::Unit(2 * n, k) * kProbe_m);
   const DiscsSolution s = SolveDiscs(def, level, points_S, contact_radius_m, cases,
                                      std::numeric_limits<double>::infinity());
