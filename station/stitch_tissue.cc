@@ -43,8 +43,10 @@ std::optional<StitchOnTissue> MakeStitchOnTissue(const scene::SceneModel& scene,
     // The same grid as the normal compliance's: cells at most half the contact disc's radius
     // (level 7 against 8 differ by 8 % at the scene's 0.3 mm disc: in_plane_compliance_test).
     try {
-      out.in_plane =
-          fem::CalcInPlaneCompliance(def, def.level, out.p_S, scene.tissue->contact_radius_m);
+      out.in_plane_m_per_N =
+          fem::CalcInPlaneCompliance(def, def.level, out.p_S, scene.tissue->contact_radius_m)
+              .c_m_per_N;
+      out.has_in_plane = true;
     } catch (const std::exception& e) {
       throw std::runtime_error(scene.path + ": knot_tying.stitch_in_plane: " + e.what());
     }

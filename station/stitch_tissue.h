@@ -28,21 +28,24 @@ struct StitchOnTissue {
   Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();  // the patch's normal (out of the tissue)
   std::array<Eigen::Vector2d, kStitchRods> p_S{};  // the rods' points in the patch plane
   fem::PointCompliance compliance;                 // at p_S, along n_W
-  // The patch's in-plane axes (its x and y) in W, and its in-plane compliance at p_S (empty
-  // unless built: knot_tying.stitch_in_plane).
+  // The patch's in-plane axes (its x and y) in W, and its in-plane compliance at p_S
+  // (fem::InPlaneCompliance, fixed-size: the haptic step multiplies by it; built only with
+  // knot_tying.stitch_in_plane).
+  using InPlaneMatrix = Eigen::Matrix<double, 2 * kStitchRods, 2 * kStitchRods>;
   Eigen::Matrix<double, 3, 2> t_W = Eigen::Matrix<double, 3, 2>::Zero();
-  fem::InPlaneCompliance in_plane;
+  bool has_in_plane = false;
+  InPlaneMatrix in_plane_m_per_N = InPlaneMatrix::Zero();
   // The rods' displacement along n_W for the loads (N, along n_W) on them, m.
   Eigen::Vector3d Displacement_m(const std::array<double, kStitchRods>& load_N) const {
     return compliance.c_m_per_N * Eigen::Map<const Eigen::Vector3d>(load_N.data());
   }
-  bool HasInPlane() const { return in_plane.c_m_per_N.rows() == 2 * kStitchRods; }
+  bool HasInPlane() const { return has_in_plane; }
   // Rod k's displacement in the patch's plane, in W, for the in-plane loads (x, y of S per rod).
   Eigen::Vector3d InPlaneDisplacement_W(const std::array<double, 2 * kStitchRods>& load_N,
                                         int k) const {
     using Vector6d = Eigen::Matrix<double, 2 * kStitchRods, 1>;
     const Eigen::Vector2d u_S =
-        in_plane.c_m_per_N.middleRows<2>(2 * k) * Eigen::Map<const Vector6d>(load_N.data());
+        in_plane_m_per_N.middleRows<2>(2 * k) * Eigen::Map<const Vector6d>(load_N.data());
     return t_W * u_S;
   }
 };

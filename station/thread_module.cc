@@ -111,10 +111,10 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
       const double ea_N =
           model_.def.youngs_modulus_Pa * std::numbers::pi * model_.radius_m * model_.radius_m;
       const double k_N_per_m = 2 * ea_N / tie_->stitch.guide_offset_m;
-      const double c_m_per_N = std::max(
-          stitch_tissue_->compliance.c_m_per_N.diagonal().maxCoeff(),
-          stitch_tissue_->HasInPlane() ? stitch_tissue_->in_plane.c_m_per_N.diagonal().maxCoeff()
-                                       : 0.0);
+      const double c_m_per_N = std::max(stitch_tissue_->compliance.c_m_per_N.diagonal().maxCoeff(),
+                                        stitch_tissue_->HasInPlane()
+                                            ? stitch_tissue_->in_plane_m_per_N.diagonal().maxCoeff()
+                                            : 0.0);
       const double min_relax_s = model_.def.time_step_s * (1 + c_m_per_N * k_N_per_m) / 2;
       if (!(stitch_gain_ * (1 + c_m_per_N * k_N_per_m) < 2)) {
         throw std::runtime_error(
