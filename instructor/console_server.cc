@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "common/base/json_text.h"
 #include "common/cues/cue_kind.h"
 #include "common/scene/scene.h"
 #include "common/view/scene_files.h"
@@ -24,7 +25,7 @@ namespace microdex::instructor {
 namespace {
 
 // The station list's readouts: 6 significant digits.
-std::string Num(double v) { return view::JsonNumber(v, 6); }
+std::string Num(double v) { return JsonNumber(v, 6); }
 
 std::int64_t RealtimeNowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -129,7 +130,7 @@ std::optional<view::WebFile> ConsoleServer::SceneFor(const std::string& station_
       spdlog::error("console: station '{}': {}", station_id, why);
     }
     scene_logged_[station_id] = why;
-    return view::WebFile{"application/json", "{\"error\":" + view::JsonQuote(why) +
+    return view::WebFile{"application/json", "{\"error\":" + JsonQuote(why) +
                                                  ",\"retry\":" + (retry ? "true" : "false") + "}"};
   };
   if (!refused.empty()) return error("scene description refused: " + refused, false);
@@ -226,10 +227,9 @@ std::string ConsoleServer::HandleMessage(const std::string& message) {
     if (sent.size() > kCuesShown) sent.erase(sent.begin());
   }
   next_status_ns_ = 0;  // show it at once
-  return "{\"type\":\"cue_sent\",\"station\":" + view::JsonQuote(station) +
-         ",\"cue_id\":" + std::to_string(id) +
-         ",\"kind\":" + view::JsonQuote(cues::CueKindName(kind)) + ",\"param\":" + Num(param) +
-         ",\"off\":" + (off ? "true" : "false") + "}";
+  return "{\"type\":\"cue_sent\",\"station\":" + JsonQuote(station) +
+         ",\"cue_id\":" + std::to_string(id) + ",\"kind\":" + JsonQuote(cues::CueKindName(kind)) +
+         ",\"param\":" + Num(param) + ",\"off\":" + (off ? "true" : "false") + "}";
 }
 
 namespace {
@@ -242,8 +242,8 @@ std::string CueKindsJson() {
     const cues::CueParamRange r = cues::CueParamLimits(kind);
     if (k > 1) out += ',';
     out += "{\"kind\":";
-    out += view::JsonQuote(cues::CueKindName(kind));
-    out += ",\"bit\":" + std::to_string(k) + ",\"param\":" + view::JsonQuote(r.name);
+    out += JsonQuote(cues::CueKindName(kind));
+    out += ",\"bit\":" + std::to_string(k) + ",\"param\":" + JsonQuote(r.name);
     out += ",\"min\":" + Num(r.min) + ",\"max\":" + Num(r.max);
     out += ",\"default\":" + Num(r.default_value) + "}";
   }
@@ -258,7 +258,7 @@ std::string ConsoleServer::StatusJsonHead() const {
   std::string rej = "{\"total\":" + std::to_string(rejected.total) + ",\"by_topic\":{";
   for (const auto& [topic, n] : rejected.by_topic) {
     if (rej.back() != '{') rej += ',';
-    rej += view::JsonQuote(topic);
+    rej += JsonQuote(topic);
     rej += ':';
     rej += std::to_string(n);
   }
@@ -268,8 +268,8 @@ std::string ConsoleServer::StatusJsonHead() const {
   for (char& ch : latest) {
     if (ch < ' ' || ch > '~') ch = '?';
   }
-  rej += "},\"latest\":" + view::JsonQuote(latest) + "}";
-  return "{\"type\":\"stations\",\"issuer_session\":" + view::JsonQuote(instructor_.session_id()) +
+  rej += "},\"latest\":" + JsonQuote(latest) + "}";
+  return "{\"type\":\"stations\",\"issuer_session\":" + JsonQuote(instructor_.session_id()) +
          ",\"cue_kinds\":" + CueKindsJson() + ",\"rejected\":" + rej +
          ",\"session\":" + (session_ ? session_->StatusJson() : std::string("null")) +
          ",\"stations\":[";
@@ -280,17 +280,15 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
   std::ostringstream j;
   {
     const std::string& id = v.info.header.station_id;
-    j << (slot ? "," : "") << "{\"slot\":" << slot << ",\"id\":" << view::JsonQuote(id)
-      << ",\"trainee\":" << view::JsonQuote(v.info.trainee)
-      << ",\"scene\":" << view::JsonQuote(v.info.scene)
-      << ",\"device\":" << view::JsonQuote(v.info.device) << ",\"skill\":" << Num(v.info.skill)
-      << ",\"presence\":" << view::JsonQuote(PresenceName(v.presence))
-      << ",\"lost_by\":" << view::JsonQuote(LossSignalName(v.lost_by))
-      << ",\"comebacks\":" << v.comebacks
+    j << (slot ? "," : "") << "{\"slot\":" << slot << ",\"id\":" << JsonQuote(id)
+      << ",\"trainee\":" << JsonQuote(v.info.trainee) << ",\"scene\":" << JsonQuote(v.info.scene)
+      << ",\"device\":" << JsonQuote(v.info.device) << ",\"skill\":" << Num(v.info.skill)
+      << ",\"presence\":" << JsonQuote(PresenceName(v.presence))
+      << ",\"lost_by\":" << JsonQuote(LossSignalName(v.lost_by)) << ",\"comebacks\":" << v.comebacks
       << ",\"heard_ms_ago\":" << Num(static_cast<double>(now_ns - v.last_heard_ns) * 1e-6)
       << ",\"inputs_lost\":" << v.inputs_lost << ",\"modules\":[";
     for (std::size_t m = 0; m < v.info.modules.size(); ++m) {
-      j << (m ? "," : "") << view::JsonQuote(v.info.modules[m]);
+      j << (m ? "," : "") << JsonQuote(v.info.modules[m]);
     }
     j << "]";
     if (v.telemetry.latest) {
@@ -304,10 +302,10 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
     if (v.score.latest) {
       const net::Score& s = *v.score.latest;
       j << ",\"score\":" << Num(s.score) << ",\"progress\":" << Num(s.progress)
-        << ",\"outcome\":" << int{s.outcome} << ",\"task\":" << view::JsonQuote(s.task)
+        << ",\"outcome\":" << int{s.outcome} << ",\"task\":" << JsonQuote(s.task)
         << ",\"final\":" << (s.is_final ? "true" : "false") << ",\"terms\":[";
       for (std::size_t k = 0; k < s.terms.size(); ++k) {
-        j << (k ? "," : "") << "{\"metric\":" << view::JsonQuote(s.terms[k].metric)
+        j << (k ? "," : "") << "{\"metric\":" << JsonQuote(s.terms[k].metric)
           << ",\"value\":" << Num(s.terms[k].value) << ",\"points\":" << Num(s.terms[k].points)
           << ",\"weight\":" << Num(s.terms[k].weight) << "}";
       }
@@ -317,7 +315,7 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
     if (const auto it = sent_.find(id); it != sent_.end()) {
       for (std::size_t k = 0; k < it->second.size(); ++k) {
         const SentCue& c = it->second[k];
-        j << (k ? "," : "") << "{\"cue_id\":" << c.cue_id << ",\"kind\":" << view::JsonQuote(c.kind)
+        j << (k ? "," : "") << "{\"cue_id\":" << c.cue_id << ",\"kind\":" << JsonQuote(c.kind)
           << ",\"param\":" << Num(c.param) << ",\"off\":" << (c.off ? "true" : "false")
           << ",\"sent_ms\":" << Num(static_cast<double>(c.sent_realtime_ns) * 1e-6) << ",\"ack\":";
         const net::TaskEvent* ack = nullptr;
@@ -331,14 +329,13 @@ void ConsoleServer::AppendStationJson(const StationView& v, std::size_t slot, st
           j << "null";
         } else {
           j << "{\"applied\":" << (ack->kind == net::TaskEventKind::kCueApplied ? "true" : "false")
-            << ",\"step\":" << ack->header.step << ",\"text\":" << view::JsonQuote(ack->text)
-            << "}";
+            << ",\"step\":" << ack->header.step << ",\"text\":" << JsonQuote(ack->text) << "}";
         }
         j << "}";
       }
     }
     j << "]";
-    if (!v.scene_error.empty()) j << ",\"scene_error\":" << view::JsonQuote(v.scene_error);
+    if (!v.scene_error.empty()) j << ",\"scene_error\":" << JsonQuote(v.scene_error);
     j << "}";
   }
   out += j.str();
@@ -349,8 +346,7 @@ void ConsoleServer::SetPastScores(const std::string& course,
   // The latest kPastPerLine of each trainee and scene, in start order.
   std::map<std::pair<std::string, std::string>, std::vector<const scores::ScoredSession*>> lines;
   for (const scores::ScoredSession& s : sessions) lines[{s.trainee, s.scene}].push_back(&s);
-  std::string j =
-      "{\"type\":\"past_scores\",\"course\":" + view::JsonQuote(course) + ",\"lines\":[";
+  std::string j = "{\"type\":\"past_scores\",\"course\":" + JsonQuote(course) + ",\"lines\":[";
   bool first_line = true;
   for (auto& [key, runs] : lines) {
     std::sort(runs.begin(), runs.end(), [](const auto* a, const auto* b) {
@@ -359,11 +355,11 @@ void ConsoleServer::SetPastScores(const std::string& course,
     if (runs.size() > kPastPerLine) runs.erase(runs.begin(), runs.end() - kPastPerLine);
     if (!first_line) j += ',';
     first_line = false;
-    j += "{\"trainee\":" + view::JsonQuote(key.first) +
-         ",\"scene\":" + view::JsonQuote(key.second) + ",\"sessions\":[";
+    j += "{\"trainee\":" + JsonQuote(key.first) + ",\"scene\":" + JsonQuote(key.second) +
+         ",\"sessions\":[";
     for (std::size_t i = 0; i < runs.size(); ++i) {
       if (i) j += ',';
-      j += "{\"id\":" + view::JsonQuote(runs[i]->id) +
+      j += "{\"id\":" + JsonQuote(runs[i]->id) +
            ",\"started_ms\":" + Num(static_cast<double>(runs[i]->started_ns) * 1e-6) +
            ",\"score\":" + Num(runs[i]->score) + "}";
     }

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/base/json_text.h"
 #include "common/record/session_reader.h"
 #include "common/view/scene_view.h"
 
@@ -19,8 +20,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Quote(const std::string& s) { return view::JsonQuote(s); }
-std::string Num(double v) { return view::JsonNumber(v, 6); }
+std::string Quote(const std::string& s) { return JsonQuote(s); }
+std::string Num(double v) { return JsonNumber(v, 6); }
 
 std::string Join(const std::vector<std::string>& v) {
   std::string out;

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/base/json_text.h"
 #include "common/scene/scene.h"
 #include "common/state/state_hash.h"
 #include "station/audio_out.h"
@@ -32,13 +33,6 @@ namespace {
 
 constexpr int kHapticPriority = 80;
 constexpr int kPublisherPriority = 40;
-
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
 
 std::string StateHashHex(std::uint64_t h) {
   char buf[24];

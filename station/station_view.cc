@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "common/base/json_text.h"
 #include "common/view/scene_view.h"
 
 namespace microdex::station {
@@ -18,7 +19,7 @@ std::string DefaultWebDir() {
 StationView::StationView(const scene::SceneModel& scene, int port, const std::string& web_dir,
                          const std::string& station_id, PageDevice* device)
     : device_(device), scene_json_(view::SceneViewJson(scene)) {
-  info_json_ = "{\"station_id\":" + view::JsonQuote(station_id) +
+  info_json_ = "{\"station_id\":" + JsonQuote(station_id) +
                ",\"device\":" + (device != nullptr ? "\"page\"" : "\"watch\"") + "}";
   std::map<std::string, view::WebFile> files = view::LoadWebFiles(
       web_dir, {"station.html", "station.js", "frame_worker.js", "audio_worklet.js"});

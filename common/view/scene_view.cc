@@ -6,6 +6,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "common/base/json_text.h"
 #include "common/geometry/loop_wire.h"
 #include "common/knot/stitch_knot_shapes.h"
 
@@ -91,30 +92,6 @@ std::string KnotItems(const scene::KnotQuizSceneDef& k) {
 }
 
 }  // namespace
-
-std::string JsonNumber(double v, int digits) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.*g", std::clamp(digits, 1, 17), v);
-  return buf;
-}
-
-std::string JsonQuote(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
 std::string SceneViewJson(const scene::SceneModel& s) {
   std::ostringstream j;

@@ -13,12 +13,4 @@ namespace microdex::view {
 
 std::string SceneViewJson(const scene::SceneModel& scene);
 
-// A JSON string literal (quotes, backslashes and control characters escaped).
-std::string JsonQuote(const std::string& text);
-
-// A JSON number with `digits` significant digits (printf %g); "null" for NaN and infinities
-// (JSON has no such numbers). The scene uses 9 digits (µm in metres survive), the console's
-// station list 6 (readouts).
-std::string JsonNumber(double v, int digits = 9);
-
 }  // namespace microdex::view

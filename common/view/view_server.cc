@@ -19,6 +19,7 @@
 #include <thread>
 #include <type_traits>
 
+#include "common/base/json_text.h"
 #include "common/view/scene_view.h"
 
 namespace microdex::view {

@@ -12,18 +12,14 @@
 #include <string>
 
 #include "bench_registry.h"
+#include "common/base/json_text.h"
 #include "common/cues/end_point_predictor.h"
 #include "tests/support/reach_scripts.h"
 
 namespace microdex::bench {
 namespace {
 
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+std::string Num(double v) { return JsonNumber(v, 6); }
 
 // Median ns per predictor step over the samples of the first reaches.
 double StepCostNs(const testing::ReachSetDef& def) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/base/json_text.h"
 #include "common/fem/navier.h"
 #include "common/fem/tissue_step.h"
 #include "tests/bench/fem/fem_contact_report.h"
@@ -86,13 +87,6 @@ double ThreadCpuMicroseconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
-}
-
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
 }
 
 struct Run {
@@ -337,7 +331,7 @@ int RunFem(int argc, char** argv) {
           std::fprintf(
               stderr, "%s L%d %-10s %-10s n=%6d step %10.1f us cached %9.1f us rms %s F %s\n",
               c.name, level, run.mesh.c_str(), run.solver.c_str(), run.unknowns, run.step_us,
-              run.cached_step_us, Num(run.rms).c_str(), Num(run.force_error).c_str());
+              run.cached_step_us, JsonNumber(run.rms).c_str(), JsonNumber(run.force_error).c_str());
           runs.push_back(run);
         }
       }
@@ -483,11 +477,11 @@ int RunFem(int argc, char** argv) {
     auto [b7, s7] = best_ms(l7);
     auto [b8, s8] = best_ms(l8);
     goals += "\"level_for_500us_goal\": " + std::to_string(l7) +
-             ", \"best_multiscale_step_us\": " + Num(b7) + ", \"best_solver\": \"" + s7 +
+             ", \"best_multiscale_step_us\": " + JsonNumber(b7) + ", \"best_solver\": \"" + s7 +
              "\", \"goal_500us_met\": " + (b7 <= 500 ? "true" : "false");
     goals += ", \"level_for_1ms_goal\": " + std::to_string(l8) +
-             ", \"best_multiscale_step_us_top\": " + Num(b8) + ", \"best_solver_top\": \"" + s8 +
-             "\", \"goal_1ms_met\": " + (b8 <= 1000 ? "true" : "false");
+             ", \"best_multiscale_step_us_top\": " + JsonNumber(b8) + ", \"best_solver_top\": \"" +
+             s8 + "\", \"goal_1ms_met\": " + (b8 <= 1000 ? "true" : "false");
     double min_speedup = kNaN;
     std::string speedups;
     for (SolverKind s : solvers) {
@@ -499,10 +493,11 @@ int RunFem(int argc, char** argv) {
       speedups += "\"";
       speedups += ToString(s);
       speedups += "\": ";
-      speedups += Num(sp);
+      speedups += JsonNumber(sp);
       if (std::isnan(min_speedup) || sp < min_speedup) min_speedup = sp;
     }
-    goals += ", \"speedup_by_solver\": {" + speedups + "}, \"min_speedup\": " + Num(min_speedup) +
+    goals += ", \"speedup_by_solver\": {" + speedups +
+             "}, \"min_speedup\": " + JsonNumber(min_speedup) +
              ", \"goal_speedup_20x_met\": " + (min_speedup >= 20 ? "true" : "false");
     bool rms_ok = true, force_ok = true;
     for (int level = 1; level <= opt.max_level; ++level) {
@@ -528,8 +523,8 @@ int RunFem(int argc, char** argv) {
         best_moving_solver = m.solver + "/" + m.ordering;
       }
     }
-    goals += ", \"best_moving_step_us\": " + Num(best_moving) +
-             ", \"static_step_us_same_solver\": " + Num(static_of_best) +
+    goals += ", \"best_moving_step_us\": " + JsonNumber(best_moving) +
+             ", \"static_step_us_same_solver\": " + JsonNumber(static_of_best) +
              ", \"best_moving_solver\": \"" + best_moving_solver +
              "\", \"goal_moving_500us_met\": " + (best_moving <= 500 ? "true" : "false");
     // What a station runs: pcg_dic, penalty points, the attached mesh.
@@ -545,14 +540,15 @@ int RunFem(int argc, char** argv) {
     const Moving* st8 = station(l8);
     const bool station_l7 = st7 && st7->median_us <= 500 && st7->p99_us <= 1000;
     const bool station_l8 = st8 && st8->median_us <= 1000;
-    goals += ", \"station_moving_l7_median_us\": " + Num(st7 ? st7->median_us : kNaN) +
-             ", \"station_moving_l7_p99_us\": " + Num(st7 ? st7->p99_us : kNaN) +
-             ", \"station_moving_l8_median_us\": " + Num(st8 ? st8->median_us : kNaN) +
-             ", \"station_moving_l7_cpu_median_us\": " + Num(st7 ? st7->cpu_median_us : kNaN) +
-             ", \"station_moving_l7_cpu_p99_us\": " + Num(st7 ? st7->cpu_p99_us : kNaN) +
-             ", \"station_moving_l8_cpu_median_us\": " + Num(st8 ? st8->cpu_median_us : kNaN) +
-             ", \"goal_station_moving_l7_500us_p99_1ms_met\": " + (station_l7 ? "true" : "false") +
-             ", \"goal_station_moving_l8_1ms_met\": " + (station_l8 ? "true" : "false");
+    goals +=
+        ", \"station_moving_l7_median_us\": " + JsonNumber(st7 ? st7->median_us : kNaN) +
+        ", \"station_moving_l7_p99_us\": " + JsonNumber(st7 ? st7->p99_us : kNaN) +
+        ", \"station_moving_l8_median_us\": " + JsonNumber(st8 ? st8->median_us : kNaN) +
+        ", \"station_moving_l7_cpu_median_us\": " + JsonNumber(st7 ? st7->cpu_median_us : kNaN) +
+        ", \"station_moving_l7_cpu_p99_us\": " + JsonNumber(st7 ? st7->cpu_p99_us : kNaN) +
+        ", \"station_moving_l8_cpu_median_us\": " + JsonNumber(st8 ? st8->cpu_median_us : kNaN) +
+        ", \"goal_station_moving_l7_500us_p99_1ms_met\": " + (station_l7 ? "true" : "false") +
+        ", \"goal_station_moving_l8_1ms_met\": " + (station_l8 ? "true" : "false");
     goals += std::string(", \"goal_off_grid_within_2pct_met\": ") +
              (contact.off_grid_within_2pct ? "true" : "false");
     goals +=
@@ -591,12 +587,13 @@ int RunFem(int argc, char** argv) {
       if (fair.size() > 1) fair += ", ";
       fair += "{\"solver\": \"" + std::string(ToString(s)) +
               "\", \"level\": " + std::to_string(level) +
-              ", \"multiscale_force_error\": " + Num(m->force_error) +
-              ", \"multiscale_step_us\": " + Num(m->step_us) +
-              ", \"speedup_same_level\": " + Num(level_gain) + ", \"fine_level_equal_accuracy\": " +
+              ", \"multiscale_force_error\": " + JsonNumber(m->force_error) +
+              ", \"multiscale_step_us\": " + JsonNumber(m->step_us) +
+              ", \"speedup_same_level\": " + JsonNumber(level_gain) +
+              ", \"fine_level_equal_accuracy\": " +
               (f_equal ? std::to_string(f_equal->level) : std::string("null")) +
-              ", \"speedup_equal_accuracy\": " + Num(equal_gain) +
-              ", \"step_over_cholmod\": " + Num(over_cholmod) + "}";
+              ", \"speedup_equal_accuracy\": " + JsonNumber(equal_gain) +
+              ", \"step_over_cholmod\": " + JsonNumber(over_cholmod) + "}";
     }
   }
   fair += "]";
@@ -610,13 +607,13 @@ int RunFem(int argc, char** argv) {
                "{\n  \"bench\": \"fem\",\n  \"domain_m\": %s, \"shear_modulus_Pa\": %s, "
                "\"thickness_m\": %s, \"bar_length_m\": %s, \"press_m\": %s, \"grading\": %s, "
                "\"end_resolution\": %s,\n",
-               Num(kDomain_m).c_str(), Num(1e4).c_str(), Num(0.01).c_str(),
-               Num(kBarLength_m).c_str(), Num(kPress_m).c_str(), Num(opt.grading).c_str(),
-               Num(opt.end_resolution).c_str());
+               JsonNumber(kDomain_m).c_str(), JsonNumber(1e4).c_str(), JsonNumber(0.01).c_str(),
+               JsonNumber(kBarLength_m).c_str(), JsonNumber(kPress_m).c_str(),
+               JsonNumber(opt.grading).c_str(), JsonNumber(opt.end_resolution).c_str());
   std::fprintf(out, "  \"navier_force_N\": {");
   for (size_t i = 0; i < navier_force.size(); ++i)
     std::fprintf(out, "%s\"%s\": %s", i ? ", " : "", navier_force[i].first.c_str(),
-                 Num(-navier_force[i].second).c_str());
+                 JsonNumber(-navier_force[i].second).c_str());
   std::fprintf(out, "},\n  \"goals\": %s,\n  \"fair_comparisons\": %s,\n", goals.c_str(),
                fair.c_str());
   std::fprintf(out,
@@ -633,32 +630,35 @@ int RunFem(int argc, char** argv) {
                  "\"nodal_force_rms_error\": %s, "
                  "\"resultant_force_error\": %s, \"status\": \"%s\"}%s\n",
                  r.case_name.c_str(), r.level, r.mesh.c_str(), r.solver.c_str(), r.unknowns,
-                 r.contacts, Num(r.step_us).c_str(), Num(r.cached_step_us).c_str(),
-                 Num(r.select_us).c_str(), Num(r.assemble_us).c_str(), Num(r.solve_us).c_str(),
-                 Num(r.forces_us).c_str(), r.iterations, r.steps, Num(r.residual).c_str(),
-                 Num(r.force_N).c_str(), Num(r.rms).c_str(), Num(r.nodal_rms).c_str(),
-                 Num(r.force_error).c_str(), r.status.c_str(), i + 1 < runs.size() ? "," : "");
+                 r.contacts, JsonNumber(r.step_us).c_str(), JsonNumber(r.cached_step_us).c_str(),
+                 JsonNumber(r.select_us).c_str(), JsonNumber(r.assemble_us).c_str(),
+                 JsonNumber(r.solve_us).c_str(), JsonNumber(r.forces_us).c_str(), r.iterations,
+                 r.steps, JsonNumber(r.residual).c_str(), JsonNumber(r.force_N).c_str(),
+                 JsonNumber(r.rms).c_str(), JsonNumber(r.nodal_rms).c_str(),
+                 JsonNumber(r.force_error).c_str(), r.status.c_str(),
+                 i + 1 < runs.size() ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"moving\": [\n");
   for (size_t i = 0; i < moving.size(); ++i) {
     const Moving& m = moving[i];
-    std::fprintf(out,
-                 "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", "
-                 "\"ordering\": \"%s\", \"tool_constraint\": \"%s\", \"attached_mesh\": %s, "
-                 "\"steps\": %d, \"median_us\": %s, \"p99_us\": %s, "
-                 "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
-                 "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
-                 "\"failed_steps\": %d, \"mean_unknowns\": %s, \"cpu_median_us\": %s, "
-                 "\"cpu_p99_us\": %s, \"median_iterations\": %s, \"twisted_fraction\": %s, "
-                 "\"reattached_steps\": %d}%s\n",
-                 m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(),
-                 m.attached ? "true" : "false", m.steps, Num(m.median_us).c_str(),
-                 Num(m.p99_us).c_str(), Num(m.max_us).c_str(), Num(m.select_us).c_str(),
-                 Num(m.assemble_us).c_str(), Num(m.solve_us).c_str(),
-                 Num(m.static_median_us).c_str(), Num(m.reuse_fraction).c_str(), m.failed,
-                 Num(m.mean_unknowns).c_str(), Num(m.cpu_median_us).c_str(),
-                 Num(m.cpu_p99_us).c_str(), Num(m.iterations).c_str(),
-                 Num(m.twisted_fraction).c_str(), m.reattached, i + 1 < moving.size() ? "," : "");
+    std::fprintf(
+        out,
+        "    {\"level\": %d, \"mesh\": \"multiscale\", \"solver\": \"%s\", "
+        "\"ordering\": \"%s\", \"tool_constraint\": \"%s\", \"attached_mesh\": %s, "
+        "\"steps\": %d, \"median_us\": %s, \"p99_us\": %s, "
+        "\"max_us\": %s, \"select_us\": %s, \"assemble_us\": %s, \"solve_us\": %s, "
+        "\"static_median_us\": %s, \"pattern_reuse_fraction\": %s, "
+        "\"failed_steps\": %d, \"mean_unknowns\": %s, \"cpu_median_us\": %s, "
+        "\"cpu_p99_us\": %s, \"median_iterations\": %s, \"twisted_fraction\": %s, "
+        "\"reattached_steps\": %d}%s\n",
+        m.level, m.solver.c_str(), m.ordering.c_str(), m.constraint.c_str(),
+        m.attached ? "true" : "false", m.steps, JsonNumber(m.median_us).c_str(),
+        JsonNumber(m.p99_us).c_str(), JsonNumber(m.max_us).c_str(), JsonNumber(m.select_us).c_str(),
+        JsonNumber(m.assemble_us).c_str(), JsonNumber(m.solve_us).c_str(),
+        JsonNumber(m.static_median_us).c_str(), JsonNumber(m.reuse_fraction).c_str(), m.failed,
+        JsonNumber(m.mean_unknowns).c_str(), JsonNumber(m.cpu_median_us).c_str(),
+        JsonNumber(m.cpu_p99_us).c_str(), JsonNumber(m.iterations).c_str(),
+        JsonNumber(m.twisted_fraction).c_str(), m.reattached, i + 1 < moving.size() ? "," : "");
   }
   std::fprintf(out, "  ],\n  \"force_distribution\": [\n");
   for (size_t i = 0; i < distributions.size(); ++i) {
@@ -670,9 +670,9 @@ int RunFem(int argc, char** argv) {
         fs += ", ";
         rs += ", ";
       }
-      xs += Num(d.x_m[k]);
-      fs += Num(d.f_N[k]);
-      rs += Num(d.ref_N[k]);
+      xs += JsonNumber(d.x_m[k]);
+      fs += JsonNumber(d.f_N[k]);
+      rs += JsonNumber(d.ref_N[k]);
     }
     std::fprintf(out,
                  "    {\"case\": \"%s\", \"level\": %d, \"mesh\": \"%s\", \"x_m\": [%s], "
@@ -693,13 +693,14 @@ int RunFem(int argc, char** argv) {
                    "resultant_force_error,force_N,iterations\n");
       for (const Run& r : runs)
         std::fprintf(f, "%s,%d,%s,%s,%d,%s,%s,%s,%s,%s,%d\n", r.case_name.c_str(), r.level,
-                     r.mesh.c_str(), r.solver.c_str(), r.unknowns, Num(r.step_us).c_str(),
-                     Num(r.cached_step_us).c_str(), Num(r.rms).c_str(), Num(r.force_error).c_str(),
-                     Num(r.force_N).c_str(), r.iterations);
+                     r.mesh.c_str(), r.solver.c_str(), r.unknowns, JsonNumber(r.step_us).c_str(),
+                     JsonNumber(r.cached_step_us).c_str(), JsonNumber(r.rms).c_str(),
+                     JsonNumber(r.force_error).c_str(), JsonNumber(r.force_N).c_str(),
+                     r.iterations);
       std::fclose(f);
     }
     // Per-figure data files for gnuplot (blank-line separated blocks, NaN as "?").
-    auto q = [](double v) { return std::isfinite(v) ? Num(v) : std::string("?"); };
+    auto q = [](double v) { return std::isfinite(v) ? JsonNumber(v) : std::string("?"); };
     if (std::FILE* f = std::fopen((dir + "fig3_5_force_G1.dat").c_str(), "w")) {
       for (const auto& [name, qs] : navier_density) {
         if (name != "G1") continue;

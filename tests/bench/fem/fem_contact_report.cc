@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/base/json_text.h"
 #include "common/fem/navier.h"
 #include "common/fem/tissue_step.h"
 
@@ -27,13 +28,6 @@ constexpr double kTurn_rad_per_s = 1.0;     // rotation of the continuity test
 constexpr double kStep_s = 1e-3;            // haptic rate
 constexpr double kJumpForceFloor = 1e-4;    // of the force, added to 3× the reference change
 constexpr double kJumpReferenceFactor = 3;  // the issue's bound on a step's change
-
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
 
 // Progress on stderr: stage, elapsed time and a linear estimate of the rest.
 class Progress {
@@ -181,12 +175,12 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
       worst_nodes = std::max(worst_nodes, err[1]);
       if (!(err[0] <= 0.02)) report.off_grid_within_2pct = false;
       if (report.off_grid.size() > 1) report.off_grid += ", ";
-      report.off_grid += "{\"case\": \"R" + std::to_string(c) +
-                         "\", \"level\": " + std::to_string(level) + ", \"x1_m\": " + Num(x1) +
-                         ", \"x2_m\": " + Num(x2) + ", \"y1_m\": " + Num(y1) +
-                         ", \"navier_force_N\": " + Num(reference) +
-                         ", \"resultant_force_error\": " + Num(err[0]) +
-                         ", \"nearest_nodes_force_error\": " + Num(err[1]) + "}";
+      report.off_grid +=
+          "{\"case\": \"R" + std::to_string(c) + "\", \"level\": " + std::to_string(level) +
+          ", \"x1_m\": " + JsonNumber(x1) + ", \"x2_m\": " + JsonNumber(x2) +
+          ", \"y1_m\": " + JsonNumber(y1) + ", \"navier_force_N\": " + JsonNumber(reference) +
+          ", \"resultant_force_error\": " + JsonNumber(err[0]) +
+          ", \"nearest_nodes_force_error\": " + JsonNumber(err[1]) + "}";
     }
     progress.Done("random bar R" + std::to_string(c));
   }
@@ -234,12 +228,12 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
         if (report.tilted.size() > 1) report.tilted += ", ";
         report.tilted +=
             std::string("{\"case\": \"") + s.name + "\", \"level\": " + std::to_string(level) +
-            ", \"resultant_force_error\": " + Num(std::abs(f - ref.value_N) / ref.value_N) +
-            ", \"reference_N\": " + Num(ref.value_N) +
+            ", \"resultant_force_error\": " + JsonNumber(std::abs(f - ref.value_N) / ref.value_N) +
+            ", \"reference_N\": " + JsonNumber(ref.value_N) +
             ", \"reference_conforming\": " + (s.conforming ? "true" : "false") +
-            ", \"reference_error_estimate\": " + Num(ref.error_estimate_N / ref.value_N) +
+            ", \"reference_error_estimate\": " + JsonNumber(ref.error_estimate_N / ref.value_N) +
             ", \"reference_error_vs_navier\": " +
-            Num(std::abs(ref.value_N - s.navier_N) / s.navier_N) + "}";
+            JsonNumber(std::abs(ref.value_N - s.navier_N) / s.navier_N) + "}";
       }
       progress.Done(std::string("Richardson reference ") + s.name);
     }
@@ -323,7 +317,7 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
       std::max(motions[0].max_jump_over_reference[0], motions[1].max_jump_over_reference[0]);
   report.continuity_met = worst <= 1;
   report.continuity = "{\"level\": " + std::to_string(level) + ", \"solver\": \"" +
-                      ToString(solver) + "\", \"max_jump_over_reference\": " + Num(worst) +
+                      ToString(solver) + "\", \"max_jump_over_reference\": " + JsonNumber(worst) +
                       ", \"positions_tested\": " + std::to_string(2 * steps) +
                       ", \"criterion_met\": " + (report.continuity_met ? "true" : "false") +
                       ", \"motions\": [";
@@ -334,9 +328,9 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
           std::string(motion + c > 0 ? ", " : "") + "{\"motion\": \"" + m.name +
           "\", \"tool_constraint\": \"" + (c == 0 ? "penalty_points" : "nearest_nodes") +
           "\", \"steps\": " + std::to_string(steps) +
-          ", \"max_jump_over_reference\": " + Num(m.max_jump_over_reference[c]) +
-          ", \"max_step_change_rel\": " + Num(m.max_jump_rel[c]) +
-          ", \"reference_max_step_change_rel\": " + Num(m.reference_max_step_rel) + "}";
+          ", \"max_jump_over_reference\": " + JsonNumber(m.max_jump_over_reference[c]) +
+          ", \"max_step_change_rel\": " + JsonNumber(m.max_jump_rel[c]) +
+          ", \"reference_max_step_change_rel\": " + JsonNumber(m.reference_max_step_rel) + "}";
     }
   }
   report.continuity += "]}";
@@ -350,10 +344,12 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
                    "# step t_s translate: penalty nodes reference | rotate: penalty nodes "
                    "reference (N)\n");
       for (int k = 0; k < steps; ++k) {
-        std::fprintf(f, "%d %s %s %s %s %s %s %s\n", k, Num(k * kStep_s).c_str(),
-                     Num(motions[0].penalty_N[k]).c_str(), Num(motions[0].nodes_N[k]).c_str(),
-                     Num(motions[0].reference_N[k]).c_str(), Num(motions[1].penalty_N[k]).c_str(),
-                     Num(motions[1].nodes_N[k]).c_str(), Num(motions[1].reference_N[k]).c_str());
+        std::fprintf(
+            f, "%d %s %s %s %s %s %s %s\n", k, JsonNumber(k * kStep_s).c_str(),
+            JsonNumber(motions[0].penalty_N[k]).c_str(), JsonNumber(motions[0].nodes_N[k]).c_str(),
+            JsonNumber(motions[0].reference_N[k]).c_str(),
+            JsonNumber(motions[1].penalty_N[k]).c_str(), JsonNumber(motions[1].nodes_N[k]).c_str(),
+            JsonNumber(motions[1].reference_N[k]).c_str());
       }
       std::fclose(f);
     }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/base/json_text.h"
 #include "common/geometry/arc_torus.h"
 #include "common/geometry/arc_torus_exact.h"
 #include "common/geometry/arc_torus_mesh.h"
@@ -349,12 +350,7 @@ void Score(const std::vector<ArcTorusClearance>& got, const std::vector<ArcTorus
   m->error_queries = n;
 }
 
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+using ::microdex::JsonNumber;
 
 struct ReportOptions {
   std::string json, csv, plot, mesh_dir;

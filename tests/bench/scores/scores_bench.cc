@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/base/json_text.h"
 #include "common/scene/scene.h"
 #include "station/scene_run.h"
 
@@ -74,12 +75,7 @@ std::string CheckSeparation(const std::vector<Group>& g) {
   return why.str();
 }
 
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+using ::microdex::JsonNumber;
 
 int Run(int argc, char** argv) {
   std::string json_path;

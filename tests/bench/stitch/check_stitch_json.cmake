@@ -1,7 +1,8 @@
 # Runs `microdex-bench stitch --quick --json OUT` and checks the report: two compliance levels
 # within 5 % of the Navier series off the load; the rigid run and the one at the scene's
 # relaxation time both tie the surgeon's knot, the latter with the bite lifted and the rods'
-# loads tracked and balanced against the hands' pull.
+# loads tracked and balanced against the hands' pull; the in-plane compliance's error against
+# the annulus, and the run with it on.
 execute_process(COMMAND ${BENCH} stitch --quick --json ${OUT} RESULT_VARIABLE rc
                 OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("${out}")
@@ -24,8 +25,8 @@ foreach(i 0 1)
   endif()
 endforeach()
 string(JSON n LENGTH "${json}" coupling)
-if(NOT n EQUAL 2)
-  message(FATAL_ERROR "expected 2 coupling runs, got ${n}")
+if(NOT n EQUAL 3)
+  message(FATAL_ERROR "expected 3 coupling runs (rigid, relaxed, relaxed in-plane), got ${n}")
 endif()
 foreach(i 0 1)
   string(JSON knot GET "${json}" coupling ${i} knot)
@@ -33,9 +34,38 @@ foreach(i 0 1)
     message(FATAL_ERROR "coupling[${i}] tied '${knot}', not a surgeon's knot")
   endif()
 endforeach()
-string(JSON bite GET "${json}" coupling 1 bite_um)
-string(JSON trailing GET "${json}" coupling 1 trailing)
-string(JSON balance GET "${json}" coupling 1 balance)
-if(NOT bite GREATER 10 OR trailing GREATER 0.05 OR balance GREATER 0.1)
-  message(FATAL_ERROR "coupled run: bite ${bite} um, trailing ${trailing}, balance ${balance}")
+# The relaxed runs, without and with the in-plane compliance: run to the end, the bite lifted,
+# the rods' loads tracked and balanced against the hands' pull along the normal (the knot of the
+# in-plane run is reported, not held: it is not the scene's surgeon's knot,
+# assets/scenes/README.md, "The in-plane pull").
+foreach(i 1 2)
+  string(JSON refused GET "${json}" coupling ${i} refused)
+  string(JSON bite GET "${json}" coupling ${i} bite_um)
+  string(JSON trailing GET "${json}" coupling ${i} trailing)
+  string(JSON balance GET "${json}" coupling ${i} balance)
+  if(refused OR NOT bite GREATER 10 OR trailing GREATER 0.05 OR balance GREATER 0.1)
+    message(FATAL_ERROR "coupling[${i}]: refused ${refused}, bite ${bite} um, trailing "
+                        "${trailing}, balance ${balance}")
+  endif()
+endforeach()
+string(JSON in_plane GET "${json}" coupling 2 in_plane)
+if(NOT in_plane)
+  message(FATAL_ERROR "coupling[2] is not the run with knot_tying.stitch_in_plane")
 endif()
+# The in-plane compliance: the annulus error falls from level 5 to 6 and is within 4 % at 6
+# (the fem test's bound), and each level's build is timed.
+string(JSON n LENGTH "${json}" in_plane)
+if(NOT n EQUAL 2)
+  message(FATAL_ERROR "expected 2 in-plane levels, got ${n}")
+endif()
+string(JSON e5 GET "${json}" in_plane 0 annulus_error)
+string(JSON e6 GET "${json}" in_plane 1 annulus_error)
+if(NOT e6 LESS e5 OR e6 GREATER 0.04)
+  message(FATAL_ERROR "in-plane annulus error: level 5 ${e5}, level 6 ${e6}")
+endif()
+foreach(i 0 1)
+  string(JSON ms GET "${json}" in_plane ${i} stitch_ms)
+  if(NOT ms GREATER 0)
+    message(FATAL_ERROR "in_plane[${i}].stitch_ms ${ms}")
+  endif()
+endforeach()

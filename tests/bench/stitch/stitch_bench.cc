@@ -8,12 +8,17 @@
 //   off-diagonal entries against the rectangle's Green's function (the Navier point-load
 //   series), of the diagonal against that function on the contact disc's rim, and the largest
 //   asymmetry |C_ij − C_ji| / C_ij;
+// in_plane: the patch's in-plane (plane-stress) compliance (fem::CalcInPlaneCompliance) at the
+//   same levels, and level 9 in the full run: a rigid 1 mm disc in an annulus clamped at 8 mm,
+//   at the patch's centre, against Muskhelishvili's closed form (its solve time and error), and
+//   the stitch's 6 × 6 compliance (its build time, median of 3, and its largest difference from
+//   the finest level's, relative to the largest entry);
 // coupling: the scene's surgeon's knot (buttons 3, 2, the hands at rest) to the end of the hold,
 //   rigid (stitch_relax_s 0), at the scene's relaxation time and at others: the station step's
 //   median and p99 with their ratio to the rigid run's in the same run, the bite's displacement at
 //   the end, how far the low-passed loads trail the thread's (largest |load − force| over the
 //   largest |force|), the balance of the rods' loads against the hands' pull along the normal,
-//   and the knot named;
+//   and the knot named; at the scene's relaxation time also with knot_tying.stitch_in_plane on;
 // cut-through: the same tie with the hands pulling the held ends 0 … 5 mm further out
 //   (knot_tying.hold_pull_N_per_m sets the tension they then keep), with the scene's
 //   bite_tear_N and without it: the hands' tension at the end, the bite's largest low-passed
@@ -32,6 +37,7 @@
 
 #include "bench_registry.h"
 #include "bench_util.h"
+#include "common/fem/in_plane_compliance.h"
 #include "common/fem/navier.h"
 #include "common/fem/point_compliance.h"
 #include "common/knot/obj.h"
@@ -101,8 +107,44 @@ ComplianceRow MeasureCompliance(const scene::SceneModel& scene,
   return row;
 }
 
+struct InPlaneRow {
+  int level = 0;
+  double annulus_ms = 0;
+  double annulus_error = 0;  // |C_fem / C_exact − 1|
+  double stitch_ms = 0;
+  double stitch_difference = 0;  // max |C − C_finest| / max |C_finest|
+  Eigen::MatrixXd c_m_per_N;
+};
+
+InPlaneRow MeasureInPlane(const scene::SceneModel& scene, const station::StitchOnTissue& stitch,
+                          int level) {
+  const fem::TissueDef& def = scene.tissue->def;
+  const double a_m = 1e-3, r_m = 8e-3, u_m = 1e-4;
+  const Eigen::Vector2d centre(0.5 * def.length_x_m, 0.5 * def.length_y_m);
+  InPlaneRow row;
+  row.level = level;
+  std::vector<double> annulus_ms, stitch_ms;
+  for (int rep = 0; rep < 3; ++rep) {
+    auto t0 = Clock::now();
+    const fem::RigidDiscSolution disc = fem::SolveRigidDisc(def, level, centre, a_m, {u_m, 0}, r_m);
+    annulus_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    const double exact = fem::RigidDiscInAnnulusCompliance_m_per_N(
+        def.shear_modulus_Pa, def.poisson_ratio, def.thickness_m, a_m, r_m);
+    row.annulus_error = std::abs(u_m / disc.reaction_N.x() / exact - 1);
+    t0 = Clock::now();
+    row.c_m_per_N =
+        fem::CalcInPlaneCompliance(def, level, stitch.p_S, scene.tissue->contact_radius_m)
+            .c_m_per_N;
+    stitch_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
+  row.annulus_ms = Percentile(annulus_ms, 0.5);
+  row.stitch_ms = Percentile(stitch_ms, 0.5);
+  return row;
+}
+
 struct CouplingRow {
   double relax_s = 0;
+  bool in_plane = false;   // knot_tying.stitch_in_plane
   double hold_pull_m = 0;  // the hands' extra pull in the hold
   double tear_N = 0;       // knot_tying.bite_tear_N
   double hold_N = 0;       // the larger of the hands' pulls at the end
@@ -122,11 +164,13 @@ struct CouplingRow {
 };
 
 CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s, double hold_pull_m = 0,
-                            double tear_N = 0) {
+                            double tear_N = 0, bool in_plane = false) {
   scene.knot_tying->stitch_relax_s = relax_s;
   scene.knot_tying->bite_tear_N = tear_N;
+  scene.knot_tying->stitch_in_plane = in_plane;
   CouplingRow row;
   row.relax_s = relax_s;
+  row.in_plane = in_plane;
   row.hold_pull_m = hold_pull_m;
   row.tear_N = tear_N;
   try {
@@ -196,8 +240,9 @@ int Run(int argc, char** argv) {
   app.add_option("--scene", scene_path, "the knot-tying scene");
   std::string obj_dir;
   app.add_option("--obj-dir", obj_dir,
-                 "write each cut-through run's thread at the end as an OBJ polyline in the "
-                 "tissue's frame (cut_PULLmm_TEAR.obj), for microdex-bench knot and knots.tied");
+                 "write each coupling and cut-through run's thread at the end as an OBJ polyline "
+                 "in the tissue's frame (coupling_RELAXs[_in_plane].obj, cut_PULLmm_TEAR.obj), "
+                 "for microdex-bench knot and knots.tied");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -232,8 +277,12 @@ int Run(int argc, char** argv) {
   const double scene_tear_N = scene.knot_tying->bite_tear_N;
   const std::vector<double> pulls_m =
       quick ? std::vector<double>{3e-3} : std::vector<double>{0.0, 1e-3, 2e-3, 3e-3, 5e-3};
+  std::vector<int> in_plane_levels = levels;
+  if (!quick) in_plane_levels.push_back(9);
+  const bool in_plane_coupling = true;
   const int total =
-      static_cast<int>(levels.size() + relax.size() + (scene_tear_N > 0 ? 2 * pulls_m.size() : 0));
+      static_cast<int>(levels.size() + in_plane_levels.size() + relax.size() +
+                       (in_plane_coupling ? 1 : 0) + (scene_tear_N > 0 ? 2 * pulls_m.size() : 0));
   int done = 0;
   const auto start = Clock::now();
   std::vector<ComplianceRow> compliance;
@@ -241,9 +290,28 @@ int Run(int argc, char** argv) {
     compliance.push_back(MeasureCompliance(scene, *stitch, level));
     Progress("compliance", ++done, total, start);
   }
+  std::vector<InPlaneRow> in_plane;
+  try {
+    for (const int level : in_plane_levels) {
+      in_plane.push_back(MeasureInPlane(scene, *stitch, level));
+      Progress("in-plane", ++done, total, start);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "microdex-bench stitch: in-plane compliance: %s\n", e.what());
+    return 2;
+  }
+  const Eigen::MatrixXd& finest = in_plane.back().c_m_per_N;
+  for (InPlaneRow& r : in_plane) {
+    r.stitch_difference =
+        (r.c_m_per_N - finest).cwiseAbs().maxCoeff() / finest.cwiseAbs().maxCoeff();
+  }
   std::vector<CouplingRow> coupling;
   for (const double r : relax) {
     coupling.push_back(MeasureCoupling(scene, r));
+    Progress("coupling", ++done, total, start);
+  }
+  if (in_plane_coupling) {
+    coupling.push_back(MeasureCoupling(scene, scene_relax_s, 0, 0, true));
     Progress("coupling", ++done, total, start);
   }
   for (CouplingRow& c : coupling) {
@@ -261,20 +329,37 @@ int Run(int argc, char** argv) {
     cut.push_back(whole);
     cut.push_back(torn);
   }
-  for (const CouplingRow& r : obj_dir.empty() ? std::vector<CouplingRow>{} : cut) {
-    if (r.polyline.empty()) continue;
-    const std::string name = "cut_" + Fmt(r.hold_pull_m * 1e3) + "mm_" +
-                             (r.tear_N > 0 ? Fmt(r.tear_N * 1e3) + "mN" : "none") + ".obj";
-    try {
-      knot::WriteObjPolyline(
-          std::filesystem::path(obj_dir) / name, r.polyline,
-          {"microdex-bench stitch --obj-dir: " + scene_path + ", the surgeon's knot, the hands " +
-               Fmt(r.hold_pull_m * 1e3) + " mm further out in the hold, bite_tear_N " +
-               (r.tear_N > 0 ? Fmt(r.tear_N) : "0") + ": " + r.knot,
-           "the tissue's frame: surface z = 0, z out of the tissue, metres"});
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "microdex-bench stitch: --obj-dir: %s\n", e.what());
-      return 2;
+  if (!obj_dir.empty()) {
+    const auto write = [&](const CouplingRow& r, const std::string& name, const std::string& what) {
+      if (r.polyline.empty()) return true;
+      try {
+        knot::WriteObjPolyline(
+            std::filesystem::path(obj_dir) / name, r.polyline,
+            {"microdex-bench stitch --obj-dir: " + scene_path + ", " + what + ": " + r.knot,
+             "the tissue's frame: surface z = 0, z out of the tissue, metres"});
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "microdex-bench stitch: --obj-dir: %s\n", e.what());
+        return false;
+      }
+      return true;
+    };
+    for (const CouplingRow& r : coupling) {
+      const std::string tag = Fmt(r.relax_s) + "s" + (r.in_plane ? "_in_plane" : "");
+      if (!write(r, "coupling_" + tag + ".obj",
+                 "the surgeon's knot, the hands at rest, stitch_relax_s " + Fmt(r.relax_s) +
+                     (r.in_plane ? ", stitch_in_plane" : ""))) {
+        return 2;
+      }
+    }
+    for (const CouplingRow& r : cut) {
+      const std::string name = "cut_" + Fmt(r.hold_pull_m * 1e3) + "mm_" +
+                               (r.tear_N > 0 ? Fmt(r.tear_N * 1e3) + "mN" : "none") + ".obj";
+      if (!write(r, name,
+                 "the surgeon's knot, the hands " + Fmt(r.hold_pull_m * 1e3) +
+                     " mm further out in the hold, bite_tear_N " +
+                     (r.tear_N > 0 ? Fmt(r.tear_N) : "0"))) {
+        return 2;
+      }
     }
   }
   std::printf("compliance at the rods (%s)\n", scene_path.c_str());
@@ -284,19 +369,30 @@ int Run(int argc, char** argv) {
     std::printf("| %d | %.1f | %.2f %% | %.2f %% | %.2f %% |\n", r.level, r.build_ms,
                 100 * r.off_diagonal_error, 100 * r.diagonal_error, 100 * r.asymmetry);
   }
+  std::printf(
+      "\nin-plane compliance (a 1 mm disc in an annulus clamped at 8 mm against Muskhelishvili; "
+      "the stitch's 6 x 6 against level %d)\n",
+      in_plane.back().level);
+  std::printf("| level | annulus ms | annulus error | stitch ms | stitch difference |\n");
+  std::printf("|---|---|---|---|---|\n");
+  for (const InPlaneRow& r : in_plane) {
+    std::printf("| %d | %.1f | %.2f %% | %.1f | %.2f %% |\n", r.level, r.annulus_ms,
+                100 * r.annulus_error, r.stitch_ms, 100 * r.stitch_difference);
+  }
   std::printf("\ncoupling (surgeon's knot, hands at rest; step: the whole station step)\n");
   std::printf(
-      "| stitch_relax_s | step median us | p99 us | median / rigid | p99 / rigid | bite um | "
-      "trailing | balance | knot |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+      "| stitch_relax_s | in-plane | step median us | p99 us | median / rigid | p99 / rigid | "
+      "bite um | trailing | balance | knot |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const CouplingRow& r : coupling) {
     if (!r.error.empty()) {
-      std::printf("| %.3g | refused: %s |\n", r.relax_s, r.error.c_str());
+      std::printf("| %.3g | %s | refused: %s |\n", r.relax_s, r.in_plane ? "yes" : "no",
+                  r.error.c_str());
       continue;
     }
-    std::printf("| %.3g | %.1f | %.1f | %.3f | %.3f | %+.1f | %.3f | %.3f | %s |\n", r.relax_s,
-                r.step_median_us, r.step_p99_us, r.median_ratio, r.p99_ratio, r.bite_um, r.trailing,
-                r.balance, r.knot.c_str());
+    std::printf("| %.3g | %s | %.1f | %.1f | %.3f | %.3f | %+.1f | %.3f | %.3f | %s |\n", r.relax_s,
+                r.in_plane ? "yes" : "no", r.step_median_us, r.step_p99_us, r.median_ratio,
+                r.p99_ratio, r.bite_um, r.trailing, r.balance, r.knot.c_str());
   }
   if (!cut.empty()) {
     std::printf(
@@ -328,10 +424,18 @@ int Run(int argc, char** argv) {
           << ", \"diagonal_error\": " << r.diagonal_error << ", \"asymmetry\": " << r.asymmetry
           << "}";
     }
+    out << "], \"in_plane\": [";
+    for (std::size_t i = 0; i < in_plane.size(); ++i) {
+      const InPlaneRow& r = in_plane[i];
+      out << (i ? ", " : "") << "{\"level\": " << r.level << ", \"annulus_ms\": " << r.annulus_ms
+          << ", \"annulus_error\": " << r.annulus_error << ", \"stitch_ms\": " << r.stitch_ms
+          << ", \"stitch_difference\": " << r.stitch_difference << "}";
+    }
     out << "], \"coupling\": [";
     for (std::size_t i = 0; i < coupling.size(); ++i) {
       const CouplingRow& r = coupling[i];
       out << (i ? ", " : "") << "{\"stitch_relax_s\": " << r.relax_s
+          << ", \"in_plane\": " << (r.in_plane ? "true" : "false")
           << ", \"step_median_us\": " << r.step_median_us << ", \"step_p99_us\": " << r.step_p99_us
           << ", \"median_ratio\": " << r.median_ratio << ", \"p99_ratio\": " << r.p99_ratio
           << ", \"bite_um\": " << r.bite_um << ", \"trailing\": " << r.trailing

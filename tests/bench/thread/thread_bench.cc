@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "common/base/json_text.h"
 #include "common/knot/obj.h"
 #include "common/thread/grasp.h"
 #include "common/thread/sphere_bvh.h"
@@ -60,12 +61,7 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-std::string Num(double x) {
-  if (!std::isfinite(x)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.6g", x);
-  return buf;
-}
+std::string Num(double v) { return JsonNumber(v, 6); }
 
 void WriteFile(const std::string& path, const std::string& text) {
   std::ofstream out(path);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 
+#include "common/base/json_text.h"
 #include "common/scene/scene.h"
 #include "common/view/scene_view.h"
 
