@@ -10,7 +10,9 @@ namespace microdex::station {
 KnotQuizModule::KnotQuizModule(const scene::SceneModel& scene) : items_(scene.knots->items) {
   for (std::size_t i = 0; i < items_.size(); ++i) {
     shapes_.push_back(scene.knots->ItemShape(i));
-    const knot::StitchKnotType seen = knot::RecogniseStitchKnot(shapes_.back());
+    knot::StitchKnotOptions options;
+    options.thread_diameter_m = scene.knots->ItemThreadDiameter(i);
+    const knot::StitchKnotType seen = knot::RecogniseStitchKnot(shapes_.back(), options);
     if (seen != items_[i]) {
       throw std::runtime_error(scene.path + ": knots.items[" + std::to_string(i) + "]: the " +
                                std::string(knot::StitchKnotName(items_[i])) +

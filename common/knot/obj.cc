@@ -1,6 +1,7 @@
 #include "common/knot/obj.h"
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -24,6 +25,8 @@ bool ParseInt(std::string_view token, long* out) {
   return ec == std::errc() && ptr == token.data() + token.size();
 }
 
+constexpr const char* kDiameterKey = "thread_diameter_m";
+
 struct LineElement {
   int line = 0;
   std::vector<int> indices;  // 0-based
@@ -31,9 +34,11 @@ struct LineElement {
 
 }  // namespace
 
-std::vector<Eigen::Vector3d> ReadObjPolyline(const std::filesystem::path& path) {
+std::vector<Eigen::Vector3d> ReadObjPolyline(const std::filesystem::path& path,
+                                             double* thread_diameter_m) {
   std::ifstream in(path);
   if (!in) Fail(path, 0, "cannot open file");
+  double diameter_m = 0.0;
   std::vector<Eigen::Vector3d> vertices;
   std::vector<LineElement> elements;
   std::string text;
@@ -43,7 +48,19 @@ std::vector<Eigen::Vector3d> ReadObjPolyline(const std::filesystem::path& path) 
     if (!text.empty() && text.back() == '\r') text.pop_back();
     std::istringstream tokens(text);
     std::string keyword;
-    if (!(tokens >> keyword) || keyword[0] == '#') continue;
+    if (!(tokens >> keyword)) continue;
+    if (keyword == "#") {
+      std::string name, token, extra;
+      if (tokens >> name && name == kDiameterKey) {
+        if (!(tokens >> token) || !ParseDouble(token, &diameter_m) || !std::isfinite(diameter_m) ||
+            !(diameter_m > 0.0) || tokens >> extra) {
+          Fail(path, line_no,
+               std::string("malformed '# ") + kDiameterKey + " D', expected one positive number");
+        }
+      }
+      continue;
+    }
+    if (keyword[0] == '#') continue;
     if (keyword == "v") {
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) {
@@ -112,15 +129,20 @@ std::vector<Eigen::Vector3d> ReadObjPolyline(const std::filesystem::path& path) 
   std::vector<Eigen::Vector3d> nodes;
   nodes.reserve(chain.size());
   for (int i : chain) nodes.push_back(vertices[i]);
+  if (thread_diameter_m != nullptr) *thread_diameter_m = diameter_m;
   return nodes;
 }
 
 void WriteObjPolyline(const std::filesystem::path& path, std::span<const Eigen::Vector3d> nodes,
-                      const std::vector<std::string>& comment) {
+                      const std::vector<std::string>& comment, double thread_diameter_m) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path.string() + ": cannot write file");
   for (const auto& c : comment) out << "# " << c << "\n";
   char buffer[128];
+  if (thread_diameter_m > 0.0) {
+    std::snprintf(buffer, sizeof(buffer), "# %s %.9g\n", kDiameterKey, thread_diameter_m);
+    out << buffer;
+  }
   for (const auto& p : nodes) {
     std::snprintf(buffer, sizeof(buffer), "v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
     out << buffer;

@@ -341,9 +341,10 @@ SceneModel ReadScene(const YamlReader& reader) {
       for (const char* name : {"square", "granny", "surgeons", "slip", "half-hitch"}) {
         if (!tied->Has(name)) continue;
         const std::string file = ResolveBeside(s.path, tied->String(name, ""));
+        double diameter_m = 0.0;
         try {
           std::vector<Eigen::Vector3d> shape =
-              knot::CropStitchTails(knot::ReadObjPolyline(file), kTiedRadius_m);
+              knot::CropStitchTails(knot::ReadObjPolyline(file, &diameter_m), kTiedRadius_m);
           Eigen::Vector3d lo = shape.front(), hi = shape.front();
           for (const Eigen::Vector3d& p : shape) {
             lo = lo.cwiseMin(p);
@@ -351,12 +352,15 @@ SceneModel ReadScene(const YamlReader& reader) {
           }
           const Eigen::Vector3d centre(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.0);
           for (Eigen::Vector3d& p : shape) p = kTiedScale * (p - centre);
-          d.tied.emplace_back(*knot::StitchKnotTypeFromName(name), std::move(shape));
+          d.tied.push_back(
+              {*knot::StitchKnotTypeFromName(name), std::move(shape), kTiedScale * diameter_m});
         } catch (const std::exception& e) {
           tied->Fail(name, e.what());
         }
-        const knot::StitchKnotType seen = knot::RecogniseStitchKnot(d.tied.back().second);
-        if (seen != d.tied.back().first) {
+        knot::StitchKnotOptions options;
+        options.thread_diameter_m = d.tied.back().thread_diameter_m;
+        const knot::StitchKnotType seen = knot::RecogniseStitchKnot(d.tied.back().shape, options);
+        if (seen != d.tied.back().type) {
           tied->Fail(name, file + ": recognised as " + std::string(knot::StitchKnotName(seen)));
         }
       }
@@ -534,17 +538,25 @@ TaskKind ParseTaskKind(const std::string& text) {
 
 std::vector<Eigen::Vector3d> KnotQuizSceneDef::ItemShape(std::size_t i) const {
   const knot::StitchKnotType type = items.at(i);
-  for (const auto& [kind, shape] : tied) {
-    if (kind != type) continue;
+  for (const TiedKnot& t : tied) {
+    if (t.type != type) continue;
     const auto before =
         std::count(items.begin(), items.begin() + static_cast<std::ptrdiff_t>(i), type);
-    std::vector<Eigen::Vector3d> out = shape;
+    std::vector<Eigen::Vector3d> out = t.shape;
     if (before % 2 == 1) {
       for (Eigen::Vector3d& p : out) p.x() = -p.x();
     }
     return out;
   }
   return knot::MakeStitchKnot(knot::QuizItemShapeDef(type, i, thread_diameter_m));
+}
+
+double KnotQuizSceneDef::ItemThreadDiameter(std::size_t i) const {
+  const knot::StitchKnotType type = items.at(i);
+  for (const TiedKnot& t : tied) {
+    if (t.type == type) return t.thread_diameter_m;
+  }
+  return thread_diameter_m;
 }
 
 Eigen::Isometry3d CalcWireCoursePose(const geometry::WireDef& wire, double fraction) {

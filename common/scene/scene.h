@@ -174,12 +174,23 @@ struct KnotQuizSceneDef {
   std::vector<knot::StitchKnotType> items;  // shown in this order
   double thread_diameter_m = 30e-6;         // 10-0 nylon
   // Knots tied by the thread module around a stitch (`knots.tied`: class -> OBJ polyline in
-  // the tissue's frame, written by microdex-bench thread --tie ... --stitch --obj), read at
-  // load. A class without one is drawn parametrically (knot::QuizItemShapeDef).
-  std::vector<std::pair<knot::StitchKnotType, std::vector<Eigen::Vector3d>>> tied;
+  // the tissue's frame, written by microdex-bench thread --tie ... --stitch --obj or
+  // microdex-bench stitch --obj-dir), read at load. A class without one is drawn
+  // parametrically (knot::QuizItemShapeDef).
+  struct TiedKnot {
+    knot::StitchKnotType type = knot::StitchKnotType::kNone;
+    std::vector<Eigen::Vector3d> shape;  // cropped, centred and scaled for the view
+    // The file's thread diameter (`# thread_diameter_m`, knot/obj.h) at the shape's scale;
+    // 0 for a file without one (the recogniser then takes the median link).
+    double thread_diameter_m = 0.0;
+  };
+  std::vector<TiedKnot> tied;
   // The thread shown as item i: the tied knot of its class (its mirror image, x -> -x, for
   // every second item of that class), or the parametric shape.
   std::vector<Eigen::Vector3d> ItemShape(std::size_t i) const;
+  // The diameter to recognise item i's shape with (knot::StitchKnotOptions): the tied knot's,
+  // or thread_diameter_m for a parametric shape.
+  double ItemThreadDiameter(std::size_t i) const;
 };
 
 // Knot placement (station "placement" module, thesis §2.2: "microsurgeons place knots evenly

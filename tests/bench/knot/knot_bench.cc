@@ -31,11 +31,12 @@ namespace shapes = knot::shapes;
 constexpr double kDiameter_m = 3e-5;
 
 // The class of the knot tied around the stitch of a thread through the tissue.
+// diameter_m: the thread's (the file's or --thread-diameter); 0, the median link.
 int PrintStitchKnot(const std::string& path, const std::vector<Eigen::Vector3d>& nodes,
-                    bool verbose) {
+                    double diameter_m, bool verbose) {
   knot::StitchKnotAnalysis a;
   try {
-    a = knot::AnalyzeStitchKnot(nodes, {.full_evidence = verbose});
+    a = knot::AnalyzeStitchKnot(nodes, {.thread_diameter_m = diameter_m, .full_evidence = verbose});
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "microdex-bench knot: %s: %s\n", path.c_str(), e.what());
     return 2;
@@ -43,12 +44,12 @@ int PrintStitchKnot(const std::string& path, const std::vector<Eigen::Vector3d>&
   std::printf("%s\n", std::string(knot::StitchKnotName(a.type)).c_str());
   if (verbose) {
     std::fprintf(stderr,
-                 "stitch: nodes %zu, below the tissue %d..%d, diameter %.3g m, total twist %.3f "
-                 "turns, Gauss linking %.3f, closure %s%s%s\n",
+                 "stitch: nodes %zu, below the tissue %d..%d, diameter %.3g m (%s), total twist "
+                 "%.3f turns, Gauss linking %.3f, closure %s%s%s\n",
                  nodes.size(), a.first_below, a.last_below, a.thread_diameter_m,
-                 a.total_twist_turns, a.gauss_linking,
-                 std::string(knot::KnotName(a.closure)).c_str(), a.reason.empty() ? "" : ", ",
-                 a.reason.c_str());
+                 diameter_m > 0 ? "the thread's" : "the median link", a.total_twist_turns,
+                 a.gauss_linking, std::string(knot::KnotName(a.closure)).c_str(),
+                 a.reason.empty() ? "" : ", ", a.reason.c_str());
     for (std::size_t i = 0; i < a.throws.size(); ++i) {
       const knot::StitchThrow& t = a.throws[i];
       std::fprintf(
@@ -63,15 +64,20 @@ int PrintStitchKnot(const std::string& path, const std::vector<Eigen::Vector3d>&
   return 0;
 }
 
-int PrintKnot(const std::string& path, bool verbose) {
+// thread_diameter_m > 0 overrides the file's diameter.
+int PrintKnot(const std::string& path, double thread_diameter_m, bool verbose) {
   std::vector<Eigen::Vector3d> nodes;
+  double file_diameter_m = 0.0;
   try {
-    nodes = knot::ReadObjPolyline(path);
+    nodes = knot::ReadObjPolyline(path, &file_diameter_m);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "microdex-bench knot: %s\n", e.what());
     return 2;
   }
-  if (knot::IsStitchPolyline(nodes)) return PrintStitchKnot(path, nodes, verbose);
+  if (knot::IsStitchPolyline(nodes)) {
+    return PrintStitchKnot(path, nodes, thread_diameter_m > 0 ? thread_diameter_m : file_diameter_m,
+                           verbose);
+  }
   knot::KnotAnalysis a;
   try {
     a = knot::AnalyzeKnot(nodes, {.locate = verbose});
@@ -263,6 +269,11 @@ int RunKnot(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--speed", speed, "time recognition on reference threads instead");
   app.add_flag("--verbose,-v", verbose, "print the invariants and the knotted core on stderr");
+  double thread_diameter_m = 0.0;
+  app.add_option("--thread-diameter", thread_diameter_m,
+                 "a knot around a stitch: the thread's diameter in metres (default: the file's "
+                 "'# thread_diameter_m', else the median link)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--nodes", sizes, "--speed: thread sizes")->check(CLI::Range(8, 100000));
   app.add_option("--repeats", repeats, "--speed: runs per median")->check(CLI::Range(1, 10000));
   app.add_option("--json", json, "--speed: write the runs as JSON");
@@ -278,7 +289,7 @@ int RunKnot(int argc, char** argv) {
     std::fprintf(stderr, "microdex-bench knot: expected FILE.obj (or --speed)\n");
     return 2;
   }
-  return PrintKnot(file, verbose);
+  return PrintKnot(file, thread_diameter_m, verbose);
 }
 
 }  // namespace

@@ -333,10 +333,12 @@ int Run(int argc, char** argv) {
     const auto write = [&](const CouplingRow& r, const std::string& name, const std::string& what) {
       if (r.polyline.empty()) return true;
       try {
-        knot::WriteObjPolyline(
-            std::filesystem::path(obj_dir) / name, r.polyline,
-            {"microdex-bench stitch --obj-dir: " + scene_path + ", " + what + ": " + r.knot,
-             "the tissue's frame: surface z = 0, z out of the tissue, metres"});
+        knot::WriteObjPolyline(std::filesystem::path(obj_dir) / name, r.polyline,
+                               {"microdex-bench stitch --obj-dir: " +
+                                    std::filesystem::path(scene_path).filename().string() + ", " +
+                                    what + ": " + r.knot,
+                                "the tissue's frame: surface z = 0, z out of the tissue, metres"},
+                               scene.thread->def.diameter_m);
       } catch (const std::exception& e) {
         std::fprintf(stderr, "microdex-bench stitch: --obj-dir: %s\n", e.what());
         return false;

@@ -547,7 +547,8 @@ int RunTie(const std::string& spec, int nodes, bool force_limited_pull, double p
         {"microdex-bench thread --tie " + spec + " --nodes " + std::to_string(nodes) + " --stitch" +
              (force_limited_pull ? " --force-limited-pull" : "") + " --pull-tension " +
              Num(pull_tension_N) + ": " + r.knot,
-         "the tissue's frame: surface z = 0, the first puncture at x = 0, metres"});
+         "the tissue's frame: surface z = 0, the first puncture at x = 0, metres"},
+        def.diameter_m);
   } else if (!obj.empty()) {
     std::ostringstream out;
     out << "o thread\n";

@@ -38,6 +38,28 @@ TEST(KnotObjTest, RoundTrip) {
   }
 }
 
+TEST(KnotObjTest, TheThreadDiameterTravelsAsItsOwnComment) {
+  const std::vector<Eigen::Vector3d> nodes = {{0, 0, 0}, {1e-4, 0, 0}, {2e-4, 0, 0}};
+  const auto path = std::filesystem::temp_directory_path() / "microdex_knot_obj_diameter.obj";
+  WriteObjPolyline(path, nodes, {"a comment"}, 2.5e-5);
+  double d = -1;
+  EXPECT_EQ(ReadObjPolyline(path, &d).size(), 3u);
+  EXPECT_DOUBLE_EQ(d, 2.5e-5);
+  // Without one, 0; a comment that only mentions it is not it.
+  WriteObjPolyline(path, nodes, {"the thread_diameter_m 3e-5 line is absent"});
+  EXPECT_EQ(ReadObjPolyline(path, &d).size(), 3u);
+  EXPECT_EQ(d, 0.0);
+  // A malformed one names the file and the line.
+  for (const char* bad : {"# thread_diameter_m\n", "# thread_diameter_m -1e-5\n",
+                          "# thread_diameter_m nan\n", "# thread_diameter_m 2e-5 m\n"}) {
+    const auto bad_path =
+        WriteTemp("bad_diameter.obj", std::string("v 0 0 0\n") + bad + "v 1 0 0\nl 1 2\n");
+    const std::string e = ErrorOf(bad_path);
+    EXPECT_NE(e.find("bad_diameter.obj:2: malformed '# thread_diameter_m D'"), std::string::npos)
+        << bad << ": " << e;
+  }
+}
+
 TEST(KnotObjTest, ExporterForms) {
   // One element per segment, out of order and reversed, with v/vt forms, negative indices,
   // CRLF line ends and unrelated statements.

@@ -21,28 +21,36 @@ scene::SceneModel QuizScene() {
                           "/assets/scenes/knot_topology.yaml");
 }
 
-// The square, granny and surgeon's knots and the half hitches shown are the ones tied by the
-// thread module around a stitch (assets/knots, 193 nodes), read from the closure: tied, not
-// twisted pairs (a half hitch's closure is a trefoil); the second item of a class is the mirror
-// image of the first. A tied knot's file that is missing is named
-// with the scene's file, line and field.
+// Every knot shown is one tied by the thread module around a stitch (assets/knots, 193 nodes),
+// read with the thread's own diameter (the files' `# thread_diameter_m`, at the shape's
+// scale): the square, granny and surgeon's knots and the half hitches from the closure (tied,
+// not twisted pairs; a half hitch's closure is a trefoil); the slip knots as two half hitches
+// on one straight strand, the post (a square knot capsized: its closure is still the square
+// knot); the second item of a class is the mirror image of the first. A tied knot's file
+// that is missing is named with the scene's file, line and field.
 TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
   const scene::SceneModel scene = QuizScene();
   const auto& items = scene.knots->items;
   int tied = 0;
   for (std::size_t i = 0; i < items.size(); ++i) {
-    if (items[i] != knot::StitchKnotType::kSquare && items[i] != knot::StitchKnotType::kGranny &&
-        items[i] != knot::StitchKnotType::kSurgeons &&
-        items[i] != knot::StitchKnotType::kHalfHitch) {
-      continue;
-    }
     const std::vector<Eigen::Vector3d> shape = scene.knots->ItemShape(i);
-    const knot::StitchKnotAnalysis a = knot::AnalyzeStitchKnot(shape);
-    EXPECT_TRUE(a.from_closure) << i;
+    knot::StitchKnotOptions options;
+    options.thread_diameter_m = scene.knots->ItemThreadDiameter(i);
+    // 25 um nylon drawn 2.5 times its size.
+    EXPECT_NEAR(options.thread_diameter_m, 62.5e-6, 1e-12) << i;
+    const knot::StitchKnotAnalysis a = knot::AnalyzeStitchKnot(shape, options);
     EXPECT_EQ(a.type, items[i]) << i;
+    if (items[i] == knot::StitchKnotType::kSlip) {
+      EXPECT_EQ(a.closure, knot::KnotType::kSquare) << i;
+      ASSERT_EQ(a.throws.size(), 2u) << i;
+      EXPECT_TRUE(a.throws[0].hitch && a.throws[1].hitch) << i;
+      EXPECT_EQ(a.throws[0].post_strand, a.throws[1].post_strand) << i;
+      EXPECT_EQ(a.throws[0].hand, -a.throws[1].hand) << i << ": a lark's head, opposite senses";
+    }
+    EXPECT_TRUE(a.from_closure) << i;
     ++tied;
   }
-  EXPECT_EQ(tied, 8);
+  EXPECT_EQ(tied, 10);
   const std::vector<Eigen::Vector3d> first = scene.knots->ItemShape(0);   // square
   const std::vector<Eigen::Vector3d> second = scene.knots->ItemShape(6);  // square again
   ASSERT_EQ(first.size(), second.size());
@@ -69,7 +77,9 @@ TEST(KnotQuizModule, ShowsRecognisedKnotsAndCountsAnswers) {
   KnotQuizModule m(scene);
   const auto& items = scene.knots->items;
   for (std::size_t i = 0; i < items.size(); ++i) {
-    EXPECT_EQ(knot::RecogniseStitchKnot(m.shape(i)), items[i]) << i;
+    knot::StitchKnotOptions options;
+    options.thread_diameter_m = scene.knots->ItemThreadDiameter(i);
+    EXPECT_EQ(knot::RecogniseStitchKnot(m.shape(i), options), items[i]) << i;
   }
   state::StationState s;
   m.InitState(s);
