@@ -44,4 +44,19 @@ void Progress(const char* what, int done, int total, std::chrono::steady_clock::
   if (done == total) std::fprintf(stderr, "\n");
 }
 
+ProgressLine::ProgressLine(int total) : total_(total), tty_(isatty(STDERR_FILENO) != 0) {}
+
+void ProgressLine::Step(const std::string& what) {
+  ++done_;
+  if (!tty_) return;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double eta = s * (total_ - done_) / done_;
+  std::fprintf(stderr, "\r[%d/%d] %-40s ETA %4.0f s   ", done_, total_, what.c_str(), eta);
+}
+
+void ProgressLine::Finish() {
+  if (tty_) std::fprintf(stderr, "\r%*s\r", 72, "");
+  tty_ = false;
+}
+
 }  // namespace microdex::bench

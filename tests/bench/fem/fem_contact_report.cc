@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_util.h"
 #include "common/base/json_text.h"
 #include "common/fem/navier.h"
 #include "common/fem/tissue_step.h"
@@ -28,24 +29,6 @@ constexpr double kTurn_rad_per_s = 1.0;     // rotation of the continuity test
 constexpr double kStep_s = 1e-3;            // haptic rate
 constexpr double kJumpForceFloor = 1e-4;    // of the force, added to 3× the reference change
 constexpr double kJumpReferenceFactor = 3;  // the issue's bound on a step's change
-
-// Progress on stderr: stage, elapsed time and a linear estimate of the rest.
-class Progress {
- public:
-  explicit Progress(int total) : total_(total), start_(std::chrono::steady_clock::now()) {}
-  void Done(const std::string& what) {
-    ++done_;
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const double eta = done_ < total_ ? elapsed / done_ * (total_ - done_) : 0.0;
-    std::fprintf(stderr, "fem contact [%d/%d] %s  (%.0f s, ETA %.0f s)\n", done_, total_,
-                 what.c_str(), elapsed, eta);
-  }
-
- private:
-  int total_, done_ = 0;
-  std::chrono::steady_clock::time_point start_;
-};
 
 TissueDef ContactDef(int level, MeshKind mesh, ToolConstraint constraint, SolverKind solver) {
   TissueDef def;
@@ -146,7 +129,7 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
   const int num_random = options.quick ? 3 : 12;
   const int steps = options.quick ? 40 : 400;
   const int reference_stride = options.quick ? 20 : 50;
-  Progress progress(num_random + (options.quick ? 0 : 4) + 2);
+  bench::ProgressLine progress(num_random + (options.quick ? 0 : 4) + 2);
 
   // 1. Axis-aligned bars at seeded random positions against Navier.
   std::mt19937_64 rng(kSeed);
@@ -182,7 +165,7 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
           ", \"resultant_force_error\": " + JsonNumber(err[0]) +
           ", \"nearest_nodes_force_error\": " + JsonNumber(err[1]) + "}";
     }
-    progress.Done("random bar R" + std::to_string(c));
+    progress.Step("random bar R" + std::to_string(c));
   }
   report.off_grid += "]";
   std::fprintf(stderr,
@@ -235,7 +218,7 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
             ", \"reference_error_vs_navier\": " +
             JsonNumber(std::abs(ref.value_N - s.navier_N) / s.navier_N) + "}";
       }
-      progress.Done(std::string("Richardson reference ") + s.name);
+      progress.Step(std::string("Richardson reference ") + s.name);
     }
   }
   report.tilted += "]";
@@ -305,7 +288,7 @@ ContactReport RunContactReport(const ContactReportOptions& options) {
     } else {
       ScoreMotion(m);
     }
-    progress.Done("continuity " + m.name);
+    progress.Step("continuity " + m.name);
     std::fprintf(stderr,
                  "continuity %s L%d: max step change %.2e of F (penalty points), %.2e (nearest "
                  "nodes), reference %.2e; over the bound 3|dF_ref| + 1e-4 F: %.2f, %.2f\n",

@@ -6,7 +6,6 @@
 // (centre within R of the axis, tilted up to 60° from the tangent) and far from it (3–30 R).
 // Also: the segment–circle minimum by the stationary-point quartic (quartic.h) against the
 // bracketed solver on near-degenerate segments.
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -20,6 +19,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "bench_util.h"
 #include "common/geometry/loop_wire.h"
 #include "common/geometry/loop_wire_mesh.h"
 #include "common/geometry/loop_wire_sampled.h"
@@ -70,44 +70,6 @@ struct Measure {
   double contact_agreement = 1;  // fraction of queries with the reference's contact flag
 };
 
-class Progress {
- public:
-  explicit Progress(int total) : total_(total), tty_(isatty(STDERR_FILENO) != 0) {}
-  void Step(const std::string& what) {
-    ++done_;
-    if (!tty_) return;
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
-    const double eta = elapsed * (static_cast<double>(total_) / done_ - 1);
-    std::fprintf(stderr, "\r[%d/%d] %-40s ETA %4.0f s   ", done_, total_, what.c_str(), eta);
-  }
-  // Clears the progress line.
-  void Finish() {
-    if (tty_) std::fprintf(stderr, "\r%*s\r", 72, "");
-    tty_ = false;
-  }
-  ~Progress() { Finish(); }
-
- private:
-  int total_, done_ = 0;
-  bool tty_;
-  Clock::time_point start_ = Clock::now();
-};
-
-template <typename Fn>
-double MedianNsPerQuery(int queries, int reps, double budget_s, Fn&& fn) {
-  std::vector<double> per_rep;
-  const auto start = Clock::now();
-  for (int rep = 0; rep < reps; ++rep) {
-    const auto t0 = Clock::now();
-    for (int i = 0; i < queries; ++i) fn(i);
-    const auto t1 = Clock::now();
-    per_rep.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / queries);
-    if (rep >= 2 && std::chrono::duration<double>(t1 - start).count() > budget_s) break;
-  }
-  std::nth_element(per_rep.begin(), per_rep.begin() + per_rep.size() / 2, per_rep.end());
-  return per_rep[per_rep.size() / 2];
-}
-
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -115,7 +77,7 @@ double Median(std::vector<double> v) {
 }
 
 Family MakeFamily(bool threaded, int n, std::mt19937_64& rng, const geometry::LoopDef& loop,
-                  const geometry::WireDef& wire, Progress* progress) {
+                  const geometry::WireDef& wire, ProgressLine* progress) {
   const geometry::testing::RandomLoopWire scene{loop, wire};
   const LoopWireModel model(loop, wire);
   Family f;
@@ -251,7 +213,7 @@ int RunReport(const Options& opt) {
     meshes.push_back({256, 64, 64});
   }
   const int methods = 1 + static_cast<int>(samples.size() + meshes.size());
-  Progress progress(2 * (n / 50) + 2 * methods + 1);
+  ProgressLine progress(2 * (n / 50) + 2 * methods + 1);
   std::mt19937_64 rng(opt.seed);
   std::vector<Family> families;
   families.push_back(MakeFamily(true, n, rng, loop, wire, &progress));

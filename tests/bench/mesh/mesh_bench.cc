@@ -6,7 +6,6 @@
 //      (0.5 mm and 0.8 mm radius, centres 3 mm apart, random orientations) against the analytic
 //      distance, per resolution: the worst error and the median query time, with the BVHs built
 //      in millimetres (length_scale 1e3, as mesh_fcl.h advises) and in metres (1).
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
@@ -21,6 +20,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "bench_util.h"
 #include "common/mesh/mesh_fcl.h"
 #include "common/mesh/mesh_io.h"
 #include "common/mesh/primitives.h"
@@ -40,29 +40,6 @@ double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
-
-// Progress with an ETA on stderr when it is a terminal.
-class Progress {
- public:
-  explicit Progress(int total) : total_(total), start_ns_(NowNs()), tty_(isatty(STDERR_FILENO)) {}
-  void Step(const std::string& what) {
-    ++done_;
-    if (!tty_) return;
-    const double fraction = static_cast<double>(done_) / total_;
-    const double eta_s = (NowNs() - start_ns_) * 1e-9 * (1 / fraction - 1);
-    std::fprintf(stderr, "\r[%d/%d] %-32s ETA %.0f s   ", done_, total_, what.c_str(), eta_s);
-  }
-  ~Progress() {
-    if (tty_) std::fprintf(stderr, "\r%*s\r", 70, "");
-  }
-  Progress(const Progress&) = delete;
-  Progress& operator=(const Progress&) = delete;
-
- private:
-  int total_, done_ = 0;
-  double start_ns_;
-  bool tty_;
-};
 
 struct AssetResult {
   std::string file;
@@ -166,7 +143,7 @@ int RunMesh(int argc, char** argv) {
   std::vector<AssetResult> asset_results;
   std::vector<SphereResult> sphere_results;
   try {
-    Progress progress(static_cast<int>(assets.size() + resolutions.size() * scales.size()));
+    ProgressLine progress(static_cast<int>(assets.size() + resolutions.size() * scales.size()));
     for (const meshgen::SceneAsset& asset : assets) {
       asset_results.push_back(MeasureAsset(dir, asset, repeats));
       progress.Step(asset.file);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench_registry.h"
+#include "bench_util.h"
 #include "common/base/json_text.h"
 #include "common/geometry/arc_torus.h"
 #include "common/geometry/arc_torus_exact.h"
@@ -284,23 +285,6 @@ struct MethodResult {
 };
 
 using Clock = std::chrono::steady_clock;
-
-// Median over repetitions of the mean time per query; a repetition is one pass over all
-// queries. Slow methods get fewer repetitions (at least 3) within a time budget.
-template <typename Fn>
-double MedianNsPerQuery(int queries, int reps, double budget_s, Fn&& fn) {
-  std::vector<double> per_rep;
-  const auto start = Clock::now();
-  for (int rep = 0; rep < reps; ++rep) {
-    const auto t0 = Clock::now();
-    for (int i = 0; i < queries; ++i) fn(i);
-    const auto t1 = Clock::now();
-    per_rep.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / queries);
-    if (rep >= 2 && std::chrono::duration<double>(t1 - start).count() > budget_s) break;
-  }
-  std::nth_element(per_rep.begin(), per_rep.begin() + per_rep.size() / 2, per_rep.end());
-  return per_rep[per_rep.size() / 2];
-}
 
 // Whether the exact deepest point of a query is well defined: every needle point inside the
 // segment farther than `radius_m` (along the needle) from it is shallower by more than
