@@ -163,8 +163,15 @@ std::string SceneViewJson(const scene::SceneModel& s) {
     j << "],\"surface_y\":" << Num(s.knot_tying->surface_y_m) << "}";
   }
   if (s.knots) {
-    j << ",\"knots\":{\"radius\":" << Num(s.knots->thread_diameter_m / 2)
-      << ",\"items\":" << KnotItems(*s.knots) << "}";
+    // The thread as drawn: a tied knot's diameter at its drawing scale (the largest, for one
+    // tube), else the parametric shapes'.
+    double diameter_m = 0;
+    for (std::size_t i = 0; i < s.knots->items.size(); ++i) {
+      diameter_m = std::max(diameter_m, s.knots->ItemThreadDiameter(i));
+    }
+    if (!(diameter_m > 0)) diameter_m = s.knots->thread_diameter_m;
+    j << ",\"knots\":{\"radius\":" << Num(diameter_m / 2) << ",\"items\":" << KnotItems(*s.knots)
+      << "}";
   }
   j << "}";
   return j.str();

@@ -170,6 +170,13 @@ TEST(SceneView, JsonHasTheSceneShapes) {
   EXPECT_NE(jn.find("\"needle\":{\"radius\":"), std::string::npos);
 }
 
+TEST(SceneView, TheQuizsKnotsAreDrawnWithTheirThreadsDiameter) {
+  // The tied knots' 25 um nylon, drawn 2.5 times its size: a tube of 31.25 um radius, not the
+  // parametric shapes' 15 um.
+  const scene::SceneModel s = scene::LoadScene("assets/scenes/knot_topology.yaml");
+  EXPECT_NE(SceneViewJson(s).find("\"knots\":{\"radius\":3.125e-05,"), std::string::npos);
+}
+
 TEST(SceneView, JsonNumberDigitsAndNonFinite) {
   EXPECT_EQ(JsonNumber(0.123456789012), "0.123456789");
   EXPECT_EQ(JsonNumber(0.123456789012, 6), "0.123457");
