@@ -278,20 +278,35 @@ TEST(HapticLoop, TrainingSceneTicksNeverAllocate) {
 
 // Knot tying inside the tick: the throws chosen, each throw's script built in the state and
 // stepped, the ends' roles swapped, the hold started and run, and the task ended, with no
-// allocation after warm-up (an expert trainee, whose choices come within the first 6 s).
+// allocation after warm-up (an expert trainee, whose choices come within the first 6 s); also
+// with the stitch moving in the patch's plane (knot_tying.stitch_in_plane, off in the scene).
 TEST(HapticLoop, KnotTyingTicksNeverAllocate) {
-  SceneRig rig(scene::LoadScene(SceneFile("knot_tying.yaml")), 1.0);
-  rig.Steps(500);
-  ASSERT_EQ(rig.loop.state().thread->tie.started, 0) << "a throw started during the warm-up";
-  std::atomic<bool> stop{false};
-  testing::StartCountingAllocations();
-  rig.loop.Run(stop, rig.loop.step() + 20000);
-  const std::uint64_t allocations = testing::StopCountingAllocations();
-  EXPECT_EQ(allocations, 0u);
-  const state::KnotTieState& tie = rig.loop.state().thread->tie;
-  EXPECT_EQ(tie.pulled, 2);
-  EXPECT_EQ(tie.done, 1);
-  EXPECT_EQ(rig.loop.state().score.outcome, 1);
+  for (const bool in_plane : {false, true}) {
+    SCOPED_TRACE(in_plane ? "stitch_in_plane" : "normal only");
+    scene::SceneModel scene = scene::LoadScene(SceneFile("knot_tying.yaml"));
+    scene.knot_tying->stitch_in_plane = in_plane;
+    SceneRig rig(std::move(scene), 1.0);
+    rig.Steps(500);
+    ASSERT_EQ(rig.loop.state().thread->tie.started, 0) << "a throw started during the warm-up";
+    std::atomic<bool> stop{false};
+    testing::StartCountingAllocations();
+    rig.loop.Run(stop, rig.loop.step() + 20000);
+    const std::uint64_t allocations = testing::StopCountingAllocations();
+    EXPECT_EQ(allocations, 0u);
+    const state::KnotTieState& tie = rig.loop.state().thread->tie;
+    EXPECT_EQ(tie.pulled, 2);
+    EXPECT_EQ(tie.done, 1);
+    EXPECT_EQ(rig.loop.state().score.outcome, 1);
+    double in_plane_load_N = 0;
+    for (const double f : tie.stitch_in_plane_load_N) {
+      in_plane_load_N = std::max(in_plane_load_N, std::abs(f));
+    }
+    if (in_plane) {
+      EXPECT_GT(in_plane_load_N, 1e-3) << "the in-plane path did not run";
+    } else {
+      EXPECT_EQ(in_plane_load_N, 0.0);
+    }
+  }
 }
 
 TEST(HapticLoop, ThreadAndTissueTicksNeverAllocate) {
