@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -337,6 +338,55 @@ std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> po
   begin = std::max<std::ptrdiff_t>(begin - 1, 0);
   end = std::min<std::ptrdiff_t>(end + 1, n - 1);
   return {polyline.begin() + begin, polyline.begin() + end + 1};
+}
+
+Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline,
+                                       double thread_diameter_m, double margin_diameters) {
+  Eigen::AlignedBox3d core;  // empty
+  const std::size_t n = polyline.size();
+  std::size_t first = n, last = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (polyline[i].z() < 0) {
+      first = std::min(first, i);
+      last = i;
+    }
+  }
+  if (first == n || first < 2 || last + 2 >= n) return core;
+  double d = thread_diameter_m;
+  if (!(d > 0)) {
+    std::vector<double> links;
+    links.reserve(n - 1);
+    for (std::size_t i = 0; i + 1 < n; ++i) links.push_back((polyline[i + 1] - polyline[i]).norm());
+    std::nth_element(links.begin(), links.begin() + static_cast<std::ptrdiff_t>(links.size() / 2),
+                     links.end());
+    d = links[links.size() / 2];
+  }
+  // The strands' links above the tissue that cross (not the legs running side by side to the
+  // stitch: at most cos 0.9 between them), each pair's nearest points and distance.
+  struct Crossing {
+    Eigen::Vector3d p, q;
+    double distance_m;
+  };
+  std::vector<Crossing> crossings;
+  double nearest_m = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < first; ++i) {
+    const Eigen::Vector3d ta = polyline[i + 1] - polyline[i];
+    for (std::size_t j = last + 1; j + 1 < n; ++j) {
+      const Eigen::Vector3d tb = polyline[j + 1] - polyline[j];
+      if (std::abs(ta.dot(tb)) > 0.9 * ta.norm() * tb.norm()) continue;
+      const geometry::SegmentClosest c = geometry::ClosestSegmentSegment(
+          polyline[i], polyline[i + 1], polyline[j], polyline[j + 1]);
+      if (c.p.z() <= 0 || c.q.z() <= 0) continue;
+      crossings.push_back({c.p, c.q, c.distance_m});
+      nearest_m = std::min(nearest_m, c.distance_m);
+    }
+  }
+  for (const Crossing& c : crossings) {
+    if (c.distance_m > nearest_m + margin_diameters * d) continue;
+    core.extend(c.p);
+    core.extend(c.q);
+  }
+  return core;
 }
 
 }  // namespace microdex::knot

@@ -12,6 +12,7 @@
 // each strand moves away from the axis and leaves as a straight tail.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <span>
 #include <vector>
 
@@ -76,6 +77,15 @@ StitchKnotShapeDef QuizItemShapeDef(StitchKnotType kind, std::size_t index,
 // unchanged when it has no node below the tissue.
 std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> polyline,
                                              double radius_m);
+
+// Where the knot is on a stitch polyline (the tissue at z = 0): the box of the nearest points
+// of the strands' links that cross above the tissue (links at more than about 25 degrees to
+// each other: not the legs running side by side to the stitch), for every crossing within
+// `margin_diameters` thread diameters of the nearest one. thread_diameter_m <= 0: the median
+// link. Empty (isEmpty()) when the strands never cross above the tissue or the polyline has no
+// node below it.
+Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline,
+                                       double thread_diameter_m, double margin_diameters = 4.0);
 
 // `segments` equal arc-length pieces of an open polyline (segments + 1 points, both ends kept);
 // at least two points in, segments >= 1.

@@ -331,12 +331,12 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.thread_diameter_m = k->FiniteDouble("thread_diameter_m", d.thread_diameter_m);
     if (const std::optional<YamlSection> tied = k->OptionalMap("tied")) {
       // The tails are shown up to this far from the stitch (the knot and the stitch, not the
-      // whole suture), centred over the origin in x and y and drawn this many times their size
-      // (the throws pulled on the jig lie up to 5 mm apart, their wraps a tenth of a
-      // millimetre across). Moving and scaling keep the topology: the recogniser checks each
-      // one below.
+      // whole suture); the knot (knot::CalcStitchKnotCore: 0.6-0.9 mm along the strands, its
+      // wraps a tenth of a millimetre across) is centred over the origin in x and y and drawn
+      // this many times its size, to fill the microscope's field. Moving and scaling keep the
+      // topology: the recogniser checks each one below.
       constexpr double kTiedRadius_m = 5e-3;
-      constexpr double kTiedScale = 2.5;
+      constexpr double kTiedScale = 10.0;
       tied->CheckNoUnknownKeys({"square", "granny", "surgeons", "slip", "half-hitch"});
       for (const char* name : {"square", "granny", "surgeons", "slip", "half-hitch"}) {
         if (!tied->Has(name)) continue;
@@ -345,12 +345,11 @@ SceneModel ReadScene(const YamlReader& reader) {
         try {
           std::vector<Eigen::Vector3d> shape =
               knot::CropStitchTails(knot::ReadObjPolyline(file, &diameter_m), kTiedRadius_m);
-          Eigen::Vector3d lo = shape.front(), hi = shape.front();
-          for (const Eigen::Vector3d& p : shape) {
-            lo = lo.cwiseMin(p);
-            hi = hi.cwiseMax(p);
+          Eigen::AlignedBox3d box = knot::CalcStitchKnotCore(shape, diameter_m);
+          if (box.isEmpty()) {  // no strands in contact: the whole thread
+            for (const Eigen::Vector3d& p : shape) box.extend(p);
           }
-          const Eigen::Vector3d centre(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.0);
+          const Eigen::Vector3d centre(box.center().x(), box.center().y(), 0.0);
           for (Eigen::Vector3d& p : shape) p = kTiedScale * (p - centre);
           d.tied.push_back(
               {*knot::StitchKnotTypeFromName(name), std::move(shape), kTiedScale * diameter_m});

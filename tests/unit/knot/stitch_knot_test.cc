@@ -114,6 +114,41 @@ TEST(StitchKnotTest, CropStitchTailsKeepsTheStitchAndNearTails) {
   EXPECT_EQ(CropStitchTails(thread, 2e-3).size(), thread.size());
 }
 
+// CalcStitchKnotCore boxes the knot, not the tails or the stitch: on a parametric square knot
+// with long tails it holds every throw's centre, lies above the tissue and is a small part of
+// the thread's box; strands that never cross have no core.
+TEST(StitchKnotTest, TheKnotsCoreHoldsItsThrowsAndNotItsTails) {
+  StitchKnotShapeDef def;
+  def.kind = StitchKnotType::kSquare;
+  def.tail_length_m = 3e-3;
+  const std::vector<Eigen::Vector3d> thread = MakeStitchKnot(def);
+  const Eigen::AlignedBox3d core = CalcStitchKnotCore(thread, def.thread_diameter_m);
+  ASSERT_FALSE(core.isEmpty());
+  EXPECT_GT(core.min().z(), 0.0);
+  Eigen::AlignedBox3d all;
+  for (const Eigen::Vector3d& p : thread) all.extend(p);
+  EXPECT_LT(core.diagonal().norm(), 0.3 * all.diagonal().norm());
+  StitchKnotOptions options;
+  options.thread_diameter_m = def.thread_diameter_m;
+  const StitchKnotAnalysis a = AnalyzeStitchKnot(thread, options);
+  ASSERT_EQ(a.throws.size(), 2u);
+  for (const StitchThrow& t : a.throws) {
+    EXPECT_TRUE(core.contains(t.p_center_W)) << t.p_center_W.transpose();
+  }
+  // The median link for the diameter: the same box for nodes one diameter apart.
+  const Eigen::AlignedBox3d median = CalcStitchKnotCore(thread, 0.0);
+  EXPECT_LT((median.min() - core.min()).norm(), 2 * def.thread_diameter_m);
+  EXPECT_LT((median.max() - core.max()).norm(), 2 * def.thread_diameter_m);
+  // Two strands along one line, 2 mm apart at their nearest: they never cross, no core.
+  std::vector<Eigen::Vector3d> apart;
+  for (int i = 0; i <= 40; ++i) {
+    apart.emplace_back(-10e-3 + 0.5e-3 * i, 0.0, i >= 19 && i <= 21 ? -0.5e-3 : 0.3e-3);
+  }
+  EXPECT_TRUE(CalcStitchKnotCore(apart, 0.0).isEmpty());
+  for (Eigen::Vector3d& p : apart) p.z() = 0.3e-3;
+  EXPECT_TRUE(CalcStitchKnotCore(apart, 1e-4).isEmpty()) << "no stitch";
+}
+
 TEST(StitchKnotTest, NamesAreTheCommandLineWords) {
   const std::vector<std::pair<StitchKnotType, const char*>> words = {
       {StitchKnotType::kNone, "none"},      {StitchKnotType::kSquare, "square"},

@@ -171,10 +171,10 @@ TEST(SceneView, JsonHasTheSceneShapes) {
 }
 
 TEST(SceneView, TheQuizsKnotsAreDrawnWithTheirThreadsDiameter) {
-  // The tied knots' 25 um nylon, drawn 2.5 times its size: a tube of 31.25 um radius, not the
+  // The tied knots' 25 um nylon, drawn 10 times its size: a tube of 125 um radius, not the
   // parametric shapes' 15 um.
   const scene::SceneModel s = scene::LoadScene("assets/scenes/knot_topology.yaml");
-  EXPECT_NE(SceneViewJson(s).find("\"knots\":{\"radius\":3.125e-05,"), std::string::npos);
+  EXPECT_NE(SceneViewJson(s).find("\"knots\":{\"radius\":0.000125,"), std::string::npos);
 }
 
 TEST(SceneView, JsonNumberDigitsAndNonFinite) {
