@@ -341,7 +341,7 @@ std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> po
 }
 
 Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline,
-                                       double thread_diameter_m, double margin_diameters) {
+                                       double thread_diameter_m, double contact_diameters) {
   Eigen::AlignedBox3d core;  // empty
   const std::size_t n = polyline.size();
   std::size_t first = n, last = 0;
@@ -361,30 +361,24 @@ Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline
                      links.end());
     d = links[links.size() / 2];
   }
-  // The strands' links above the tissue that cross (not the legs running side by side to the
-  // stitch: at most cos 0.9 between them), each pair's nearest points and distance.
-  struct Crossing {
-    Eigen::Vector3d p, q;
-    double distance_m;
-  };
-  std::vector<Crossing> crossings;
-  double nearest_m = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i + 1 < first; ++i) {
+  // The links above the tissue that touch or nearly touch (within contact_diameters) at an
+  // angle of more than about 25 degrees (cos 0.9): the strands crossing each other and a strand
+  // wound on itself, not the legs running side by side to the stitch nor neighbouring links.
+  const double reach_m = contact_diameters * d;
+  const auto in_strand = [&](std::size_t i) { return i + 1 < first || (i > last && i + 1 < n); };
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (!in_strand(i)) continue;
     const Eigen::Vector3d ta = polyline[i + 1] - polyline[i];
-    for (std::size_t j = last + 1; j + 1 < n; ++j) {
+    for (std::size_t j = i + 3; j + 1 < n; ++j) {
+      if (!in_strand(j)) continue;
       const Eigen::Vector3d tb = polyline[j + 1] - polyline[j];
       if (std::abs(ta.dot(tb)) > 0.9 * ta.norm() * tb.norm()) continue;
       const geometry::SegmentClosest c = geometry::ClosestSegmentSegment(
           polyline[i], polyline[i + 1], polyline[j], polyline[j + 1]);
-      if (c.p.z() <= 0 || c.q.z() <= 0) continue;
-      crossings.push_back({c.p, c.q, c.distance_m});
-      nearest_m = std::min(nearest_m, c.distance_m);
+      if (c.distance_m > reach_m || c.p.z() <= 0 || c.q.z() <= 0) continue;
+      core.extend(c.p);
+      core.extend(c.q);
     }
-  }
-  for (const Crossing& c : crossings) {
-    if (c.distance_m > nearest_m + margin_diameters * d) continue;
-    core.extend(c.p);
-    core.extend(c.q);
   }
   return core;
 }

@@ -79,13 +79,13 @@ std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> po
                                              double radius_m);
 
 // Where the knot is on a stitch polyline (the tissue at z = 0): the box of the nearest points
-// of the strands' links that cross above the tissue (links at more than about 25 degrees to
-// each other: not the legs running side by side to the stitch), for every crossing within
-// `margin_diameters` thread diameters of the nearest one. thread_diameter_m <= 0: the median
-// link. Empty (isEmpty()) when the strands never cross above the tissue or the polyline has no
-// node below it.
+// of every two links above the tissue that come within `contact_diameters` thread diameters
+// of each other at more than about 25 degrees: the strands crossing each other and a strand
+// wound on itself (a throw's wraps), not the legs running side by side to the stitch nor
+// neighbouring links. thread_diameter_m <= 0: the median link. Empty (isEmpty()) when no
+// links cross so near or the polyline has no node below the tissue.
 Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline,
-                                       double thread_diameter_m, double margin_diameters = 4.0);
+                                       double thread_diameter_m, double contact_diameters = 4.0);
 
 // `segments` equal arc-length pieces of an open polyline (segments + 1 points, both ends kept);
 // at least two points in, segments >= 1.

@@ -331,12 +331,14 @@ SceneModel ReadScene(const YamlReader& reader) {
     d.thread_diameter_m = k->FiniteDouble("thread_diameter_m", d.thread_diameter_m);
     if (const std::optional<YamlSection> tied = k->OptionalMap("tied")) {
       // The tails are shown up to this far from the stitch (the knot and the stitch, not the
-      // whole suture); the knot (knot::CalcStitchKnotCore: 0.6-0.9 mm along the strands, its
-      // wraps a tenth of a millimetre across) is centred over the origin in x and y and drawn
-      // this many times its size, to fill the microscope's field. Moving and scaling keep the
-      // topology: the recogniser checks each one below.
+      // whole suture); the knot (knot::CalcStitchKnotCore: its throws' wraps and crossings, a
+      // tenth of a millimetre across, the throws up to 3.5 mm apart) is centred over the origin
+      // in x and y and drawn kTiedSpan_m across (the field of a 20x microscope is 10 mm high,
+      // 18 mm wide), at 2.5 to 10 times its size. Moving and scaling keep the topology: the
+      // recogniser checks each one below.
       constexpr double kTiedRadius_m = 5e-3;
-      constexpr double kTiedScale = 10.0;
+      constexpr double kTiedSpan_m = 8e-3;
+      constexpr double kTiedMinScale = 2.5, kTiedMaxScale = 10.0;
       tied->CheckNoUnknownKeys({"square", "granny", "surgeons", "slip", "half-hitch"});
       for (const char* name : {"square", "granny", "surgeons", "slip", "half-hitch"}) {
         if (!tied->Has(name)) continue;
@@ -350,9 +352,12 @@ SceneModel ReadScene(const YamlReader& reader) {
             for (const Eigen::Vector3d& p : shape) box.extend(p);
           }
           const Eigen::Vector3d centre(box.center().x(), box.center().y(), 0.0);
-          for (Eigen::Vector3d& p : shape) p = kTiedScale * (p - centre);
+          const double span_m = std::max(box.sizes().x(), box.sizes().y());
+          const double scale =
+              std::clamp(kTiedSpan_m / std::max(span_m, 1e-9), kTiedMinScale, kTiedMaxScale);
+          for (Eigen::Vector3d& p : shape) p = scale * (p - centre);
           d.tied.push_back(
-              {*knot::StitchKnotTypeFromName(name), std::move(shape), kTiedScale * diameter_m});
+              {*knot::StitchKnotTypeFromName(name), std::move(shape), scale * diameter_m});
         } catch (const std::exception& e) {
           tied->Fail(name, e.what());
         }

@@ -163,15 +163,20 @@ std::string SceneViewJson(const scene::SceneModel& s) {
     j << "],\"surface_y\":" << Num(s.knot_tying->surface_y_m) << "}";
   }
   if (s.knots) {
-    // The thread as drawn: a tied knot's diameter at its drawing scale (the largest, for one
-    // tube), else the parametric shapes'.
+    // The thread as drawn: each item's (a tied knot's diameter at its drawing scale, else the
+    // parametric shapes'), and the largest.
+    std::string radii = "[";
     double diameter_m = 0;
     for (std::size_t i = 0; i < s.knots->items.size(); ++i) {
-      diameter_m = std::max(diameter_m, s.knots->ItemThreadDiameter(i));
+      double item_m = s.knots->ItemThreadDiameter(i);
+      if (!(item_m > 0)) item_m = s.knots->thread_diameter_m;
+      diameter_m = std::max(diameter_m, item_m);
+      if (i > 0) radii += ',';
+      radii += Num(item_m / 2);
     }
     if (!(diameter_m > 0)) diameter_m = s.knots->thread_diameter_m;
-    j << ",\"knots\":{\"radius\":" << Num(diameter_m / 2) << ",\"items\":" << KnotItems(*s.knots)
-      << "}";
+    j << ",\"knots\":{\"radius\":" << Num(diameter_m / 2) << ",\"radii\":" << radii << "]"
+      << ",\"items\":" << KnotItems(*s.knots) << "}";
   }
   j << "}";
   return j.str();

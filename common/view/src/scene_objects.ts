@@ -35,7 +35,8 @@ export interface SceneJson {
   };
   placement?: { vessel_radius: number; end_height: number; stitches: number; bite: number };
   // The knot-topology quiz: each item's thread, x y z per point (m, the tissue at z = 0).
-  knots?: { radius: number; items: number[][] };
+  // radius: the largest item's; radii: each item's tube (the knots are drawn at their own scale).
+  knots?: { radius: number; radii?: number[]; items: number[][] };
   // Knot tying: the stitch's rods (the bite and the two punctures) and the tissue surface, the
   // plane y = surface_y (that scene's frame has y up).
   stitch?: { rods: { a: V3; b: V3; radius: number }[]; surface_y: number };
@@ -268,6 +269,7 @@ export class SceneView {
   private readonly stitchRodCentres: THREE.Vector3[] = [];
   knot: PolylineTube | null = null;
   knotItem = -1; // the quiz item drawn (-1 none; items.length: the quiz is done)
+  private knotMinRadius = 0;
   // Knot placement: the stitches placed so far (hidden until placed), from the frames.
   readonly stitches: THREE.Mesh[] = [];
   readonly overlay: CueOverlayView;
@@ -401,7 +403,8 @@ export class SceneView {
     if (scene.knots && scene.knots.items.length > 0) {
       const maxPoints = Math.max(...scene.knots.items.map((k) => k.length / 3));
       // Thin: the strands of a tight knot lie a diameter apart; drawn at least a pixel or two.
-      const radius = Math.max(scene.knots.radius, (fieldOfView(scene) * d.thinFraction) / 6);
+      this.knotMinRadius = (fieldOfView(scene) * d.thinFraction) / 6;
+      const radius = Math.max(scene.knots.radius, this.knotMinRadius);
       this.knot = new PolylineTube(Math.max(maxPoints, 2), radius, Math.max(4, d.radial / 2),
                                    material(KNOT_COLOR));
       this.root.add(this.knot.mesh);
@@ -486,6 +489,8 @@ export class SceneView {
                                                                   opacity: 0.45 }));
     this.root.add(this.shadowDot);
     this.placeShadow();
+    // The knot quiz is answered with the buttons: its tool would only hide the knot.
+    if (scene.knots) this.tool.visible = this.shadowDot.visible = false;
 
     // Lighting: the microscope's coaxial light plus a hemisphere fill.
     this.root.add(new THREE.HemisphereLight(0xffffff, 0x303040, 0.8));
@@ -550,6 +555,8 @@ export class SceneView {
     this.knotItem = i;
     const items = this.scene.knots.items;
     if (i >= 0 && i < items.length) {
+      this.knot.radius =
+          Math.max(this.scene.knots.radii?.[i] ?? this.scene.knots.radius, this.knotMinRadius);
       this.knot.update(new Float32Array(items[i]));
       this.knot.mesh.visible = true;
     } else {

@@ -171,10 +171,20 @@ TEST(SceneView, JsonHasTheSceneShapes) {
 }
 
 TEST(SceneView, TheQuizsKnotsAreDrawnWithTheirThreadsDiameter) {
-  // The tied knots' 25 um nylon, drawn 10 times its size: a tube of 125 um radius, not the
-  // parametric shapes' 15 um.
+  // Each item's tube is its tied knot's 25 um nylon at the knot's drawing scale (2.5 to 10),
+  // not the parametric shapes' 15 um; "radius" the largest.
   const scene::SceneModel s = scene::LoadScene("assets/scenes/knot_topology.yaml");
-  EXPECT_NE(SceneViewJson(s).find("\"knots\":{\"radius\":0.000125,"), std::string::npos);
+  const std::string j = SceneViewJson(s);
+  ASSERT_NE(j.find("\"radii\":["), std::string::npos);
+  double largest = 0;
+  for (std::size_t i = 0; i < s.knots->items.size(); ++i) {
+    const double r = s.knots->ItemThreadDiameter(i) / 2;
+    EXPECT_GE(r, 2.5 * 12.5e-6 - 1e-12) << i;
+    EXPECT_LE(r, 10 * 12.5e-6 + 1e-12) << i;
+    largest = std::max(largest, r);
+  }
+  EXPECT_NE(j.find("\"knots\":{\"radius\":" + JsonNumber(largest) + ","), std::string::npos)
+      << j.substr(j.find("\"knots\""), 80);
 }
 
 TEST(SceneView, JsonNumberDigitsAndNonFinite) {

@@ -31,15 +31,21 @@ function frame(flags: number, set: Record<number, number>, thread: number[] = []
 }
 
 test('the knot quiz shows the item its progress points at, none once done', () => {
-  const knots = { radius: 15e-6, items: [[0, 0, 0, 1e-4, 0, 0, 2e-4, 1e-4, 0], [0, 0, 0, 0, 3e-4, 0]] };
+  const knots = { radius: 90e-6, radii: [60e-6, 90e-6],
+                  items: [[0, 0, 0, 1e-4, 0, 0, 2e-4, 1e-4, 0], [0, 0, 0, 0, 3e-4, 0]] };
   const v = new SceneView({ ...base, modules: ['knots'], vessel: undefined, needle: undefined, knots }, LOW_DETAIL);
   assert.ok(v.knot);
+  assert.equal(v.knot!.mesh.visible, true);
+  assert.equal(v.tool.visible, false, 'the quiz is answered with the buttons: no tool over the knot');
+  assert.equal(new SceneView(base, LOW_DETAIL).tool.visible, true);
   assert.equal(v.knotItem, 0);
   const drawn = () => v.knot!.mesh.geometry.drawRange.count;
   const first = drawn();
   assert.ok(first > 0);
+  assert.equal(v.knot!.radius, 60e-6, 'each item its own tube');
   v.apply(frame(HAS_SCORE, { [S.progress]: 0.5 }));
   assert.equal(v.knotItem, 1);
+  assert.equal(v.knot!.radius, 90e-6);
   assert.ok(drawn() < first, 'the second knot has fewer points');
   assert.ok(v.knot!.mesh.visible);
   v.apply(frame(HAS_SCORE, { [S.progress]: 1 }));
