@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 
 namespace microdex::knot {
@@ -58,6 +60,51 @@ TEST(KnotObjTest, TheThreadDiameterTravelsAsItsOwnComment) {
     EXPECT_NE(e.find("bad_diameter.obj:2: malformed '# thread_diameter_m D'"), std::string::npos)
         << bad << ": " << e;
   }
+}
+
+// A corrupt file (bytes replaced, dropped or repeated anywhere in a valid one, the diameter
+// line included) is read or refused with an error naming it; nothing else escapes.
+TEST(KnotObjTest, CorruptFilesAreReadOrRefusedByName) {
+  const std::vector<Eigen::Vector3d> nodes = {{0, 0, 1e-4}, {1e-4, 0, -1e-4}, {2e-4, 0, 1e-4}};
+  const auto path = std::filesystem::temp_directory_path() / "microdex_knot_obj_corrupt.obj";
+  WriteObjPolyline(path, nodes, {"seed"}, 2.5e-5);
+  std::ifstream in(path);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::mt19937 rng(7);
+  const std::string alphabet = "v l#-+.e0123456789/ \n\r\tnaNinf_thread_diameter_m";
+  int refused = 0, read = 0;
+  for (int k = 0; k < 2000; ++k) {
+    std::string text = good;
+    const int edits = 1 + static_cast<int>(rng() % 4);
+    for (int e = 0; e < edits && !text.empty(); ++e) {
+      const std::size_t at = rng() % text.size();
+      switch (rng() % 3) {
+        case 0:
+          text[at] = alphabet[rng() % alphabet.size()];
+          break;
+        case 1:
+          text.erase(at, 1 + rng() % 8);
+          break;
+        default:
+          text.insert(at, text.substr(at, 1 + rng() % 16));
+          break;
+      }
+    }
+    std::ofstream(path, std::ios::trunc) << text;
+    try {
+      double d = 0;
+      const std::vector<Eigen::Vector3d> p = ReadObjPolyline(path, &d);
+      EXPECT_GE(p.size(), 2u);
+      EXPECT_TRUE(d == 0.0 || (std::isfinite(d) && d > 0)) << d;
+      ++read;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("microdex_knot_obj_corrupt.obj"), std::string::npos)
+          << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GT(refused, 100);
+  EXPECT_GT(read, 100);
 }
 
 TEST(KnotObjTest, ExporterForms) {
