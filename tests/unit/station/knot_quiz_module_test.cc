@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -70,6 +71,29 @@ TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("knots.tied.granny"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("missing.obj"), std::string::npos) << e.what();
+  }
+  // A tied knot whose thread diameter is malformed: named with its file and line.
+  const std::filesystem::path bad_obj =
+      std::filesystem::temp_directory_path() / "microdex_quiz_bad_diameter.obj";
+  {
+    std::ifstream granny(std::string(root != nullptr ? root : ".") +
+                         "/assets/knots/tied_granny.obj");
+    std::stringstream g;
+    g << granny.rdbuf();
+    std::string obj = g.str();
+    obj.replace(obj.find("# thread_diameter_m 2.5e-05"), 27, "# thread_diameter_m -2.5e-05");
+    std::ofstream(bad_obj) << obj;
+  }
+  std::string bad_d = text.str();
+  bad_d.replace(bad_d.find("../knots/tied_granny.obj"), 24, bad_obj.string());
+  try {
+    (void)scene::ParseScene(bad_d, path);
+    ADD_FAILURE() << "a negative thread diameter accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("knots.tied.granny"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("microdex_quiz_bad_diameter.obj:3: malformed"),
+              std::string::npos)
+        << e.what();
   }
 }
 
