@@ -161,6 +161,26 @@ function material(color: number, look: Look = {}): THREE.MeshLambertMaterial {
 
 // A tube along a polyline of up to maxNodes nodes whose vertices are rewritten in place
 // (the thread: its nodes move every frame). Rings are carried along by parallel transport.
+// The quiz's knots are drawn as a smooth centreline through their nodes (a centripetal
+// Catmull-Rom curve, KNOT_SMOOTHING points per link, through every node): a tied knot's links
+// are about four thread diameters long, so that a wrap is only two or three of them.
+export const KNOT_SMOOTHING = 4;
+export function smoothKnot(points: number[]): Float32Array {
+  const n = Math.floor(points.length / 3);
+  if (n < 3) return new Float32Array(points);
+  const nodes: THREE.Vector3[] = [];
+  for (let i = 0; i < n; ++i) nodes.push(new THREE.Vector3(points[3 * i], points[3 * i + 1], points[3 * i + 2]));
+  const curve = new THREE.CatmullRomCurve3(nodes, false, 'centripetal');
+  const m = (n - 1) * KNOT_SMOOTHING + 1;
+  const out = new Float32Array(m * 3);
+  const p = new THREE.Vector3();
+  for (let k = 0; k < m; ++k) {
+    curve.getPoint(k / (m - 1), p);  // uniform in the curve's parameter: node i at k = 4 i
+    out[3 * k] = p.x; out[3 * k + 1] = p.y; out[3 * k + 2] = p.z;
+  }
+  return out;
+}
+
 export class PolylineTube {
   readonly mesh: THREE.Mesh;
   private readonly positions: Float32Array;
@@ -405,7 +425,8 @@ export class SceneView {
       // Thin: the strands of a tight knot lie a diameter apart; drawn at least a pixel or two.
       this.knotMinRadius = (fieldOfView(scene) * d.thinFraction) / 6;
       const radius = Math.max(scene.knots.radius, this.knotMinRadius);
-      this.knot = new PolylineTube(Math.max(maxPoints, 2), radius, Math.max(4, d.radial / 2),
+      this.knot = new PolylineTube(Math.max((maxPoints - 1) * KNOT_SMOOTHING + 1, 2), radius,
+                                   Math.max(4, d.radial / 2),
                                    material(KNOT_COLOR));
       this.root.add(this.knot.mesh);
       this.showKnot(0);
@@ -557,7 +578,7 @@ export class SceneView {
     if (i >= 0 && i < items.length) {
       this.knot.radius =
           Math.max(this.scene.knots.radii?.[i] ?? this.scene.knots.radius, this.knotMinRadius);
-      this.knot.update(new Float32Array(items[i]));
+      this.knot.update(smoothKnot(items[i]));
       this.knot.mesh.visible = true;
     } else {
       this.knot.mesh.visible = false;

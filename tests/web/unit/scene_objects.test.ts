@@ -6,7 +6,8 @@ import * as THREE from 'three';
 import { HAS_NEEDLE, HAS_SCORE, HAS_SECOND_TOOL, HAS_TISSUE, HAS_THREAD, S, SCALAR_COUNT, Frame, Overlay } from '../../../common/view/src/frame';
 import {
   SceneJson, SceneView, HIGH_DETAIL, LOW_DETAIL, NEEDLE_COLOR, CONTACT_COLOR, gridIndices,
-  needleCurve, polylineCurve, sampleTissue, sampleField, fieldOfView, TISSUE_REST,
+  needleCurve, polylineCurve, sampleTissue, sampleField, fieldOfView, TISSUE_REST, KNOT_SMOOTHING,
+  smoothKnot,
 } from '../../../common/view/src/scene_objects';
 import { fitCamera, microscopeCamera } from '../../../common/view/src/microscope';
 
@@ -29,6 +30,20 @@ function frame(flags: number, set: Record<number, number>, thread: number[] = []
   return { flags, slot: 0, scalars, threadNodes: new Float32Array(thread),
            tissue: new Float32Array(tissue), tissueNodesX: nx, tissueNodesY: ny, overlay: null };
 }
+
+test('a quiz knot is drawn smooth through every one of its nodes', () => {
+  const nodes = [0, 0, 0, 1e-4, 0, 0, 1e-4, 1e-4, 0, 0, 1e-4, 5e-5];
+  const s = smoothKnot(nodes);
+  assert.equal(s.length / 3, 3 * KNOT_SMOOTHING + 1);
+  for (let i = 0; i < 4; ++i) {
+    for (let c = 0; c < 3; ++c) assert.ok(Math.abs(s[3 * KNOT_SMOOTHING * i + c] - nodes[3 * i + c]) < 1e-10);
+  }
+  // Between the corner nodes the curve bulges out of the polygon's corner (rounded, not cut).
+  const mid = (k: number) => new THREE.Vector3(s[3 * k], s[3 * k + 1], s[3 * k + 2]);
+  const half = mid(KNOT_SMOOTHING + KNOT_SMOOTHING / 2);  // between nodes 1 and 2, x = 1e-4 on the polygon
+  assert.ok(half.x > 1e-4, `the curve is rounded out past the corner: x ${half.x}`);
+  assert.deepEqual(Array.from(smoothKnot([0, 0, 0, 1, 0, 0])), [0, 0, 0, 1, 0, 0]);
+});
 
 test('the knot quiz shows the item its progress points at, none once done', () => {
   const knots = { radius: 90e-6, radii: [60e-6, 90e-6],
