@@ -344,15 +344,8 @@ StitchKnotAnalysis AnalyzeStitchKnot(std::span<const Eigen::Vector3d> polyline,
   // Thread diameter: given, or the median link length.
   double diameter = options.thread_diameter_m;
   if (diameter <= 0.0) {
-    std::vector<double> lengths;
-    for (int i = 0; i + 1 < n; ++i) {
-      const double l = (polyline[i + 1] - polyline[i]).norm();
-      if (l > 0.0) lengths.push_back(l);
-    }
-    if (lengths.empty()) throw std::invalid_argument("stitch polyline: all nodes coincide");
-    std::nth_element(lengths.begin(), lengths.begin() + static_cast<long>(lengths.size() / 2),
-                     lengths.end());
-    diameter = lengths[lengths.size() / 2];
+    diameter = MedianLinkLength(polyline);
+    if (diameter <= 0.0) throw std::invalid_argument("stitch polyline: all nodes coincide");
   }
   out.thread_diameter_m = diameter;
 

@@ -340,6 +340,19 @@ std::vector<Eigen::Vector3d> CropStitchTails(std::span<const Eigen::Vector3d> po
   return {polyline.begin() + begin, polyline.begin() + end + 1};
 }
 
+double MedianLinkLength(std::span<const Eigen::Vector3d> polyline) {
+  std::vector<double> lengths;
+  lengths.reserve(polyline.size());
+  for (std::size_t i = 0; i + 1 < polyline.size(); ++i) {
+    const double l = (polyline[i + 1] - polyline[i]).norm();
+    if (l > 0.0) lengths.push_back(l);
+  }
+  if (lengths.empty()) return 0.0;
+  const auto mid = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+  std::nth_element(lengths.begin(), mid, lengths.end());
+  return *mid;
+}
+
 Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline,
                                        double thread_diameter_m, double contact_diameters) {
   Eigen::AlignedBox3d core;  // empty
@@ -352,15 +365,7 @@ Eigen::AlignedBox3d CalcStitchKnotCore(std::span<const Eigen::Vector3d> polyline
     }
   }
   if (first == n || first < 2 || last + 2 >= n) return core;
-  double d = thread_diameter_m;
-  if (!(d > 0)) {
-    std::vector<double> links;
-    links.reserve(n - 1);
-    for (std::size_t i = 0; i + 1 < n; ++i) links.push_back((polyline[i + 1] - polyline[i]).norm());
-    std::nth_element(links.begin(), links.begin() + static_cast<std::ptrdiff_t>(links.size() / 2),
-                     links.end());
-    d = links[links.size() / 2];
-  }
+  const double d = thread_diameter_m > 0 ? thread_diameter_m : MedianLinkLength(polyline);
   // The links above the tissue that touch or nearly touch (within contact_diameters) at an
   // angle of more than about 25 degrees (cos 0.9): the strands crossing each other and a strand
   // wound on itself, not the legs running side by side to the stitch nor neighbouring links.

@@ -93,6 +93,9 @@ std::vector<Eigen::Vector3d> ResampleByArcLength(std::span<const Eigen::Vector3d
                                                  int segments);
 // The length of an open polyline.
 double PolylineLength(std::span<const Eigen::Vector3d> open);
+// The median length of the polyline's links of nonzero length (a thread's diameter when its
+// nodes are one diameter apart: StitchKnotOptions); 0 when there are none.
+double MedianLinkLength(std::span<const Eigen::Vector3d> polyline);
 
 // Smallest distance between two segments of the polyline that are more than `skip_arc_m`
 // apart along it (for a thread of diameter d with nodes about d apart, `skip_arc_m` = 2 d
