@@ -1,25 +1,10 @@
 #include "station/knot_quiz_module.h"
 
-#include <stdexcept>
-#include <string>
-
-#include "common/knot/stitch_knot_shapes.h"
-
 namespace microdex::station {
 
+// The scene's loader has checked that the recogniser names each item's shape as its class.
 KnotQuizModule::KnotQuizModule(const scene::SceneModel& scene) : items_(scene.knots->items) {
-  for (std::size_t i = 0; i < items_.size(); ++i) {
-    shapes_.push_back(scene.knots->ItemShape(i));
-    knot::StitchKnotOptions options;
-    options.thread_diameter_m = scene.knots->ItemThreadDiameter(i);
-    const knot::StitchKnotType seen = knot::RecogniseStitchKnot(shapes_.back(), options);
-    if (seen != items_[i]) {
-      throw std::runtime_error(scene.path + ": knots.items[" + std::to_string(i) + "]: the " +
-                               std::string(knot::StitchKnotName(items_[i])) +
-                               " knot shown would be recognised as " +
-                               std::string(knot::StitchKnotName(seen)));
-    }
-  }
+  for (std::size_t i = 0; i < items_.size(); ++i) shapes_.push_back(scene.knots->ItemShape(i));
 }
 
 void KnotQuizModule::Step(const ToolInput& in, state::StationState& s, Eigen::Vector3d& /*f_T_W*/) {

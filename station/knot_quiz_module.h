@@ -3,9 +3,10 @@
 // surgical knot from incorrect ones can be learned separately"): the scene's knots, tied around
 // a stitch (common/knot/stitch_knot_shapes.h), are shown one at a time; the trainee names each
 // by pressing the device's button whose value is the knot's class (1 square, 2 granny,
-// 3 surgeon's, 4 slip, 5 half hitch), the next knot appearing at once. Each knot's shape is
-// checked at construction by the stitch-knot recogniser, so a trainee is never asked to name a
-// knot the recogniser would call otherwise. Adds no force. State: state::KnotQuizState.
+// 3 surgeon's, 4 slip, 5 half hitch), the next knot appearing at once. Each knot's shape has
+// been checked by the stitch-knot recogniser when the scene was loaded (scene::LoadScene), so
+// a trainee is never asked to name a knot the recogniser would call otherwise. Adds no force.
+// State: state::KnotQuizState.
 
 #include <Eigen/Core>
 #include <vector>
@@ -17,7 +18,6 @@ namespace microdex::station {
 
 class KnotQuizModule final : public Module {
  public:
-  // Throws std::runtime_error naming the item whose shape the recogniser does not confirm.
   explicit KnotQuizModule(const scene::SceneModel& scene);
   const char* name() const override { return "knots"; }
   void InitState(state::StationState& state) const override { state.knots.emplace(); }

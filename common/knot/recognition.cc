@@ -17,6 +17,7 @@
 #include "common/knot/invariants.h"
 #include "common/knot/projection.h"
 #include "common/knot/reduction.h"
+#include "common/knot/stitch_knot_shapes.h"
 
 namespace microdex::knot {
 namespace {
@@ -122,15 +123,6 @@ std::vector<Eigen::Vector3d> PrepareNodes(std::span<const Eigen::Vector3d> polyl
     throw std::invalid_argument("knot polyline: all nodes coincide, expected two distinct nodes");
   }
   return nodes;
-}
-
-double ThreadDiameter(std::span<const Eigen::Vector3d> nodes, const KnotOptions& options) {
-  if (options.thread_diameter_m > 0.0) return options.thread_diameter_m;
-  std::vector<double> lengths(nodes.size() - 1);
-  for (std::size_t i = 0; i + 1 < nodes.size(); ++i) lengths[i] = (nodes[i + 1] - nodes[i]).norm();
-  std::nth_element(lengths.begin(), lengths.begin() + static_cast<long>(lengths.size() / 2),
-                   lengths.end());
-  return lengths[lengths.size() / 2];
 }
 
 Eigen::Vector3d RandomDirection(std::mt19937_64& rng) {
@@ -248,7 +240,8 @@ void KnotOptions::Validate() const {
 KnotAnalysis AnalyzeKnot(std::span<const Eigen::Vector3d> polyline, const KnotOptions& options) {
   options.Validate();
   const std::vector<Eigen::Vector3d> nodes = PrepareNodes(polyline);
-  const double diameter = ThreadDiameter(nodes, options);
+  const double diameter =
+      options.thread_diameter_m > 0.0 ? options.thread_diameter_m : MedianLinkLength(nodes);
   std::mt19937_64 rng(options.seed);
 
   KnotAnalysis analysis;

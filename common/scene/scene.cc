@@ -369,6 +369,25 @@ SceneModel ReadScene(const YamlReader& reader) {
         }
       }
     }
+    // Every item shown is the knot it asks for: the parametric ones (each item its own shape)
+    // and the tied ones drawn mirrored (every second item of a class; the tied shape itself was
+    // checked above, naming its file).
+    for (std::size_t i = 0; i < d.items.size(); ++i) {
+      const auto tied = std::find_if(d.tied.begin(), d.tied.end(),
+                                     [&](const auto& t) { return t.type == d.items[i]; });
+      const auto before =
+          std::count(d.items.begin(), d.items.begin() + static_cast<std::ptrdiff_t>(i), d.items[i]);
+      if (tied != d.tied.end() && before != 1) continue;  // the same shape as one checked
+      knot::StitchKnotOptions options;
+      options.thread_diameter_m = d.ItemThreadDiameter(i);
+      const knot::StitchKnotType seen = knot::RecogniseStitchKnot(d.ItemShape(i), options);
+      if (seen != d.items[i]) {
+        k->Fail("items", "[" + std::to_string(i) + "]: the " +
+                             std::string(knot::StitchKnotName(d.items[i])) +
+                             " knot shown would be recognised as " +
+                             std::string(knot::StitchKnotName(seen)));
+      }
+    }
     s.knots = d;
   }
   if (const std::optional<YamlSection> pl = root.OptionalMap("placement")) {

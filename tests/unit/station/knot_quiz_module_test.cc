@@ -72,6 +72,19 @@ TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
     EXPECT_NE(std::string(e.what()).find("knots.tied.granny"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("missing.obj"), std::string::npos) << e.what();
   }
+  // A tied knot of another class than its key: refused when the scene is loaded, naming the
+  // key and the file (the scene's loader checks every shape shown; the module does not again).
+  std::string wrong = text.str();
+  wrong.replace(wrong.find("../knots/tied_square.obj"), 24, "../knots/tied_granny.obj");
+  try {
+    (void)scene::ParseScene(wrong, path);
+    ADD_FAILURE() << "a granny knot accepted as the square knot";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("knots.tied.square"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("tied_granny.obj: recognised as granny"),
+              std::string::npos)
+        << e.what();
+  }
   // A tied knot whose thread diameter is malformed: named with its file and line.
   const std::filesystem::path bad_obj =
       std::filesystem::temp_directory_path() / "microdex_quiz_bad_diameter.obj";
