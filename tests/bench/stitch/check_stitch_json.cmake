@@ -1,8 +1,9 @@
 # Runs `microdex-bench stitch --quick --json OUT` and checks the report: two compliance levels
 # within 5 % of the Navier series off the load; the rigid run and the one at the scene's
 # relaxation time both tie the surgeon's knot, the latter with the bite lifted and the rods'
-# loads tracked and balanced against the hands' pull; the in-plane compliance's error against
-# the annulus, and the run with it on.
+# loads tracked and balanced against the hands' pull, and so does the stitch with the in-plane
+# key turned the other way at its own jig; the in-plane compliance's error against the annulus;
+# the slip knot's recipe.
 execute_process(COMMAND ${BENCH} stitch --quick --json ${OUT} RESULT_VARIABLE rc
                 OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("${out}")
@@ -25,10 +26,11 @@ foreach(i 0 1)
   endif()
 endforeach()
 string(JSON n LENGTH "${json}" coupling)
-if(NOT n EQUAL 3)
-  message(FATAL_ERROR "expected 3 coupling runs (rigid, relaxed, relaxed in-plane), got ${n}")
+if(NOT n EQUAL 4)
+  message(FATAL_ERROR "expected 4 coupling runs (rigid, the scene's, the in-plane key the other "
+                      "way, the slip knot's recipe), got ${n}")
 endif()
-foreach(i 0 1)
+foreach(i 0 1 2)
   string(JSON knot GET "${json}" coupling ${i} knot)
   if(NOT knot STREQUAL "surgeons")
     message(FATAL_ERROR "coupling[${i}] tied '${knot}', not a surgeon's knot")
@@ -36,7 +38,7 @@ foreach(i 0 1)
 endforeach()
 # The relaxed runs, without and with the in-plane compliance: run to the end, the bite lifted,
 # the rods' loads tracked and balanced against the hands' pull along the normal.
-foreach(i 1 2)
+foreach(i 1 2 3)
   string(JSON refused GET "${json}" coupling ${i} refused)
   string(JSON bite GET "${json}" coupling ${i} bite_um)
   string(JSON trailing GET "${json}" coupling ${i} trailing)
@@ -46,14 +48,20 @@ foreach(i 1 2)
                         "${trailing}, balance ${balance}")
   endif()
 endforeach()
-# The in-plane run's knot capsizes onto one strand: a slip knot, the knot-topology scene's
-# assets/knots/tied_slip.obj (made by --obj-dir from this run): if it no longer does, that
-# file's recipe is stale.
-string(JSON in_plane GET "${json}" coupling 2 in_plane)
-string(JSON knot GET "${json}" coupling 2 knot)
+string(JSON a GET "${json}" coupling 1 in_plane)
+string(JSON b GET "${json}" coupling 2 in_plane)
+if(a STREQUAL b)
+  message(FATAL_ERROR "coupling[2] should turn the scene's in-plane key the other way")
+endif()
+# The in-plane stitch at the normal-only stitch's jig (4.3 mm): the knot capsizes onto one
+# strand, a slip knot, the knot-topology scene's assets/knots/tied_slip.obj (made by --obj-dir
+# from this run): if it no longer does, that file's recipe is stale.
+string(JSON in_plane GET "${json}" coupling 3 in_plane)
+string(JSON jig GET "${json}" coupling 3 next_jig_x_m)
+string(JSON knot GET "${json}" coupling 3 knot)
 if(NOT in_plane OR NOT knot STREQUAL "slip")
-  message(FATAL_ERROR "coupling[2]: in_plane ${in_plane}, knot '${knot}' (expected a slip knot, "
-                      "the recipe of assets/knots/tied_slip.obj)")
+  message(FATAL_ERROR "coupling[3]: in_plane ${in_plane}, next jig ${jig} m, knot '${knot}' "
+                      "(expected a slip knot, the recipe of assets/knots/tied_slip.obj)")
 endif()
 # The in-plane compliance: the annulus error falls from level 5 to 6 and is within 4 % at 6
 # (the fem test's bound), and each level's build is timed.

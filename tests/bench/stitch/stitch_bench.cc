@@ -1,7 +1,8 @@
 // microdex-bench stitch: the knot-tying stitch moved by the tissue (station/stitch_tissue.h),
 // error against run time (assets/scenes/README.md, "The stitch on the tissue").
 //
-//   microdex-bench stitch [--json FILE] [--quick] [--scene FILE]
+//   microdex-bench stitch [--json FILE] [--quick] [--scene FILE] [--obj-dir DIR]
+//                         [--jig-window FROM:TO:STEP [--window-relax S ...]]
 //
 // compliance: the patch's point compliance at the stitch's three rods (fem::CalcPointCompliance)
 //   at tissue levels 5 … 8: its build time (median of 3), the largest relative error of the
@@ -14,12 +15,17 @@
 //   the stitch's 6 × 6 compliance (its build time, median of 3, and its largest difference from
 //   the finest level's, relative to the largest entry);
 // coupling: the scene's surgeon's knot (buttons 3, 2, the hands at rest) to the end of the hold,
-//   rigid (stitch_relax_s 0), at the scene's relaxation time and at others: the station step's
-//   median and p99 with their ratio to the rigid run's in the same run, the bite's displacement at
-//   the end, how far the low-passed loads trail the thread's (largest |load − force| over the
-//   largest |force|), the balance of the rods' loads against the hands' pull along the normal,
-//   and the knot named; at the scene's relaxation time also with knot_tying.stitch_in_plane on;
-// cut-through: the same tie with the hands pulling the held ends 0 … 5 mm further out
+//   with the rigid stitch (stitch_relax_s 0), the scene's, the same with the in-plane key
+//   (knot_tying.stitch_in_plane) turned the other way, the in-plane stitch at the jig where the
+//   normal-only stitch ties (the knot capsizes: the knot-topology scene's slip knot), and at other
+//   relaxation times: the station step's median and p99 with their ratio to the rigid run's in
+//   the same run, the bite's displacement at the end, how far the low-passed loads trail the
+//   thread's (largest |load − force| over the largest |force|), the balance of the rods' loads
+//   against the hands' pull along the normal, and the knot named;
+// jig window (--jig-window FROM:TO:STEP): the six button pairs tied with the next throws' jig
+//   (knot_tying.next_jig_x_m) over a range, with and without the in-plane key: the knot of each;
+// cut-through: the same tie with the hands pulling the held ends 0 … 5 mm further out (in the
+//   full run also with the in-plane key turned the other way)
 //   (knot_tying.hold_pull_N_per_m sets the tension they then keep), with the scene's
 //   bite_tear_N and without it: the hands' tension at the end, the bite's largest low-passed
 //   load, how far the bite cut and whether it was pulled out, the rods' balance against the
@@ -142,12 +148,20 @@ InPlaneRow MeasureInPlane(const scene::SceneModel& scene, const station::StitchO
   return row;
 }
 
-struct CouplingRow {
+// One knot tied in the scene: the stitch's model (relaxation time, the in-plane key), where the
+// next throws' jig sits, the buttons' throws, and the hands' extra pull and tear threshold.
+struct CouplingCase {
   double relax_s = 0;
-  bool in_plane = false;   // knot_tying.stitch_in_plane
-  double hold_pull_m = 0;  // the hands' extra pull in the hold
-  double tear_N = 0;       // knot_tying.bite_tear_N
-  double hold_N = 0;       // the larger of the hands' pulls at the end
+  bool in_plane = false;           // knot_tying.stitch_in_plane
+  double next_jig_m = 0;           // knot_tying.next_jig_x_m
+  double hold_pull_m = 0;          // the hands' extra pull in the hold
+  double tear_N = 0;               // knot_tying.bite_tear_N
+  unsigned first = 3, second = 2;  // the buttons: a double right throw, then a single left
+};
+
+struct CouplingRow {
+  CouplingCase c;
+  double hold_N = 0;  // the larger of the hands' pulls at the end
   double bite_load_max_N = 0;
   double cut_um = 0;
   bool pulled_out = false;
@@ -157,22 +171,21 @@ struct CouplingRow {
   double median_ratio = 1;  // to the rigid run's
   double p99_ratio = 1;
   double bite_um = 0;
+  double max_strain = 0;  // the thread's largest link strain, over the run
+  double end_strain = 0;  // and at the end
   double trailing = 0;
   double balance = 0;
   std::string knot;
   std::string error;
 };
 
-CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s, double hold_pull_m = 0,
-                            double tear_N = 0, bool in_plane = false) {
-  scene.knot_tying->stitch_relax_s = relax_s;
-  scene.knot_tying->bite_tear_N = tear_N;
-  scene.knot_tying->stitch_in_plane = in_plane;
+CouplingRow MeasureCoupling(scene::SceneModel scene, const CouplingCase& c) {
+  scene.knot_tying->stitch_relax_s = c.relax_s;
+  scene.knot_tying->bite_tear_N = c.tear_N;
+  scene.knot_tying->stitch_in_plane = c.in_plane;
+  scene.knot_tying->next_jig_x_m = c.next_jig_m;
   CouplingRow row;
-  row.relax_s = relax_s;
-  row.in_plane = in_plane;
-  row.hold_pull_m = hold_pull_m;
-  row.tear_N = tear_N;
+  row.c = c;
   try {
     station::Simulation sim(scene);
     state::StationState s = sim.MakeInitialState(1);
@@ -185,14 +198,15 @@ CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s, double hold
       in.second.X_WT = scene.CalcIdealSecondToolPose(0);
       in.second.gripper = 1;
       const std::uint64_t k = s.step;
-      in.device.buttons = k >= 300 && k < 400 ? 3u : k >= 500 && k < 600 ? 2u : 0u;
+      in.device.buttons = k >= 300 && k < 400 ? c.first : k >= 500 && k < 600 ? c.second : 0u;
       if (s.thread->tie.holding != 0) {
-        in.device.X_WT.translation().x() += hold_pull_m;
-        in.second.X_WT.translation().x() -= hold_pull_m;
+        in.device.X_WT.translation().x() += c.hold_pull_m;
+        in.second.X_WT.translation().x() -= c.hold_pull_m;
       }
       const auto t0 = Clock::now();
       station::StepStation(sim, in, s);
       us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+      row.max_strain = std::max(row.max_strain, s.thread->thread.status.max_strain);
       row.bite_load_max_N =
           std::max(row.bite_load_max_N, s.thread->tie.stitch_load_N[station::kBiteRod]);
     }
@@ -200,6 +214,7 @@ CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s, double hold
     row.step_p99_us = Percentile(us, 0.99);
     const state::ThreadModuleState& t = *s.thread;
     row.hold_N = std::max(t.f_T_W.norm(), t.f_T2_W.norm());
+    row.end_strain = t.thread.status.max_strain;
     row.cut_um = t.tie.bite_cut_m * 1e6;
     row.pulled_out = t.tie.bite_pulled_out != 0;
     const Eigen::Matrix3Xd& x = t.thread.x_W;
@@ -228,6 +243,15 @@ CouplingRow MeasureCoupling(scene::SceneModel scene, double relax_s, double hold
   return row;
 }
 
+// Where each stitch model ties the surgeon's knot at the scene's relaxation time (0.5 s):
+// the stitch that moves only along the patch's normal at 4.3 mm (the scene's jig; the knots
+// scatter between 3.5 and 4.6 mm, --jig-window), the one that also moves in the patch's plane
+// in a window from 3.5 to 4.0 mm in which all six button pairs tie their knots. With the
+// in-plane key on, the surgeon's knot tied at 4.3 mm capsizes onto its last strand: the slip
+// knot of the knot-topology scene (assets/knots/tied_slip.obj).
+constexpr double kNormalOnlyJig_m = 4.3e-3;
+constexpr double kInPlaneJig_m = 3.75e-3;
+
 int Run(int argc, char** argv) {
   std::string json_path;
   bool quick = false;
@@ -241,8 +265,16 @@ int Run(int argc, char** argv) {
   std::string obj_dir;
   app.add_option("--obj-dir", obj_dir,
                  "write each coupling and cut-through run's thread at the end as an OBJ polyline "
-                 "in the tissue's frame (coupling_RELAXs[_in_plane].obj, cut_PULLmm_TEAR.obj), "
-                 "for microdex-bench knot and knots.tied");
+                 "in the tissue's frame (coupling_RELAXs[_in_plane]_jigJIGmm.obj, "
+                 "cut_PULLmm_TEAR[_in_plane].obj), for microdex-bench knot and knots.tied");
+  std::string window_spec;
+  app.add_option("--jig-window", window_spec,
+                 "FROM:TO:STEP in mm: also tie the six button pairs (3,2 4,1 1,2 2,1 1,1 2,2) with "
+                 "knot_tying.next_jig_x_m over this range, with the scene's stitch and with the "
+                 "in-plane key turned the other way, and name each knot (about 30 s a jig)");
+  std::vector<double> window_relax;
+  app.add_option("--window-relax", window_relax,
+                 "the relaxation times of the --jig-window runs (default: the scene's)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -279,10 +311,54 @@ int Run(int argc, char** argv) {
       quick ? std::vector<double>{3e-3} : std::vector<double>{0.0, 1e-3, 2e-3, 3e-3, 5e-3};
   std::vector<int> in_plane_levels = levels;
   if (!quick) in_plane_levels.push_back(9);
-  const bool in_plane_coupling = true;
-  const int total =
-      static_cast<int>(levels.size() + in_plane_levels.size() + relax.size() +
-                       (in_plane_coupling ? 1 : 0) + (scene_tear_N > 0 ? 2 * pulls_m.size() : 0));
+  // The coupling runs: the rigid stitch (the cost's baseline), the scene's stitch, the same
+  // relaxation with the in-plane key turned the other way (at that model's jig), the slip
+  // knot's recipe (the in-plane stitch at the normal-only stitch's jig), then the other
+  // relaxation times.
+  const bool scene_in_plane = scene.knot_tying->stitch_in_plane;
+  const double scene_jig_m = scene.knot_tying->next_jig_x_m;
+  std::vector<CouplingCase> coupling_cases = {
+      {.relax_s = 0, .in_plane = false, .next_jig_m = scene_jig_m},
+      {.relax_s = scene_relax_s, .in_plane = scene_in_plane, .next_jig_m = scene_jig_m},
+      {.relax_s = scene_relax_s,
+       .in_plane = !scene_in_plane,
+       .next_jig_m = scene_in_plane ? kNormalOnlyJig_m : kInPlaneJig_m},
+      {.relax_s = scene_relax_s, .in_plane = true, .next_jig_m = kNormalOnlyJig_m}};
+  for (std::size_t i = 2; i < relax.size(); ++i) {
+    coupling_cases.push_back(
+        {.relax_s = relax[i], .in_plane = scene_in_plane, .next_jig_m = scene_jig_m});
+  }
+  // The jig's window.
+  std::vector<CouplingCase> window_cases;
+  if (!window_spec.empty()) {
+    double from = 0, to = 0, by = 0;
+    if (std::sscanf(window_spec.c_str(), "%lf:%lf:%lf", &from, &to, &by) != 3 || !(by > 0) ||
+        !(from > 0) || !(to >= from) || (to - from) / by > 100) {
+      std::fprintf(stderr,
+                   "microdex-bench stitch: --jig-window '%s': expected FROM:TO:STEP in mm, "
+                   "0 < FROM <= TO, STEP > 0, at most 100 steps\n",
+                   window_spec.c_str());
+      return 2;
+    }
+    if (window_relax.empty()) window_relax.push_back(scene_relax_s);
+    for (const double tau : window_relax) {
+      for (const bool key : {scene_in_plane, !scene_in_plane}) {
+        for (int i = 0; from + i * by <= to + 1e-9; ++i) {
+          for (const auto& [a, b] : std::vector<std::pair<unsigned, unsigned>>{
+                   {3, 2}, {4, 1}, {1, 2}, {2, 1}, {1, 1}, {2, 2}}) {
+            window_cases.push_back({.relax_s = tau,
+                                    .in_plane = key && tau > 0,
+                                    .next_jig_m = (from + i * by) * 1e-3,
+                                    .first = a,
+                                    .second = b});
+          }
+        }
+      }
+    }
+  }
+  const int total = static_cast<int>(levels.size() + in_plane_levels.size() +
+                                     coupling_cases.size() + window_cases.size() +
+                                     (scene_tear_N > 0 ? (quick ? 2 : 4) * pulls_m.size() : 0));
   int done = 0;
   const auto start = Clock::now();
   std::vector<ComplianceRow> compliance;
@@ -306,12 +382,8 @@ int Run(int argc, char** argv) {
         (r.c_m_per_N - finest).cwiseAbs().maxCoeff() / finest.cwiseAbs().maxCoeff();
   }
   std::vector<CouplingRow> coupling;
-  for (const double r : relax) {
-    coupling.push_back(MeasureCoupling(scene, r));
-    Progress("coupling", ++done, total, start);
-  }
-  if (in_plane_coupling) {
-    coupling.push_back(MeasureCoupling(scene, scene_relax_s, 0, 0, true));
+  for (const CouplingCase& c : coupling_cases) {
+    coupling.push_back(MeasureCoupling(scene, c));
     Progress("coupling", ++done, total, start);
   }
   for (CouplingRow& c : coupling) {
@@ -319,15 +391,37 @@ int Run(int argc, char** argv) {
     c.p99_ratio = c.step_p99_us / coupling[0].step_p99_us;
   }
   std::vector<CouplingRow> cut;
-  for (const double pull_m : scene_tear_N > 0 ? pulls_m : std::vector<double>{}) {
-    const CouplingRow whole = MeasureCoupling(scene, scene_relax_s, pull_m, 0.0);
+  // A pull without tearing (the baseline) and with the scene's threshold.
+  const auto tie_both = [&](const CouplingCase& c) {
+    const CouplingRow whole = MeasureCoupling(scene, c);
     Progress("cut-through", ++done, total, start);
-    CouplingRow torn = MeasureCoupling(scene, scene_relax_s, pull_m, scene_tear_N);
+    CouplingCase tearing = c;
+    tearing.tear_N = scene_tear_N;
+    CouplingRow torn = MeasureCoupling(scene, tearing);
     Progress("cut-through", ++done, total, start);
     torn.median_ratio = torn.step_median_us / whole.step_median_us;
     torn.p99_ratio = torn.step_p99_us / whole.step_p99_us;
     cut.push_back(whole);
     cut.push_back(torn);
+  };
+  for (const double pull_m : scene_tear_N > 0 ? pulls_m : std::vector<double>{}) {
+    const CouplingCase c{.relax_s = scene_relax_s,
+                         .in_plane = scene_in_plane,
+                         .next_jig_m = scene_jig_m,
+                         .hold_pull_m = pull_m};
+    tie_both(c);
+    if (quick) continue;
+    // The same pulls with the in-plane key turned the other way, at that model's jig.
+    CouplingCase other = c;
+    other.in_plane = !scene_in_plane;
+    other.next_jig_m = scene_in_plane ? kNormalOnlyJig_m : kInPlaneJig_m;
+    tie_both(other);
+  }
+  std::vector<CouplingRow> window;
+  for (const CouplingCase& c : window_cases) {
+    window.push_back(MeasureCoupling(scene, c));
+    window.back().polyline.clear();
+    Progress("jig window", ++done, total, start);
   }
   if (!obj_dir.empty()) {
     const auto write = [&](const CouplingRow& r, const std::string& name, const std::string& what) {
@@ -346,20 +440,23 @@ int Run(int argc, char** argv) {
       return true;
     };
     for (const CouplingRow& r : coupling) {
-      const std::string tag = Fmt(r.relax_s) + "s" + (r.in_plane ? "_in_plane" : "");
+      const std::string tag = Fmt(r.c.relax_s) + "s" + (r.c.in_plane ? "_in_plane" : "") + "_jig" +
+                              Fmt(r.c.next_jig_m * 1e3) + "mm";
       if (!write(r, "coupling_" + tag + ".obj",
-                 "the surgeon's knot, the hands at rest, stitch_relax_s " + Fmt(r.relax_s) +
-                     (r.in_plane ? ", stitch_in_plane" : ""))) {
+                 "the surgeon's knot, the hands at rest, stitch_relax_s " + Fmt(r.c.relax_s) +
+                     (r.c.in_plane ? ", stitch_in_plane" : "") + ", next_jig_x_m " +
+                     Fmt(r.c.next_jig_m))) {
         return 2;
       }
     }
     for (const CouplingRow& r : cut) {
-      const std::string name = "cut_" + Fmt(r.hold_pull_m * 1e3) + "mm_" +
-                               (r.tear_N > 0 ? Fmt(r.tear_N * 1e3) + "mN" : "none") + ".obj";
+      const std::string name = "cut_" + Fmt(r.c.hold_pull_m * 1e3) + "mm_" +
+                               (r.c.tear_N > 0 ? Fmt(r.c.tear_N * 1e3) + "mN" : "none") +
+                               (r.c.in_plane ? "_in_plane" : "") + ".obj";
       if (!write(r, name,
-                 "the surgeon's knot, the hands " + Fmt(r.hold_pull_m * 1e3) +
+                 "the surgeon's knot, the hands " + Fmt(r.c.hold_pull_m * 1e3) +
                      " mm further out in the hold, bite_tear_N " +
-                     (r.tear_N > 0 ? Fmt(r.tear_N) : "0"))) {
+                     (r.c.tear_N > 0 ? Fmt(r.c.tear_N) : "0"))) {
         return 2;
       }
     }
@@ -383,33 +480,61 @@ int Run(int argc, char** argv) {
   }
   std::printf("\ncoupling (surgeon's knot, hands at rest; step: the whole station step)\n");
   std::printf(
-      "| stitch_relax_s | in-plane | step median us | p99 us | median / rigid | p99 / rigid | "
-      "bite um | trailing | balance | knot |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+      "| stitch_relax_s | in-plane | next jig mm | step median us | p99 us | median / rigid | "
+      "p99 / rigid | bite um | trailing | balance | strain max / end | knot |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const CouplingRow& r : coupling) {
     if (!r.error.empty()) {
-      std::printf("| %.3g | %s | refused: %s |\n", r.relax_s, r.in_plane ? "yes" : "no",
-                  r.error.c_str());
+      std::printf("| %.3g | %s | %.3g | refused: %s |\n", r.c.relax_s, r.c.in_plane ? "yes" : "no",
+                  r.c.next_jig_m * 1e3, r.error.c_str());
       continue;
     }
-    std::printf("| %.3g | %s | %.1f | %.1f | %.3f | %.3f | %+.1f | %.3f | %.3f | %s |\n", r.relax_s,
-                r.in_plane ? "yes" : "no", r.step_median_us, r.step_p99_us, r.median_ratio,
-                r.p99_ratio, r.bite_um, r.trailing, r.balance, r.knot.c_str());
+    std::printf(
+        "| %.3g | %s | %.3g | %.1f | %.1f | %.3f | %.3f | %+.1f | %.3f | %.3f | %.3f / %.3f | %s "
+        "|\n",
+        r.c.relax_s, r.c.in_plane ? "yes" : "no", r.c.next_jig_m * 1e3, r.step_median_us,
+        r.step_p99_us, r.median_ratio, r.p99_ratio, r.bite_um, r.trailing, r.balance, r.max_strain,
+        r.end_strain, r.knot.c_str());
   }
   if (!cut.empty()) {
     std::printf(
         "\ncut-through (the hands pulling the held ends further out; median / untorn: the run "
         "without tearing at the same pull)\n");
     std::printf(
-        "| hold pull mm | bite_tear_N mN | hands mN | bite load max mN | cut um | pulled out | "
-        "balance | step median us | median / untorn | knot |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+        "| in-plane | hold pull mm | bite_tear_N mN | hands mN | bite load max mN | cut um | "
+        "pulled out | balance | strain max / end | step median us | median / untorn | knot |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const CouplingRow& r : cut) {
-      std::printf("| %.1f | %s | %.1f | %.2f | %.1f | %s | %.3f | %.1f | %s | %s |\n",
-                  r.hold_pull_m * 1e3, r.tear_N > 0 ? Fmt(r.tear_N * 1e3).c_str() : "none",
-                  r.hold_N * 1e3, r.bite_load_max_N * 1e3, r.cut_um, r.pulled_out ? "yes" : "no",
-                  r.balance, r.step_median_us, r.tear_N > 0 ? Fmt(r.median_ratio).c_str() : "1",
-                  r.knot.c_str());
+      std::printf(
+          "| %s | %.1f | %s | %.1f | %.2f | %.1f | %s | %.3f | %.3f / %.3f | %.1f | %s | %s |\n",
+          r.c.in_plane ? "yes" : "no", r.c.hold_pull_m * 1e3,
+          r.c.tear_N > 0 ? Fmt(r.c.tear_N * 1e3).c_str() : "none", r.hold_N * 1e3,
+          r.bite_load_max_N * 1e3, r.cut_um, r.pulled_out ? "yes" : "no", r.balance, r.max_strain,
+          r.end_strain, r.step_median_us, r.c.tear_N > 0 ? Fmt(r.median_ratio).c_str() : "1",
+          r.knot.c_str());
+    }
+  }
+  if (!window.empty()) {
+    // One line per stitch model and jig: the knot of each button pair (the right ones: 3,2 and
+    // 4,1 surgeon's, 1,2 and 2,1 square, 1,1 and 2,2 granny).
+    std::printf(
+        "\njig window (the knot of each button pair by next_jig_x_m; * where it is not the "
+        "pair's: 3,2 and 4,1 a surgeon's knot, 1,2 and 2,1 square, 1,1 and 2,2 granny)\n");
+    std::printf(
+        "| stitch_relax_s | in-plane | next jig mm | 3,2 | 4,1 | 1,2 | 2,1 | 1,1 | 2,2 |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|\n");
+    for (std::size_t i = 0; i + 6 <= window.size(); i += 6) {
+      const CouplingCase& c = window[i].c;
+      std::printf("| %.3g | %s | %.3g |", c.relax_s, c.in_plane ? "yes" : "no", c.next_jig_m * 1e3);
+      for (std::size_t j = i; j < i + 6; ++j) {
+        const CouplingRow& r = window[j];
+        const char* want = r.c.first >= 3            ? "surgeons"
+                           : r.c.first == r.c.second ? "granny"
+                                                     : "square";
+        std::printf(" %s%s |", r.error.empty() ? r.knot.c_str() : "refused",
+                    r.knot == want ? "" : "*");
+      }
+      std::printf("\n");
     }
   }
   if (!json_path.empty()) {
@@ -436,23 +561,36 @@ int Run(int argc, char** argv) {
     out << "], \"coupling\": [";
     for (std::size_t i = 0; i < coupling.size(); ++i) {
       const CouplingRow& r = coupling[i];
-      out << (i ? ", " : "") << "{\"stitch_relax_s\": " << r.relax_s
-          << ", \"in_plane\": " << (r.in_plane ? "true" : "false")
+      out << (i ? ", " : "") << "{\"stitch_relax_s\": " << r.c.relax_s
+          << ", \"in_plane\": " << (r.c.in_plane ? "true" : "false")
+          << ", \"next_jig_x_m\": " << r.c.next_jig_m
           << ", \"step_median_us\": " << r.step_median_us << ", \"step_p99_us\": " << r.step_p99_us
           << ", \"median_ratio\": " << r.median_ratio << ", \"p99_ratio\": " << r.p99_ratio
           << ", \"bite_um\": " << r.bite_um << ", \"trailing\": " << r.trailing
-          << ", \"balance\": " << r.balance << ", \"knot\": \"" << r.knot << "\""
+          << ", \"balance\": " << r.balance << ", \"max_strain\": " << r.max_strain
+          << ", \"end_strain\": " << r.end_strain << ", \"knot\": \"" << r.knot << "\""
           << ", \"refused\": " << (r.error.empty() ? "false" : "true") << "}";
     }
     out << "], \"cut_through\": [";
     for (std::size_t i = 0; i < cut.size(); ++i) {
       const CouplingRow& r = cut[i];
-      out << (i ? ", " : "") << "{\"hold_pull_m\": " << r.hold_pull_m
-          << ", \"bite_tear_N\": " << r.tear_N << ", \"hands_N\": " << r.hold_N
-          << ", \"bite_load_max_N\": " << r.bite_load_max_N << ", \"cut_m\": " << r.cut_um * 1e-6
+      out << (i ? ", " : "") << "{\"in_plane\": " << (r.c.in_plane ? "true" : "false")
+          << ", \"hold_pull_m\": " << r.c.hold_pull_m << ", \"bite_tear_N\": " << r.c.tear_N
+          << ", \"hands_N\": " << r.hold_N << ", \"bite_load_max_N\": " << r.bite_load_max_N
+          << ", \"cut_m\": " << r.cut_um * 1e-6
           << ", \"pulled_out\": " << (r.pulled_out ? "true" : "false")
-          << ", \"balance\": " << r.balance << ", \"step_median_us\": " << r.step_median_us
+          << ", \"balance\": " << r.balance << ", \"max_strain\": " << r.max_strain
+          << ", \"end_strain\": " << r.end_strain << ", \"step_median_us\": " << r.step_median_us
           << ", \"median_ratio\": " << r.median_ratio << ", \"knot\": \"" << r.knot << "\"}";
+    }
+    out << "], \"jig_window\": [";
+    for (std::size_t i = 0; i < window.size(); ++i) {
+      const CouplingRow& r = window[i];
+      out << (i ? ", " : "") << "{\"stitch_relax_s\": " << r.c.relax_s
+          << ", \"in_plane\": " << (r.c.in_plane ? "true" : "false")
+          << ", \"next_jig_x_m\": " << r.c.next_jig_m << ", \"buttons\": [" << r.c.first << ", "
+          << r.c.second << "], \"knot\": \"" << r.knot << "\""
+          << ", \"refused\": " << (r.error.empty() ? "false" : "true") << "}";
     }
     out << "]}\n";
   }
