@@ -6,6 +6,7 @@
 #include "station/module.h"
 #include "station/needle_module.h"
 #include "station/placement_module.h"
+#include "station/stitch_tissue.h"
 #include "station/thread_module.h"
 #include "station/tissue_module.h"
 #include "station/tremor_module.h"
@@ -14,15 +15,19 @@ namespace microdex::station {
 
 std::vector<std::unique_ptr<Module>> MakeModules(const scene::SceneModel& scene) {
   std::vector<std::unique_ptr<Module>> modules;
+  // The knot-tying stitch on the tissue, built once for the thread and tissue modules.
+  const SharedStitch stitch = scene.HasModule("thread") && scene.HasModule("tissue")
+                                  ? MakeSharedStitchOnTissue(scene)
+                                  : nullptr;
   for (const std::string& name : scene.modules) {
     if (name == "needle") {
       modules.push_back(std::make_unique<NeedleModule>(scene));
     } else if (name == "tremor") {
       modules.push_back(std::make_unique<TremorModule>(scene));
     } else if (name == "thread") {
-      modules.push_back(std::make_unique<ThreadModule>(scene));
+      modules.push_back(std::make_unique<ThreadModule>(scene, stitch));
     } else if (name == "tissue") {
-      modules.push_back(std::make_unique<TissueModule>(scene));
+      modules.push_back(std::make_unique<TissueModule>(scene, stitch));
     } else if (name == "grasp") {
       modules.push_back(std::make_unique<GraspModule>(scene));
     } else if (name == "loop") {

@@ -1,7 +1,9 @@
 #include "station/stitch_tissue.h"
 
 #include <algorithm>
+#include <memory>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "common/fem/tissue_model.h"
@@ -52,6 +54,14 @@ std::optional<StitchOnTissue> MakeStitchOnTissue(const scene::SceneModel& scene,
     }
   }
   return out;
+}
+
+SharedStitch MakeSharedStitchOnTissue(const scene::SceneModel& scene) {
+  if (!scene.tissue) return nullptr;
+  std::optional<StitchOnTissue> stitch =
+      MakeStitchOnTissue(scene, scene.tissue->display_level, /*with_in_plane=*/true);
+  if (!stitch) return nullptr;
+  return std::make_shared<const StitchOnTissue>(std::move(*stitch));
 }
 
 }  // namespace microdex::station

@@ -5,7 +5,7 @@
 // patch's normal (thread::CalcColliderLoad), low-passed, load the patch at them; the rods move
 // by the patch's displacement under those loads. The thread module moves the rods; the tissue
 // module adds the loads' field to the patch it draws and under the instrument it presses with.
-// Both build this from the scene alike, so both see the same numbers. With
+// Both use the one MakeSharedStitchOnTissue builds, so both see the same numbers. With
 // knot_tying.stitch_in_plane the thread module also builds the patch's in-plane compliance
 // (fem::CalcInPlaneCompliance): the loads along the surface, low-passed, move the rods in the
 // patch's plane (the legs draw the punctures together). The tissue module draws only the
@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <optional>
 
 #include "common/fem/in_plane_compliance.h"
@@ -57,5 +58,12 @@ struct StitchOnTissue {
 // off the patch.
 std::optional<StitchOnTissue> MakeStitchOnTissue(const scene::SceneModel& scene, int display_level,
                                                  bool with_in_plane = false);
+
+// The one stitch of a station's modules: built once (at the tissue's display level, with the
+// in-plane compliance if the scene asks for it) and shared by the thread module, which moves
+// the rods, and the tissue module, which draws and presses the patch they load. Null unless
+// MakeStitchOnTissue would build one.
+using SharedStitch = std::shared_ptr<const StitchOnTissue>;
+SharedStitch MakeSharedStitchOnTissue(const scene::SceneModel& scene);
 
 }  // namespace microdex::station

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <span>
 #include <stdexcept>
+#include <utility>
 
 #include "common/base/check.h"
 #include "common/thread/grasp.h"
@@ -76,7 +77,7 @@ double CalcAlignedRmsDistance(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd&
   return std::sqrt(sq / static_cast<double>(x.cols()));
 }
 
-ThreadModule::ThreadModule(const scene::SceneModel& scene)
+ThreadModule::ThreadModule(const scene::SceneModel& scene, SharedStitch stitch)
     : second_hand_(scene.second_hand.has_value()),
       max_force_N_(scene.haptic.max_force_N),
       max_strain_(scene.thread->max_strain) {
@@ -99,7 +100,7 @@ ThreadModule::ThreadModule(const scene::SceneModel& scene)
     hold_options_.fixed_colliders = stitch_;
     p_W_tool_rest_ = scene.CalcIdealToolPose(0).translation();
     p_W_second_rest_ = scene.CalcIdealSecondToolPose(0).translation();
-    stitch_tissue_ = MakeStitchOnTissue(scene, 0, /*with_in_plane=*/true);
+    stitch_tissue_ = stitch ? std::move(stitch) : MakeSharedStitchOnTissue(scene);
     if (stitch_tissue_) {
       // The rod's displacement follows u <- u + g (c F(u) - u), g = h / stitch_relax_s, where
       // the thread's load F(u) = F0 - k u falls as the rod gives: the error shrinks by

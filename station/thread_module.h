@@ -52,7 +52,9 @@ class ThreadModule final : public Module {
  public:
   // Throws std::runtime_error naming the scene field when the thread does not fit the
   // published bound (kMaxFrameThreadNodes nodes).
-  explicit ThreadModule(const scene::SceneModel& scene);
+  // stitch: the knot-tying stitch on the tissue (MakeSharedStitchOnTissue), shared with the
+  // tissue module; built here when null.
+  explicit ThreadModule(const scene::SceneModel& scene, SharedStitch stitch = nullptr);
   const char* name() const override { return "thread"; }
   const char* error_kind() const override { return "max_link_strain"; }
   void InitState(state::StationState& state) const override;
@@ -88,8 +90,8 @@ class ThreadModule final : public Module {
   std::optional<scene::KnotTyingSceneDef> tie_;
   std::vector<thread::Collider> stitch_;
   thread::KnotHoldOptions hold_options_;
-  std::optional<StitchOnTissue> stitch_tissue_;  // the stitch moves with the patch
-  double stitch_gain_ = 0;                       // per step: time step / stitch_relax_s
+  SharedStitch stitch_tissue_;  // the stitch moves with the patch
+  double stitch_gain_ = 0;      // per step: time step / stitch_relax_s
   // The bite's cut-through (knot_tying.bite_tear_N, 0: none): its threshold, the patch's
   // compliance at the bite, and the cut at which the thread under the bite reaches the surface.
   double bite_tear_N_ = 0;

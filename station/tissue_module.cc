@@ -1,12 +1,13 @@
 #include "station/tissue_module.h"
 
 #include <cmath>
+#include <utility>
 
 #include "common/base/check.h"
 
 namespace microdex::station {
 
-TissueModule::TissueModule(const scene::SceneModel& scene)
+TissueModule::TissueModule(const scene::SceneModel& scene, SharedStitch stitch)
     : model_(fem::BuildTissueModel(scene.tissue->def)),
       ws_(model_),
       X_SW_(scene.tissue->X_WS.inverse()),
@@ -20,7 +21,7 @@ TissueModule::TissueModule(const scene::SceneModel& scene)
       half_bar_m_(0.5 * scene.tissue->bar_length_m),
       display_level_(scene.tissue->display_level),
       max_force_N_(scene.tissue->max_force_N),
-      stitch_(MakeStitchOnTissue(scene, scene.tissue->display_level)) {
+      stitch_(stitch ? std::move(stitch) : MakeSharedStitchOnTissue(scene)) {
   const std::size_t side = (std::size_t{1} << display_level_) + 1;
   MICRODEX_CHECK(side * side <= kMaxFrameTissueNodes);  // display_level <= 6 (scene)
   grid_m_.assign(side * side, 0.0);

@@ -31,7 +31,9 @@ namespace microdex::station {
 
 class TissueModule final : public Module {
  public:
-  explicit TissueModule(const scene::SceneModel& scene);
+  // stitch: the knot-tying stitch (MakeSharedStitchOnTissue), shared with the thread module;
+  // built here when null.
+  explicit TissueModule(const scene::SceneModel& scene, SharedStitch stitch = nullptr);
   const char* name() const override { return "tissue"; }
   const char* error_kind() const override { return "relative_residual"; }
   void InitState(state::StationState& state) const override;
@@ -66,7 +68,7 @@ class TissueModule final : public Module {
   std::vector<double> grid_m_;           // display grid, sized once
   std::vector<double> field_scratch_m_;  // the field on the whole grid (ScatterField), sized once
   std::uint32_t mesh_revision_ = 0;
-  std::optional<StitchOnTissue> stitch_;  // knot tying: the stitch's loads on the patch
+  SharedStitch stitch_;  // knot tying: the stitch's loads on the patch
 };
 
 }  // namespace microdex::station
