@@ -271,7 +271,7 @@ int Run(int argc, char** argv) {
   app.add_option("--jig-window", window_spec,
                  "FROM:TO:STEP in mm: also tie the six button pairs (3,2 4,1 1,2 2,1 1,1 2,2) with "
                  "knot_tying.next_jig_x_m over this range, with the scene's stitch and with the "
-                 "in-plane key turned the other way, and name each knot (about 30 s a jig)");
+                 "in-plane key turned the other way, and name each knot (about a minute a jig)");
   std::vector<double> window_relax;
   app.add_option("--window-relax", window_relax,
                  "the relaxation times of the --jig-window runs (default: the scene's)");
