@@ -63,28 +63,26 @@ TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  std::string bad = text.str();
-  bad.replace(bad.find("../knots/tied_granny.obj"), 24, "../knots/missing.obj");
-  try {
-    (void)scene::ParseScene(bad, path);
-    ADD_FAILURE() << "a missing tied knot accepted";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("knots.tied.granny"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("missing.obj"), std::string::npos) << e.what();
-  }
+  // The scene with the tied file `from` replaced by `to` is refused, its error naming `key`
+  // and containing `names`.
+  const auto expect_refused = [&](const std::string& from, const std::string& to,
+                                  const std::string& key, const std::string& names) {
+    std::string changed = text.str();
+    changed.replace(changed.find(from), from.size(), to);
+    try {
+      (void)scene::ParseScene(changed, path);
+      ADD_FAILURE() << to << " accepted for " << key;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+    }
+  };
+  expect_refused("../knots/tied_granny.obj", "../knots/missing.obj", "knots.tied.granny",
+                 "missing.obj");
   // A tied knot of another class than its key: refused when the scene is loaded, naming the
   // key and the file (the scene's loader checks every shape shown; the module does not again).
-  std::string wrong = text.str();
-  wrong.replace(wrong.find("../knots/tied_square.obj"), 24, "../knots/tied_granny.obj");
-  try {
-    (void)scene::ParseScene(wrong, path);
-    ADD_FAILURE() << "a granny knot accepted as the square knot";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("knots.tied.square"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("tied_granny.obj: recognised as granny"),
-              std::string::npos)
-        << e.what();
-  }
+  expect_refused("../knots/tied_square.obj", "../knots/tied_granny.obj", "knots.tied.square",
+                 "tied_granny.obj: recognised as granny");
   // A tied knot whose thread diameter is malformed: named with its file and line.
   const std::filesystem::path bad_obj =
       std::filesystem::temp_directory_path() / "microdex_quiz_bad_diameter.obj";
@@ -97,17 +95,8 @@ TEST(KnotQuizModule, ShowsKnotsTiedByTheThreadModule) {
     obj.replace(obj.find("# thread_diameter_m 2.5e-05"), 27, "# thread_diameter_m -2.5e-05");
     std::ofstream(bad_obj) << obj;
   }
-  std::string bad_d = text.str();
-  bad_d.replace(bad_d.find("../knots/tied_granny.obj"), 24, bad_obj.string());
-  try {
-    (void)scene::ParseScene(bad_d, path);
-    ADD_FAILURE() << "a negative thread diameter accepted";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("knots.tied.granny"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("microdex_quiz_bad_diameter.obj:3: malformed"),
-              std::string::npos)
-        << e.what();
-  }
+  expect_refused("../knots/tied_granny.obj", bad_obj.string(), "knots.tied.granny",
+                 "microdex_quiz_bad_diameter.obj:3: malformed");
 }
 
 TEST(KnotQuizModule, ShowsRecognisedKnotsAndCountsAnswers) {
