@@ -308,7 +308,8 @@ int Run(int argc, char** argv) {
   // Cut-through: each pull without tearing (the baseline) and with the scene's threshold.
   const double scene_tear_N = scene.knot_tying->bite_tear_N;
   const std::vector<double> pulls_m =
-      quick ? std::vector<double>{3e-3} : std::vector<double>{0.0, 1e-3, 2e-3, 3e-3, 5e-3};
+      quick ? std::vector<double>{3e-3}
+            : std::vector<double>{0.0, 1e-3, 2e-3, 3e-3, 4e-3, 4.5e-3, 5e-3};
   std::vector<int> in_plane_levels = levels;
   if (!quick) in_plane_levels.push_back(9);
   // The coupling runs: the rigid stitch (the cost's baseline), the scene's stitch, the same
